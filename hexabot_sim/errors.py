@@ -1,0 +1,19 @@
+"""Exception types that the CLI turns into exit codes and one-line messages."""
+
+
+class HexabotError(Exception):
+    """Base class of every error hexabot-sim raises on purpose."""
+
+    exit_code = 1
+
+
+class UsageError(HexabotError):
+    """Bad input from the user: unknown name, malformed or out-of-range value, unwritable path."""
+
+    exit_code = 2
+
+
+class SimulationError(HexabotError):
+    """The simulation went unstable (MuJoCo warning or non-finite state)."""
+
+    exit_code = 1

@@ -1,0 +1,69 @@
+"""Chooses a headless OpenGL backend for MuJoCo (EGL, then OSMesa) by probing in a subprocess.
+
+MuJoCo and PyOpenGL bind their backend when first imported, so a backend that fails cannot be
+swapped in-process: each candidate is tried in a short-lived child interpreter first.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import subprocess
+import sys
+
+BACKENDS: tuple[str, ...] = ("egl", "osmesa")
+PROBE_TIMEOUT: float = 60.0  # [s] software GL can be slow to start on a loaded machine
+
+_PROBE = """
+import mujoco
+model = mujoco.MjModel.from_xml_string("<mujoco><worldbody><geom size='1'/></worldbody></mujoco>")
+with mujoco.Renderer(model, 16, 16) as renderer:
+    renderer.update_scene(mujoco.MjData(model))
+    assert renderer.render().shape == (16, 16, 3)
+"""
+
+
+@functools.cache
+def probe(backend: str) -> str | None:
+    """None if MuJoCo renders with MUJOCO_GL=backend here, else the reason it does not (one line)."""
+    env = dict(os.environ, MUJOCO_GL=backend)
+    env.pop("PYOPENGL_PLATFORM", None)
+    try:
+        proc = subprocess.run(
+            [sys.executable, "-c", _PROBE], env=env, capture_output=True, text=True, timeout=PROBE_TIMEOUT
+        )
+    except subprocess.TimeoutExpired:
+        return f"{backend}: no answer within {PROBE_TIMEOUT:.0f} s"
+    if proc.returncode == 0:
+        return None
+    lines = [line.strip() for line in proc.stderr.splitlines() if line.strip()]
+    return f"{backend}: {lines[-1] if lines else f'exit code {proc.returncode}'}"
+
+
+def loaded_backend() -> str | None:
+    """The backend MuJoCo was imported with in this process, or None if it is not imported yet."""
+    if "mujoco" not in sys.modules:
+        return None
+    return os.environ.get("MUJOCO_GL", "").lower() or "glfw"
+
+
+def choose() -> tuple[str | None, str]:
+    """Picks a working backend and exports MUJOCO_GL before MuJoCo is imported.
+
+    Returns:
+        (backend, "") when one works, else (None, reason) with one line saying why there is no video.
+    """
+    loaded = loaded_backend()
+    if loaded is not None:  # too late to switch: the one already bound must work
+        reason = probe(loaded)
+        return (loaded, "") if reason is None else (None, f"no working OpenGL: {reason}")
+    wanted = os.environ.get("MUJOCO_GL", "").lower()
+    candidates = [wanted] + [b for b in BACKENDS if b != wanted] if wanted else list(BACKENDS)
+    reasons = []
+    for backend in candidates:
+        reason = probe(backend)
+        if reason is None:
+            os.environ["MUJOCO_GL"] = backend
+            return backend, ""
+        reasons.append(reason)
+    return None, "no working OpenGL (" + "; ".join(reasons) + ")"

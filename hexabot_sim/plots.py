@@ -1,0 +1,106 @@
+"""Matplotlib (Agg) figures from a scenario result; nothing here simulates or writes files."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+from hexabot_sim.scenarios.base import ScenarioResult  # noqa: E402
+
+TARGET_STYLE = {"color": "tab:red", "linestyle": "--", "linewidth": 1.2}
+REST_STYLE = {"color": "tab:green", "linestyle": ":", "linewidth": 1.5}
+
+
+def _title(result: ScenarioResult, text: str) -> str:
+    p = result.params
+    return (
+        f"{result.scenario}: {text}\n"
+        f"m = {p.mass:g} kg, L = {p.length:g} m, b = {p.damping:g} N·m·s/rad, k = {p.stiffness:g} N·m/rad, "
+        f"θ0 = {p.theta0_deg:g}°"
+    )
+
+
+def _angle_lines(ax: plt.Axes, result: ScenarioResult, horizontal: bool = True) -> None:
+    """Draws the spring target and the predicted rest angle."""
+    draw = ax.axhline if horizontal else ax.axvline
+    target, rest = result.extras.get("target"), result.extras.get("rest_angle")
+    if target is not None:
+        draw(target, label=f"spring target {math.degrees(target):.1f}°", **TARGET_STYLE)
+    if rest is not None and result.params.damping > 0:
+        draw(rest, label=f"predicted rest angle {math.degrees(rest):.2f}°", **REST_STYLE)
+
+
+def pendulum_figures(result: ScenarioResult) -> dict[str, Figure]:
+    """Angle and angular velocity vs time (report Figs. 5-8), phase portrait, energy balance."""
+    c = result.columns
+    t, theta, omega = c["t"], c["theta"], c["omega"]
+    figures: dict[str, Figure] = {}
+
+    fig, (ax1, ax2) = plt.subplots(2, 1, sharex=True, figsize=(9, 6), constrained_layout=True)
+    ax1.plot(t, theta, color="tab:blue", label="θ")
+    _angle_lines(ax1, result)
+    ax1.set_ylabel("angle θ [rad]")
+    deg = ax1.secondary_yaxis("right", functions=(np.degrees, np.radians))
+    deg.set_ylabel("[deg]")
+    ax1.legend(loc="upper right", fontsize=8)
+    ax1.grid(alpha=0.3)
+    ax2.plot(t, omega, color="tab:orange", label="ω")
+    ax2.set_ylabel("angular velocity ω [rad/s]")
+    ax2.set_xlabel("time t [s]")
+    ax2.grid(alpha=0.3)
+    ax1.set_title(_title(result, "angle and angular velocity"), fontsize=10)
+    figures["angle_velocity"] = fig
+
+    fig, ax = plt.subplots(figsize=(6.5, 5.5), constrained_layout=True)
+    ax.plot(theta, omega, color="tab:purple", linewidth=0.9)
+    ax.plot(theta[0], omega[0], "o", color="black", label="start")
+    ax.plot(theta[-1], omega[-1], "s", color="tab:purple", label="end")
+    _angle_lines(ax, result, horizontal=False)
+    ax.set_xlabel("angle θ [rad]")
+    ax.set_ylabel("angular velocity ω [rad/s]")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    ax.set_title(_title(result, "phase portrait"), fontsize=9)
+    figures["phase"] = fig
+
+    fig, (ax1, ax2) = plt.subplots(
+        2, 1, sharex=True, figsize=(9, 6.5), gridspec_kw={"height_ratios": [3, 1.4]}, constrained_layout=True
+    )
+    ax1.plot(t, c["energy_kinetic"], label="kinetic ½Iω²")
+    ax1.plot(t, c["energy_gravity"], label="gravity mgc(1 − cos θ)")
+    if result.params.stiffness > 0:
+        ax1.plot(t, c["energy_spring"], label="spring ½k(θ − θ_t)²")
+    if result.params.damping > 0:
+        ax1.plot(t, c["energy_dissipated"], label="dissipated ∫bω² dt")
+    ax1.plot(t, c["energy_total"], color="black", linewidth=2, label="total (incl. dissipated)")
+    ax1.set_ylabel("energy [J]")
+    ax1.legend(fontsize=8, loc="center right")
+    ax1.grid(alpha=0.3)
+    ax1.set_title(_title(result, "energy"), fontsize=10)
+    e0 = c["energy_total"][0]
+    if e0 > 0:
+        err = np.abs(c["energy_total"] - e0) / e0
+        ax2.semilogy(t[1:], np.maximum(err[1:], 1e-17), color="black", linewidth=0.8)
+        ax2.set_ylabel("|E(t) − E(0)| / E(0)")
+    ax2.set_xlabel("time t [s]")
+    ax2.grid(alpha=0.3, which="both")
+    figures["energy"] = fig
+    return figures
+
+
+FIGURES: dict[str, Callable[[ScenarioResult], dict[str, Figure]]] = {
+    "pendulum": pendulum_figures,
+}
+
+
+def figures(result: ScenarioResult) -> dict[str, Figure]:
+    """The figure set of a result, by file stem."""
+    return FIGURES[result.figures](result)
+

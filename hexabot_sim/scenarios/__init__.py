@@ -1,0 +1,76 @@
+"""Registry of named scenarios: parameters with their defaults, and the function that runs them."""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+from collections.abc import Callable, Mapping
+from typing import Any
+
+from hexabot_sim.errors import UsageError
+
+
+@dataclasses.dataclass(frozen=True)
+class Scenario:
+    """A named, runnable scenario.
+
+    Attributes:
+        name: What users type after `hexabot-sim run`.
+        summary: One line for `hexabot-sim list`.
+        module: Module under hexabot_sim.scenarios holding the parameter class and `run(name, params)`.
+        params_class: Name of the frozen parameter dataclass in that module.
+        defaults: Scenario-specific defaults applied over the dataclass defaults.
+    """
+
+    name: str
+    summary: str
+    module: str
+    params_class: str
+    defaults: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+
+    def _module(self) -> Any:
+        return importlib.import_module(f"hexabot_sim.scenarios.{self.module}")
+
+    @property
+    def params_type(self) -> type:
+        return getattr(self._module(), self.params_class)
+
+    @property
+    def runner(self) -> Callable[..., Any]:
+        return self._module().run
+
+
+SCENARIOS: dict[str, Scenario] = {
+    s.name: s
+    for s in (
+        Scenario(
+            "pendulum-undamped",
+            "pendulum released from 90 deg, no damping, no spring: constant amplitude (report Fig. 5/7)",
+            "pendulum",
+            "PendulumParams",
+            {"damping": 0.0, "stiffness": 0.0},
+        ),
+        Scenario(
+            "pendulum-damped",
+            "pendulum with joint damping 0.01 N*m*s/rad: comes to rest hanging down (report Fig. 6/8)",
+            "pendulum",
+            "PendulumParams",
+            {"damping": 0.01, "stiffness": 0.0},
+        ),
+        Scenario(
+            "pendulum",
+            "damped pendulum with a joint spring toward 30 deg: rests where spring and gravity balance",
+            "pendulum",
+            "PendulumParams",
+            {},
+        ),
+    )
+}
+
+
+def get(name: str) -> Scenario:
+    """The scenario called `name`."""
+    try:
+        return SCENARIOS[name]
+    except KeyError:
+        raise UsageError(f"unknown scenario '{name}'; known: {', '.join(SCENARIOS)}") from None

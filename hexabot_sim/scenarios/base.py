@@ -1,0 +1,38 @@
+"""What every scenario hands back: the compiled model, the recorded trajectory, columns and metrics."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from hexabot_sim.simulate import Trajectory
+
+
+@dataclasses.dataclass(frozen=True)
+class Metric:
+    """One scalar result of a run, with its unit and meaning."""
+
+    value: float | int | str | bool | None
+    unit: str
+    doc: str
+
+
+@dataclasses.dataclass
+class ScenarioResult:
+    """Everything a run produced in memory; output.py, plots.py and render.py read it, nothing else."""
+
+    scenario: str
+    params: Any  # the scenario's frozen parameter dataclass
+    model: mujoco.MjModel
+    model_xml: str  # the exact MJCF that compiled to `model`
+    trajectory: Trajectory
+    columns: dict[str, np.ndarray]  # CSV columns in order; the first is "t"
+    column_units: dict[str, str]
+    metrics: dict[str, Metric]
+    summary: list[str]  # metric names shown after the run
+    camera: str  # camera the video is rendered from
+    figures: str  # name of the figure set in plots.py
+    extras: dict[str, Any] = dataclasses.field(default_factory=dict)  # scenario data for plots

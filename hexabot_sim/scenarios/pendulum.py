@@ -1,0 +1,277 @@
+"""Simple pendulum (report 000, section 1): undamped, damped, and damped with a spring toward a target."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import mujoco
+import numpy as np
+
+from hexabot_sim import models
+from hexabot_sim.params import param
+from hexabot_sim.scenarios.base import Metric, ScenarioResult
+from hexabot_sim.simulate import simulate, step_count
+
+INTEGRATORS = ("RK4", "Euler", "implicit", "implicitfast")
+SETTLING_BAND: float = 0.02  # settled once |theta - rest| stays within 2 % of |theta0 - rest|
+
+
+@dataclasses.dataclass(frozen=True)
+class PendulumParams:
+    """Parameters of the pendulum scenarios (a uniform solid cylinder on a hinge at one end)."""
+
+    mass: float = param(0.1, "kg", "mass of the link", "positive")
+    length: float = param(0.3, "m", "length of the link, pivot to tip", "positive")
+    radius: float = param(0.01, "m", "radius of the link (solid cylinder)", "positive")
+    damping: float = param(0.01, "N*m*s/rad", "joint viscous damping b (report: 0.01)", "nonnegative")
+    stiffness: float = param(0.5, "N*m/rad", "joint spring stiffness k", "nonnegative")
+    target_deg: float = param(30.0, "deg", "spring equilibrium position (Simscape 'equilibrium position')")
+    theta0_deg: float = param(90.0, "deg", "initial angle, 0 = hanging down; released from rest")
+    gravity: float = param(9.81, "m/s^2", "gravitational acceleration (0 switches gravity off)", "nonnegative")
+    duration: float = param(10.0, "s", "simulated time", "positive")
+    timestep: float = param(0.001, "s", "integration timestep", "positive")
+    integrator: str = param("RK4", "", "MuJoCo integrator", choices=INTEGRATORS)
+
+    def __post_init__(self) -> None:
+        if self.radius >= self.length:
+            raise ValueError(f"parameter 'radius' must be smaller than 'length' ({self.length} m); got {self.radius}")
+        if self.timestep > self.duration:
+            raise ValueError(
+                f"parameter 'timestep' must not exceed 'duration' ({self.duration} s); got {self.timestep}"
+            )
+        if step_count(self.duration, self.timestep) > 10_000_000:
+            raise ValueError("duration / timestep must be at most 1e7 steps; raise 'timestep' or lower 'duration'")
+
+
+# ---------------------------------------------------------------------------------------------
+# Closed forms used for the run's own predictions (the tests re-derive them independently).
+
+
+def pivot_inertia(mass: float, length: float, radius: float) -> float:
+    """Moment of inertia [kg m^2] of a solid cylinder about a transverse axis through one end."""
+    return mass * (length**2 / 3 + radius**2 / 4)
+
+
+def equilibria(stiffness: float, mgc: float, target: float) -> list[float]:
+    """Stable rest angles [rad] of  k (theta - target) + m g c sin(theta) = 0, in increasing order.
+
+    With k > 0 every root lies within |theta - target| <= m g c / k; with k = 0 they are 2 pi n.
+    """
+    if stiffness == 0:
+        return [0.0] if mgc > 0 else []
+    if mgc == 0:
+        return [target]
+    from scipy.optimize import brentq
+
+    def f(theta: float) -> float:
+        return stiffness * (theta - target) + mgc * math.sin(theta)
+
+    half = mgc / stiffness
+    grid = np.linspace(target - half, target + half, 64 * (int(half / math.pi) + 1) + 1)
+    values = np.array([f(x) for x in grid])
+    roots = [float(x) for x, v in zip(grid, values, strict=True) if v == 0]
+    for i in np.flatnonzero(values[:-1] * values[1:] < 0):
+        roots.append(brentq(f, grid[i], grid[i + 1], xtol=1e-15, rtol=4 * np.finfo(float).eps))
+    return sorted(r for r in roots if stiffness + mgc * math.cos(r) > 0)
+
+
+def rest_angle(stiffness: float, mgc: float, target: float, near: float) -> float | None:
+    """The stable equilibrium [rad] closest to `near` (unique whenever k > m g c); None if there is none."""
+    stable = equilibria(stiffness, mgc, target)
+    if stiffness == 0 and mgc > 0:  # stable equilibria are every 2 pi n
+        return 2 * math.pi * round(near / (2 * math.pi))
+    return min(stable, key=lambda r: abs(r - near)) if stable else None
+
+
+def exact_period(inertia: float, mgc: float, theta0: float) -> float:
+    """Large-amplitude period [s] of the undamped, spring-free pendulum released from rest at theta0.
+
+    T = 4 sqrt(I / (m g c)) K(k^2),  k = sin(theta0 / 2)  (complete elliptic integral of the first kind).
+    """
+    from scipy.special import ellipk
+
+    return 4.0 * math.sqrt(inertia / mgc) * float(ellipk(math.sin(theta0 / 2) ** 2))
+
+
+def upward_crossings(t: np.ndarray, x: np.ndarray, dx: np.ndarray, level: float = 0.0) -> np.ndarray:
+    """Times [s] where x rises through `level`, located by cubic Hermite interpolation of (x, dx)."""
+    y = x - level
+    idx = np.flatnonzero((y[:-1] < 0) & (y[1:] >= 0))
+    h = t[idx + 1] - t[idx]
+    p0, p1, m0, m1 = y[idx], y[idx + 1], dx[idx] * h, dx[idx + 1] * h
+    s = p0 / (p0 - p1)  # linear first guess, refined by Newton on the Hermite cubic
+    for _ in range(4):
+        s2, s3 = s * s, s * s * s
+        value = (2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * m0 + (-2 * s3 + 3 * s2) * p1 + (s3 - s2) * m1
+        slope = (6 * s2 - 6 * s) * p0 + (3 * s2 - 4 * s + 1) * m0 + (-6 * s2 + 6 * s) * p1 + (3 * s2 - 2 * s) * m1
+        s = np.clip(s - value / np.where(slope == 0, 1.0, slope), 0.0, 1.0)
+    return t[idx] + s * h
+
+
+def settling_time(t: np.ndarray, theta: np.ndarray, rest: float, band: float) -> float | None:
+    """First time [s] after which |theta - rest| stays <= band to the end; None if it never does."""
+    outside = np.flatnonzero(np.abs(theta - rest) > band)
+    if outside.size == 0:
+        return float(t[0])
+    if outside[-1] == len(t) - 1:
+        return None
+    return float(t[outside[-1] + 1])
+
+
+# ---------------------------------------------------------------------------------------------
+
+
+def build_xml(p: PendulumParams) -> str:
+    """The pendulum scene with every parameter written in at full precision."""
+    root = models.load_tree("pendulum_scene")
+    L, r, c = p.length, p.radius, p.length / 2
+    height = 1.1 * L  # pivot height above the floor
+    target = math.radians(p.target_deg)
+
+    models.find(root, "option").attrib.update(
+        timestep=models.fmt(p.timestep), integrator=p.integrator, gravity=models.fmt((0, 0, -p.gravity))
+    )
+    link = models.find(root, "body", "link")
+    link.set("pos", models.fmt((0, 0, height)))
+    i_perp = p.mass * (3 * r**2 + L**2) / 12
+    models.find(link, "inertial").attrib.update(
+        pos=models.fmt((0, 0, -c)), mass=models.fmt(p.mass), diaginertia=models.fmt((i_perp, i_perp, p.mass * r**2 / 2))
+    )
+    models.find(link, "joint", "hinge").attrib.update(
+        damping=models.fmt(p.damping), stiffness=models.fmt(p.stiffness), springref=models.fmt(target)
+    )
+    models.find(link, "geom", "rod").attrib.update(fromto=models.fmt((0, 0, 0, 0, 0, -L)), size=models.fmt(r))
+    models.find(link, "site", "tip").set("pos", models.fmt((0, 0, -L)))
+    models.find(root, "key", "home").set("qpos", models.fmt(math.radians(p.theta0_deg)))
+
+    # Visual-only stand, marker and camera scale with the link so the whole swing stays in frame.
+    s = 0.1 * L
+    models.find(root, "geom", "post").attrib.update(
+        pos=models.fmt((0, s, height / 2)), size=models.fmt((0.25 * s, 0.25 * s, height / 2))
+    )
+    models.find(root, "geom", "axle").attrib.update(
+        fromto=models.fmt((0, -0.5 * s, height, 0, s, height)), size=models.fmt(max(0.2 * s, 0.6 * r))
+    )
+    if p.stiffness > 0:
+        models.find(root, "geom", "target_marker").attrib.update(
+            fromto=models.fmt((0, -0.4 * s, height, L * math.sin(target), -0.4 * s, height - L * math.cos(target))),
+            size=models.fmt(0.1 * s),
+        )
+    else:
+        models.remove(root, "geom", "target_marker")
+    reach = 1.15 * (L + r)
+    models.find(root, "camera", "side").set("pos", models.fmt((0, -reach / math.tan(math.radians(22.5)), height)))
+    models.find(root, "geom", "floor").set("size", models.fmt((2 * reach, 2 * reach, 0.05)))
+    models.find(root, "statistic").attrib.update(center=models.fmt((0, 0, height)), extent=models.fmt(2 * reach))
+    return models.to_xml(root)
+
+
+def run(name: str, p: PendulumParams) -> ScenarioResult:
+    """Simulates the pendulum from rest at theta0 and derives energies and metrics."""
+    from scipy.integrate import cumulative_simpson
+
+    xml = build_xml(p)
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    traj = simulate(model, data, step_count(p.duration, p.timestep))
+
+    # Constants read back from the compiled model: I about the hinge (mass matrix) and m g c.
+    hinge = model.joint("hinge")
+    qadr, dadr = int(hinge.qposadr[0]), int(hinge.dofadr[0])
+    mass_matrix = np.zeros((model.nv, model.nv))  # (nv, nv), constant for a hinge about a fixed axis
+    mujoco.mj_fullM(model, data, mass_matrix)
+    inertia = float(mass_matrix[dadr, dadr])
+    link = model.body("link").id
+    mgc = float(model.body_mass[link] * -model.opt.gravity[2] * np.linalg.norm(model.body_ipos[link]))
+    k, b = float(model.jnt_stiffness[hinge.id]), float(model.dof_damping[dadr])
+    target = float(model.qpos_spring[qadr])
+
+    t = traj.t
+    theta = traj.qpos[:, qadr]
+    omega = traj.qvel[:, dadr]
+    e_kin = 0.5 * inertia * omega**2
+    e_grav = mgc * (1 - np.cos(theta))
+    e_spring = 0.5 * k * (theta - target) ** 2
+    e_diss = cumulative_simpson(b * omega**2, x=t, initial=0.0)  # energy the damper has taken out
+    e_total = e_kin + e_grav + e_spring + e_diss
+
+    theta0 = float(theta[0])
+    metrics: dict[str, Metric] = {
+        "theta0_deg": Metric(math.degrees(theta0), "deg", "initial angle"),
+        "final_theta_deg": Metric(math.degrees(theta[-1]), "deg", "angle at the end of the run"),
+        "final_omega": Metric(float(omega[-1]), "rad/s", "angular velocity at the end of the run"),
+        "max_abs_omega": Metric(float(np.abs(omega).max()), "rad/s", "largest angular speed"),
+        "inertia_pivot": Metric(inertia, "kg*m^2", "moment of inertia about the hinge (from the compiled model)"),
+        "energy_initial": Metric(float(e_total[0]), "J", "total mechanical energy at t = 0 (zero: hanging, spring at rest)"),
+    }
+    e_scale = float(e_total[0])
+    drift = float(np.max(np.abs(e_total - e_total[0])) / e_scale) if e_scale > 0 else None
+    metrics["energy_drift_rel"] = Metric(
+        drift, "1", "max |E(t) + dissipated(t) - E(0)| / E(0): energy balance error of the integration"
+    )
+
+    # Period: the large-amplitude closed form exists for the free (b = 0, k = 0) pendulum.
+    rest = rest_angle(k, mgc, target, near=float(theta[-1]))
+    crossings = upward_crossings(t, theta, omega, level=rest if rest is not None else 0.0)
+    measured = float((crossings[-1] - crossings[0]) / (len(crossings) - 1)) if len(crossings) >= 2 else None
+    metrics["period_measured"] = Metric(measured, "s", "mean time between upward crossings of the rest angle")
+    if mgc > 0:
+        metrics["period_small_angle"] = Metric(2 * math.pi * math.sqrt(inertia / (mgc + k)), "s", "2 pi sqrt(I / (m g c + k))")
+    if b == 0 and k == 0 and mgc > 0 and abs(theta0) < math.pi and omega[0] == 0:
+        exact = exact_period(inertia, mgc, theta0)
+        metrics["period_exact"] = Metric(exact, "s", "4 sqrt(I / m g c) K(sin^2(theta0 / 2)), elliptic integral")
+        rel = abs(measured - exact) / exact if measured is not None else None
+        metrics["period_rel_error"] = Metric(rel, "1", "|measured - exact| / exact")
+
+    if rest is not None and b > 0:
+        metrics["rest_angle_predicted_deg"] = Metric(
+            math.degrees(rest), "deg", "stable solution of k (theta - target) + m g c sin(theta) = 0"
+        )
+        metrics["rest_angle_error"] = Metric(abs(float(theta[-1]) - rest), "rad", "|final angle - predicted rest angle|")
+        band = SETTLING_BAND * abs(theta0 - rest)
+        metrics["settling_time"] = Metric(
+            settling_time(t, theta, rest, band), "s", "time after which |theta - rest| stays within 2 % of |theta0 - rest|"
+        )
+    if k > 0:
+        metrics["target_deg"] = Metric(math.degrees(target), "deg", "spring equilibrium position")
+
+    summary = {
+        "pendulum-undamped": ["period_measured", "period_exact", "period_rel_error", "energy_drift_rel"],
+        "pendulum-damped": ["settling_time", "final_theta_deg", "energy_drift_rel"],
+        "pendulum": ["target_deg", "rest_angle_predicted_deg", "final_theta_deg", "rest_angle_error", "settling_time"],
+    }.get(name, ["final_theta_deg", "energy_drift_rel"])
+    return ScenarioResult(
+        scenario=name,
+        params=p,
+        model=model,
+        model_xml=xml,
+        trajectory=traj,
+        columns={
+            "t": t,
+            "theta": theta,
+            "omega": omega,
+            "energy_kinetic": e_kin,
+            "energy_gravity": e_grav,
+            "energy_spring": e_spring,
+            "energy_dissipated": e_diss,
+            "energy_total": e_total,
+        },
+        column_units={
+            "t": "s",
+            "theta": "rad",
+            "omega": "rad/s",
+            "energy_kinetic": "J",
+            "energy_gravity": "J",
+            "energy_spring": "J",
+            "energy_dissipated": "J",
+            "energy_total": "J",
+        },
+        metrics=metrics,
+        summary=[m for m in summary if m in metrics],
+        camera="side",
+        figures="pendulum",
+        extras={"rest_angle": rest, "target": target if k > 0 else None, "stable_equilibria": equilibria(k, mgc, target)},
+    )

@@ -1,0 +1,116 @@
+"""The stepping loop: preallocated arrays in, a Trajectory out; divergence is detected, never recorded."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+
+import mujoco
+import numpy as np
+
+from hexabot_sim.errors import SimulationError
+
+# Steps between two divergence checks (warning counters, finiteness of the recorded block).
+CHECK_EVERY: int = 100
+
+_WARNING_TEXT = {
+    "mjWARN_INERTIA": "invalid inertia",
+    "mjWARN_CONTACTFULL": "contact buffer full",
+    "mjWARN_CNSTRFULL": "constraint buffer full",
+    "mjWARN_BADQPOS": "bad qpos (NaN, inf or huge)",
+    "mjWARN_BADQVEL": "bad qvel (NaN, inf or huge)",
+    "mjWARN_BADQACC": "bad qacc (NaN, inf or huge): the integration is unstable",
+    "mjWARN_BADCTRL": "bad ctrl (NaN, inf or huge)",
+}
+
+Controller = Callable[[mujoco.MjModel, mujoco.MjData], None]
+
+
+@dataclasses.dataclass(frozen=True)
+class Trajectory:
+    """States recorded after every step (row 0 is the initial state)."""
+
+    t: np.ndarray  # (n,) [s]
+    qpos: np.ndarray  # (n, nq)
+    qvel: np.ndarray  # (n, nv)
+    ctrl: np.ndarray  # (n, nu)
+
+
+def step_count(duration: float, timestep: float) -> int:
+    """Number of steps that covers `duration` (the last recorded time is >= duration)."""
+    return max(1, math.ceil(duration / timestep - 1e-9))
+
+
+def warning_counts(data: mujoco.MjData) -> np.ndarray:
+    """Number of times each MuJoCo warning fired."""
+    return np.array([w.number for w in data.warning])
+
+
+def simulate(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    n_steps: int,
+    controller: Controller | None = None,
+) -> Trajectory:
+    """Steps `data` n_steps times from its current state, recording every step.
+
+    Args:
+        model: Compiled model.
+        data: State to start from; it is advanced in place.
+        n_steps: Number of mj_step calls.
+        controller: Called before every step to set data.ctrl (or the state, for kinematic playback).
+
+    Raises:
+        SimulationError: naming the time and the cause, when MuJoCo warns or the state is non-finite.
+    """
+    t = np.empty(n_steps + 1)  # (n,)
+    qpos = np.empty((n_steps + 1, model.nq))  # (n, nq)
+    qvel = np.empty((n_steps + 1, model.nv))  # (n, nv)
+    ctrl = np.empty((n_steps + 1, model.nu))  # (n, nu)
+    warnings0 = warning_counts(data)
+    step = mujoco.mj_step
+
+    t[0], qpos[0], qvel[0], ctrl[0] = data.time, data.qpos, data.qvel, data.ctrl
+    checked = 0
+    for i in range(1, n_steps + 1):
+        # Command, step, record.
+        if controller is not None:
+            controller(model, data)
+        step(model, data)
+        t[i], qpos[i], qvel[i], ctrl[i] = data.time, data.qpos, data.qvel, data.ctrl
+        if i % CHECK_EVERY == 0 or i == n_steps:
+            _check(data, warnings0, t, qpos, qvel, checked, i)
+            checked = i
+    if controller is not None:
+        ctrl[0] = ctrl[1]  # the command that acted from t = 0 on
+    return Trajectory(t=t, qpos=qpos, qvel=qvel, ctrl=ctrl)
+
+
+def _check(
+    data: mujoco.MjData,
+    warnings0: np.ndarray,
+    t: np.ndarray,
+    qpos: np.ndarray,
+    qvel: np.ndarray,
+    start: int,
+    stop: int,
+) -> None:
+    """Raises SimulationError if rows start..stop hold a non-finite state or a warning fired."""
+    block = slice(start, stop + 1)
+    bad = ~(np.isfinite(qpos[block]).all(axis=1) & np.isfinite(qvel[block]).all(axis=1))
+    # MuJoCo resets the state (and time) after a bad-qacc warning: time going backwards marks it.
+    bad[1:] |= np.diff(t[block]) <= 0
+    fired = np.flatnonzero(warning_counts(data) > warnings0)
+    if not bad.any() and fired.size == 0:
+        return
+    first = start + int(np.argmax(bad)) if bad.any() else stop
+    t_last = t[max(first - 1, 0)]
+    if fired.size:
+        names = [mujoco.mjtWarning(k).name for k in fired]
+        cause = "; ".join(_WARNING_TEXT.get(n, n) for n in names)
+    else:
+        cause = "non-finite state"
+    raise SimulationError(
+        f"simulation diverged after t = {t_last:.6g} s ({cause}); try a smaller timestep or the RK4 integrator"
+    )
