@@ -51,12 +51,21 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_parser("list", help="scenarios and their parameters with defaults and units")
     run = sub.add_parser("run", help="run a scenario and write a run folder")
     run.add_argument("scenario", help="scenario name (see 'hexabot-sim list')")
-    run.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE", help="override a parameter (repeatable)")
+    run.add_argument(
+        "--set",
+        dest="sets",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="override a parameter (repeatable)",
+    )
     run.add_argument("--config", metavar="FILE", help="TOML file of 'name = value' parameter lines")
     run.add_argument("--out", metavar="DIR", help="run folder (default: runs/<scenario>-<timestamp>)")
     run.add_argument("--force", action="store_true", help="replace --out if it already holds files")
     run.add_argument("--video", action="store_true", help="also render video.mp4 (headless)")
-    run.add_argument("--quality", choices=("preview", "high"), default="preview", help="video preset (default: preview)")
+    run.add_argument(
+        "--quality", choices=("preview", "high"), default="preview", help="video preset (default: preview)"
+    )
     run.add_argument("--size", type=_size, default=(640, 480), metavar="WxH", help="video size (default: 640x480)")
     run.add_argument("--fps", type=_fps, default=30, help="video frame rate (default: 30)")
     run.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
@@ -120,7 +129,7 @@ def cmd_check() -> int:
 
         print(f"ffmpeg        {imageio_ffmpeg.get_ffmpeg_exe()}")
         ffmpeg_ok = True
-    except Exception as e:  # noqa: BLE001 - report whatever stops ffmpeg from being found
+    except Exception as e:
         print(f"ffmpeg        NOT found: {e}")
         ffmpeg_ok = False
     video = "available" if working and ffmpeg_ok else "unavailable (CSV and plots still work)"
@@ -219,7 +228,8 @@ def cmd_run(args: argparse.Namespace) -> int:
             },
         )
 
-    print(f"{scenario.name}: {result.trajectory.t[-1]:.6g} s simulated in {sim_seconds:.2f} s -> {output.display_path(out)}")
+    simulated = f"{result.trajectory.t[-1]:.6g} s simulated in {sim_seconds:.2f} s"
+    print(f"{scenario.name}: {simulated} -> {output.display_path(out)}")
     for name in result.summary:
         metric = result.metrics[name]
         print(f"  {name:<26} {_format(metric.value, metric.unit)}")

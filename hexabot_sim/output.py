@@ -70,7 +70,9 @@ def write_csv(path: Path, columns: Mapping[str, np.ndarray]) -> None:
     table = np.column_stack([np.asarray(columns[n], dtype=float) for n in names])  # (n, ncol)
     if not np.isfinite(table).all():
         row, col = np.argwhere(~np.isfinite(table))[0]
-        raise SimulationError(f"non-finite value in column '{names[col]}' at t = {table[row, 0]:.6g} s; nothing written")
+        raise SimulationError(
+            f"non-finite value in column '{names[col]}' at t = {table[row, 0]:.6g} s; nothing written"
+        )
     np.savetxt(path, table, fmt="%.17g", delimiter=",", header=",".join(names), comments="")
 
 

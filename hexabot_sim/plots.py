@@ -8,11 +8,11 @@ from collections.abc import Callable
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
 
-from hexabot_sim.scenarios.base import ScenarioResult  # noqa: E402
+from hexabot_sim.scenarios.base import ScenarioResult
 
 TARGET_STYLE = {"color": "tab:red", "linestyle": "--", "linewidth": 1.2}
 REST_STYLE = {"color": "tab:green", "linestyle": ":", "linewidth": 1.5}
@@ -103,4 +103,3 @@ FIGURES: dict[str, Callable[[ScenarioResult], dict[str, Figure]]] = {
 def figures(result: ScenarioResult) -> dict[str, Figure]:
     """The figure set of a result, by file stem."""
     return FIGURES[result.figures](result)
-

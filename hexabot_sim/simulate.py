@@ -70,18 +70,27 @@ def simulate(
     ctrl = np.empty((n_steps + 1, model.nu))  # (n, nu)
     warnings0 = warning_counts(data)
     step = mujoco.mj_step
+    # Views into mjData, bound once: reading them in the loop costs only the copy into the record.
+    data_qpos, data_qvel, data_ctrl = data.qpos, data.qvel, data.ctrl
 
-    t[0], qpos[0], qvel[0], ctrl[0] = data.time, data.qpos, data.qvel, data.ctrl
-    checked = 0
-    for i in range(1, n_steps + 1):
-        # Command, step, record.
-        if controller is not None:
-            controller(model, data)
-        step(model, data)
-        t[i], qpos[i], qvel[i], ctrl[i] = data.time, data.qpos, data.qvel, data.ctrl
-        if i % CHECK_EVERY == 0 or i == n_steps:
-            _check(data, warnings0, t, qpos, qvel, checked, i)
-            checked = i
+    # MuJoCo prints its warnings by default; collect them instead, for one clear error message.
+    messages: list[str] = []
+    previous_handler = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(messages.append)
+    try:
+        t[0], qpos[0], qvel[0], ctrl[0] = data.time, data_qpos, data_qvel, data_ctrl
+        checked = 0
+        for i in range(1, n_steps + 1):
+            # Command, step, record.
+            if controller is not None:
+                controller(model, data)
+            step(model, data)
+            t[i], qpos[i], qvel[i], ctrl[i] = data.time, data_qpos, data_qvel, data_ctrl
+            if i % CHECK_EVERY == 0 or i == n_steps:
+                _check(data, warnings0, messages, t, qpos, qvel, checked, i)
+                checked = i
+    finally:
+        mujoco.set_mju_user_warning(previous_handler)
     if controller is not None:
         ctrl[0] = ctrl[1]  # the command that acted from t = 0 on
     return Trajectory(t=t, qpos=qpos, qvel=qvel, ctrl=ctrl)
@@ -90,6 +99,7 @@ def simulate(
 def _check(
     data: mujoco.MjData,
     warnings0: np.ndarray,
+    messages: list[str],
     t: np.ndarray,
     qpos: np.ndarray,
     qvel: np.ndarray,
@@ -106,11 +116,10 @@ def _check(
         return
     first = start + int(np.argmax(bad)) if bad.any() else stop
     t_last = t[max(first - 1, 0)]
-    if fired.size:
-        names = [mujoco.mjtWarning(k).name for k in fired]
-        cause = "; ".join(_WARNING_TEXT.get(n, n) for n in names)
+    if messages:
+        cause = f"MuJoCo: {messages[0].rstrip('.')}"
+    elif fired.size:
+        cause = "; ".join(_WARNING_TEXT.get(mujoco.mjtWarning(k).name, str(k)) for k in fired)
     else:
         cause = "non-finite state"
-    raise SimulationError(
-        f"simulation diverged after t = {t_last:.6g} s ({cause}); try a smaller timestep or the RK4 integrator"
-    )
+    raise SimulationError(f"simulation diverged after t = {t_last:.6g} s ({cause}); try a smaller timestep")

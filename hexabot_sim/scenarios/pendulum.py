@@ -205,7 +205,9 @@ def run(name: str, p: PendulumParams) -> ScenarioResult:
         "final_omega": Metric(float(omega[-1]), "rad/s", "angular velocity at the end of the run"),
         "max_abs_omega": Metric(float(np.abs(omega).max()), "rad/s", "largest angular speed"),
         "inertia_pivot": Metric(inertia, "kg*m^2", "moment of inertia about the hinge (from the compiled model)"),
-        "energy_initial": Metric(float(e_total[0]), "J", "total mechanical energy at t = 0 (zero: hanging, spring at rest)"),
+        "energy_initial": Metric(
+            float(e_total[0]), "J", "total mechanical energy at t = 0 (zero: hanging, spring at rest)"
+        ),
     }
     e_scale = float(e_total[0])
     drift = float(np.max(np.abs(e_total - e_total[0])) / e_scale) if e_scale > 0 else None
@@ -219,7 +221,9 @@ def run(name: str, p: PendulumParams) -> ScenarioResult:
     measured = float((crossings[-1] - crossings[0]) / (len(crossings) - 1)) if len(crossings) >= 2 else None
     metrics["period_measured"] = Metric(measured, "s", "mean time between upward crossings of the rest angle")
     if mgc > 0:
-        metrics["period_small_angle"] = Metric(2 * math.pi * math.sqrt(inertia / (mgc + k)), "s", "2 pi sqrt(I / (m g c + k))")
+        metrics["period_small_angle"] = Metric(
+            2 * math.pi * math.sqrt(inertia / (mgc + k)), "s", "2 pi sqrt(I / (m g c + k))"
+        )
     if b == 0 and k == 0 and mgc > 0 and abs(theta0) < math.pi and omega[0] == 0:
         exact = exact_period(inertia, mgc, theta0)
         metrics["period_exact"] = Metric(exact, "s", "4 sqrt(I / m g c) K(sin^2(theta0 / 2)), elliptic integral")
@@ -230,10 +234,14 @@ def run(name: str, p: PendulumParams) -> ScenarioResult:
         metrics["rest_angle_predicted_deg"] = Metric(
             math.degrees(rest), "deg", "stable solution of k (theta - target) + m g c sin(theta) = 0"
         )
-        metrics["rest_angle_error"] = Metric(abs(float(theta[-1]) - rest), "rad", "|final angle - predicted rest angle|")
+        metrics["rest_angle_error"] = Metric(
+            abs(float(theta[-1]) - rest), "rad", "|final angle - predicted rest angle|"
+        )
         band = SETTLING_BAND * abs(theta0 - rest)
         metrics["settling_time"] = Metric(
-            settling_time(t, theta, rest, band), "s", "time after which |theta - rest| stays within 2 % of |theta0 - rest|"
+            settling_time(t, theta, rest, band),
+            "s",
+            "time after which |theta - rest| stays within 2 % of |theta0 - rest|",
         )
     if k > 0:
         metrics["target_deg"] = Metric(math.degrees(target), "deg", "spring equilibrium position")
@@ -273,5 +281,9 @@ def run(name: str, p: PendulumParams) -> ScenarioResult:
         summary=[m for m in summary if m in metrics],
         camera="side",
         figures="pendulum",
-        extras={"rest_angle": rest, "target": target if k > 0 else None, "stable_equilibria": equilibria(k, mgc, target)},
+        extras={
+            "rest_angle": rest,
+            "target": target if k > 0 else None,
+            "stable_equilibria": equilibria(k, mgc, target),
+        },
     )

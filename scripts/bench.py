@@ -1,0 +1,136 @@
+"""Benchmarks with their targets; every ratio is measured side by side in one run.
+
+Usage: python scripts/bench.py [--repeat N] [--check]
+
+  sim-loop   the pendulum scenario's stepping loop (simulate(): recording + divergence checks)
+             vs a bare `mj_step` loop over the same model and number of steps   target <= 1.5x
+  video      frames rendered and encoded per second, 640x480, preview preset     target >= 100 fps
+  list       wall time of `hexabot-sim list` (python -m hexabot_sim list)        target <= 0.5 s
+
+Timings alternate between the two sides of a ratio and keep each side's best (least disturbed)
+repeat, because these machines are shared and noisy. `--check` exits 1 if a target is missed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+import mujoco
+
+from hexabot_sim import gl, params, render, scenarios
+from hexabot_sim.scenarios import pendulum
+from hexabot_sim.simulate import simulate, step_count
+
+
+def bench_sim_loop(repeat: int) -> dict[str, float]:
+    scenario = scenarios.get("pendulum")
+    p = params.resolve(scenario.params_type, scenario.defaults)
+    model = mujoco.MjModel.from_xml_string(pendulum.build_xml(p))
+    data = mujoco.MjData(model)
+    n = step_count(p.duration, p.timestep)
+    home = model.key("home").id
+    bare, loop = [], []
+    for _ in range(repeat):
+        mujoco.mj_resetDataKeyframe(model, data, home)
+        start = time.perf_counter()
+        for _ in range(n):
+            mujoco.mj_step(model, data)
+        bare.append(time.perf_counter() - start)
+
+        mujoco.mj_resetDataKeyframe(model, data, home)
+        start = time.perf_counter()
+        simulate(model, data, n)
+        loop.append(time.perf_counter() - start)
+    return {
+        "steps": n,
+        "bare_us_per_step": min(bare) / n * 1e6,
+        "loop_us_per_step": min(loop) / n * 1e6,
+        "ratio": min(loop) / min(bare),
+    }
+
+
+def bench_video(repeat: int) -> dict[str, float] | str:
+    backend, reason = gl.choose()
+    if backend is None:
+        return reason
+    scenario = scenarios.get("pendulum")
+    p = params.resolve(scenario.params_type, scenario.defaults)
+    result = scenario.runner("pendulum", p)
+    t, qpos = result.trajectory.t, result.trajectory.qpos
+    out: dict[str, float] = {"backend": backend}  # type: ignore[dict-item]
+    with tempfile.TemporaryDirectory() as tmp:
+        for quality in ("preview", "high"):
+            best = 0.0
+            for _ in range(repeat if quality == "preview" else 1):
+                start = time.perf_counter()
+                frames = render.render_video(result.model, t, qpos, Path(tmp) / "v.mp4", camera="side", quality=quality)
+                best = max(best, frames / (time.perf_counter() - start))
+            out[f"{quality}_fps"] = best
+    out["frames"] = frames
+    return out
+
+
+def bench_list(repeat: int) -> dict[str, float]:
+    def timed(argv: list[str]) -> float:
+        start = time.perf_counter()
+        subprocess.run(argv, check=True, stdout=subprocess.DEVNULL)
+        return time.perf_counter() - start
+
+    empty, listing = [], []
+    for _ in range(repeat):
+        empty.append(timed([sys.executable, "-c", "pass"]))
+        listing.append(timed([sys.executable, "-m", "hexabot_sim", "list"]))
+    return {"python_startup_s": min(empty), "list_s": min(listing)}
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--check", action="store_true", help="exit 1 if a target is missed")
+    args = parser.parse_args()
+
+    failures = []
+    sim = bench_sim_loop(args.repeat)
+    ok = sim["ratio"] <= 1.5
+    failures += [] if ok else ["sim-loop"]
+    print(
+        f"sim-loop  {sim['steps']} steps: bare mj_step {sim['bare_us_per_step']:.2f} us/step, "
+        f"simulate() {sim['loop_us_per_step']:.2f} us/step, ratio {sim['ratio']:.2f}x (target <= 1.5x) "
+        f"{'ok' if ok else 'MISSED'}"
+    )
+
+    video = bench_video(max(1, args.repeat // 2))
+    if isinstance(video, str):
+        print(f"video     skipped: {video}")
+    else:
+        ok = video["preview_fps"] >= 100
+        failures += [] if ok else ["video"]
+        print(
+            f"video     {video['frames']} frames 640x480 via {video['backend']}: "
+            f"preview {video['preview_fps']:.0f} fps "
+            f"(target >= 100) {'ok' if ok else 'MISSED'}; high {video['high_fps']:.0f} fps "
+            f"(preview/high = {video['preview_fps'] / video['high_fps']:.1f}x)"
+        )
+
+    lst = bench_list(args.repeat)
+    ok = lst["list_s"] <= 0.5
+    failures += [] if ok else ["list"]
+    print(
+        f"list      hexabot-sim list {lst['list_s']:.3f} s (python start-up alone {lst['python_startup_s']:.3f} s) "
+        f"(target <= 0.5 s) {'ok' if ok else 'MISSED'}"
+    )
+    if failures:
+        print(f"missed: {', '.join(failures)}")
+    return 1 if (failures and args.check) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,87 @@
+"""Parameter resolution: defaults, config files, --set, and the messages for bad values."""
+
+import dataclasses
+
+import pytest
+
+from hexabot_sim import params, scenarios
+from hexabot_sim.errors import UsageError
+from hexabot_sim.scenarios.pendulum import PendulumParams
+
+
+def test_layers_apply_in_order():
+    p = params.resolve(PendulumParams, {"damping": 0.0}, {"mass": 0.2, "damping": 0.5}, {"mass": "0.3"})
+    assert (p.mass, p.damping, p.length) == (0.3, 0.5, 0.3)
+
+
+def test_scenario_defaults():
+    undamped = scenarios.get("pendulum-undamped")
+    p = params.resolve(undamped.params_type, undamped.defaults)
+    assert p.damping == 0 and p.stiffness == 0 and p.theta0_deg == 90
+    spring = scenarios.get("pendulum")
+    p = params.resolve(spring.params_type, spring.defaults)
+    assert p.damping == 0.01 and p.stiffness > 0 and p.target_deg == 30
+
+
+@pytest.mark.parametrize(
+    ("overrides", "fragment"),
+    [
+        ({"dampin": "1"}, "unknown parameter 'dampin'; known: mass, length"),
+        ({"mass": "abc"}, "'mass' must be a finite number > 0; got 'abc'"),
+        ({"mass": "nan"}, "'mass' must be a finite number > 0"),
+        ({"mass": "inf"}, "'mass' must be a finite number > 0"),
+        ({"mass": "0"}, "'mass' must be a finite number > 0"),
+        ({"damping": "-0.1"}, "'damping' must be a finite number >= 0"),
+        ({"duration": "0"}, "'duration' must be a finite number > 0"),
+        ({"timestep": "-1e-3"}, "'timestep' must be a finite number > 0"),
+        ({"theta0_deg": "-inf"}, "'theta0_deg' must be a finite number"),
+        ({"integrator": "rk45"}, "'integrator' must be one of RK4, Euler, implicit, implicitfast"),
+        ({"timestep": "2", "duration": "1"}, "'timestep' must not exceed 'duration'"),
+        ({"radius": "0.5"}, "'radius' must be smaller than 'length'"),
+        ({"mass": True}, "'mass' must be a finite number > 0"),
+    ],
+)
+def test_bad_values_name_the_problem(overrides, fragment):
+    with pytest.raises(UsageError, match=None) as info:
+        params.resolve(PendulumParams, {}, overrides)
+    assert fragment in str(info.value)
+    assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("item", ["mass", "mass=", "=1", ""])
+def test_malformed_assignment(item):
+    with pytest.raises(UsageError, match="expected name=value"):
+        params.parse_assignments([item])
+
+
+def test_config_file(tmp_path):
+    path = tmp_path / "run.toml"
+    path.write_text("mass = 0.25\nintegrator = 'Euler'\n")
+    assert params.read_config(path) == {"mass": 0.25, "integrator": "Euler"}
+    path.write_text("[params]\nlength = 0.5\n")
+    assert params.read_config(path) == {"length": 0.5}
+
+
+@pytest.mark.parametrize(
+    ("text", "fragment"),
+    [("mass = = 1", "is not valid TOML"), ("[pendulum]\nmass = 1", "unexpected table [pendulum]")],
+)
+def test_bad_config_file(tmp_path, text, fragment):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(UsageError) as info:
+        params.read_config(path)
+    assert fragment in str(info.value)
+
+
+def test_missing_config_file(tmp_path):
+    with pytest.raises(UsageError, match="not found"):
+        params.read_config(tmp_path / "nope.toml")
+
+
+def test_every_parameter_has_unit_and_doc():
+    for scenario in scenarios.SCENARIOS.values():
+        for name, (info, _) in params.infos(scenario.params_type).items():
+            assert info.doc, name
+        assert dataclasses.is_dataclass(scenario.params_type)
+        assert set(scenario.defaults) <= set(params.infos(scenario.params_type))

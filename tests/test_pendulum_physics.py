@@ -1,0 +1,137 @@
+"""Pendulum physics against independent truth: ODE solve, elliptic period, energy balance, equilibrium."""
+
+import math
+
+import numpy as np
+import pytest
+from pendulum_reference import (
+    constants,
+    elliptic_period,
+    ode_solution,
+    simpson_cumulative,
+    spring_rest_angle,
+)
+
+from hexabot_sim import params, scenarios
+from hexabot_sim.scenarios import pendulum
+
+
+def run(name, **overrides):
+    scenario = scenarios.get(name)
+    p = params.resolve(scenario.params_type, scenario.defaults, overrides)
+    return p, scenario.runner(name, p)
+
+
+@pytest.fixture(scope="module", params=["pendulum-undamped", "pendulum-damped", "pendulum"])
+def default_run(request):
+    return request.param, *run(request.param)
+
+
+def test_matches_high_accuracy_ode_solve(default_run):
+    name, p, result = default_run
+    t, theta = result.columns["t"], result.columns["theta"]
+    assert t[-1] == pytest.approx(10.0)
+    inertia, mgc = constants(p.mass, p.length, p.radius)
+    theta_ref, omega_ref = ode_solution(
+        t, math.radians(p.theta0_deg), inertia, mgc, p.damping, p.stiffness, math.radians(p.target_deg)
+    )
+    assert np.max(np.abs(theta - theta_ref)) <= 1e-6, name
+    assert np.max(np.abs(result.columns["omega"] - omega_ref)) <= 1e-5, name
+
+
+def test_default_integrator_is_the_accurate_one():
+    """Euler at 1 ms is ~1e3 times further from the ODE solution than the default RK4."""
+    p, result = run("pendulum-undamped", integrator="Euler")
+    inertia, mgc = constants(p.mass, p.length, p.radius)
+    t = result.columns["t"]
+    theta_ref, _ = ode_solution(t, math.pi / 2, inertia, mgc, 0, 0, 0)
+    assert np.max(np.abs(result.columns["theta"] - theta_ref)) > 1e-4
+
+
+def test_undamped_period_is_the_elliptic_integral_period():
+    p, result = run("pendulum-undamped")
+    inertia, mgc = constants(p.mass, p.length, p.radius)
+    exact = elliptic_period(inertia, mgc, math.pi / 2)
+    # Independent measurement: upward zero crossings by linear interpolation (theta'' = 0 at theta = 0).
+    t, theta = result.columns["t"], result.columns["theta"]
+    i = np.flatnonzero((theta[:-1] < 0) & (theta[1:] >= 0))
+    crossings = t[i] - theta[i] * (t[i + 1] - t[i]) / (theta[i + 1] - theta[i])
+    measured = (crossings[-1] - crossings[0]) / (len(crossings) - 1)
+    assert len(crossings) >= 8
+    assert abs(measured - exact) / exact <= 1e-5
+    # The run's own metrics agree with the closed form too.
+    assert result.metrics["period_exact"].value == pytest.approx(exact, rel=1e-12)
+    assert result.metrics["period_rel_error"].value <= 1e-5
+    # Large amplitude is slower than the small-angle formula (K(1/2) / (pi/2) = 1.18034).
+    assert exact / (2 * math.pi * math.sqrt(inertia / mgc)) == pytest.approx(1.18034060, rel=1e-7)
+
+
+def test_undamped_total_energy_is_conserved():
+    p, result = run("pendulum-undamped")
+    inertia, mgc = constants(p.mass, p.length, p.radius)
+    theta, omega = result.columns["theta"], result.columns["omega"]
+    energy = 0.5 * inertia * omega**2 + mgc * (1 - np.cos(theta))
+    assert energy[0] == pytest.approx(mgc)
+    assert np.max(np.abs(energy - energy[0])) / energy[0] <= 1e-8
+
+
+def test_damped_energy_balance():
+    p, result = run("pendulum-damped")
+    inertia, mgc = constants(p.mass, p.length, p.radius)
+    t, theta, omega = result.columns["t"], result.columns["theta"], result.columns["omega"]
+    mechanical = 0.5 * inertia * omega**2 + mgc * (1 - np.cos(theta))
+    dissipated = simpson_cumulative(p.damping * omega**2, t)
+    assert dissipated[-1] > 0.99 * mechanical[0]  # nearly everything has gone into the damper
+    balance = mechanical + dissipated
+    assert np.max(np.abs(balance - mechanical[0])) / mechanical[0] <= 1e-6
+    # The energy columns the run writes satisfy the same balance.
+    total = result.columns["energy_total"]
+    assert np.max(np.abs(total - total[0])) / total[0] <= 1e-6
+
+
+def test_simpson_helper_is_accurate():
+    t = np.linspace(0, 3, 3001)
+    assert np.max(np.abs(simpson_cumulative(np.cos(t), t) - np.sin(t))) < 1e-12
+
+
+def test_damped_pendulum_comes_to_rest_within_a_few_seconds():
+    _, result = run("pendulum-damped")
+    settling = result.metrics["settling_time"].value
+    assert settling is not None and 1.0 < settling < 5.0
+    assert abs(result.columns["theta"][-1]) < 1e-4
+
+
+def test_spring_rest_angle_balances_gravity():
+    p, result = run("pendulum")
+    _inertia, mgc = constants(p.mass, p.length, p.radius)
+    rest = spring_rest_angle(mgc, p.stiffness, math.radians(p.target_deg))
+    final = result.columns["theta"][-1]
+    assert abs(final - rest) <= 1e-4
+    assert result.metrics["rest_angle_predicted_deg"].value == pytest.approx(math.degrees(rest), abs=1e-9)
+    # Near, but visibly not at, the 30 deg target: gravity pulls it down by several degrees.
+    assert 3 < 30 - math.degrees(rest) < 10
+
+
+def test_spring_without_gravity_rests_at_target():
+    _, result = run("pendulum", gravity=0.0, target_deg=30.0)
+    assert abs(result.columns["theta"][-1] - math.radians(30)) <= 1e-4
+    assert result.metrics["rest_angle_predicted_deg"].value == pytest.approx(30.0)
+
+
+@pytest.mark.parametrize(
+    ("k", "mgc", "target"), [(0.5, 0.14715, 0.5), (2.0, 1.0, -1.0), (0.05, 1.0, 0.3), (1.0, 0.0, 0.7)]
+)
+def test_equilibria_solve_the_balance_and_are_stable(k, mgc, target):
+    stable = pendulum.equilibria(k, mgc, target)
+    assert stable
+    for r in stable:
+        assert abs(k * (r - target) + mgc * math.sin(r)) < 1e-12
+        assert k + mgc * math.cos(r) > 0
+    if k > mgc:
+        assert len(stable) == 1
+
+
+def test_weak_spring_has_several_stable_rest_angles():
+    """k < m g c: the spring cannot hold the link up everywhere; gravity wells near 2 pi n appear."""
+    stable = pendulum.equilibria(0.05, 1.0, 0.3)
+    assert len(stable) >= 2

@@ -1,0 +1,71 @@
+"""Headless video: real-time length, size, content; skipped with the reason where no GL works."""
+
+import io
+import json
+
+import numpy as np
+
+from hexabot_sim.__main__ import ProgressBar, main
+
+
+def test_frame_indices_are_real_time():
+    from hexabot_sim.render import frame_indices
+
+    t = np.arange(0, 2001) * 0.001  # 2 s at 1 ms
+    idx = frame_indices(t, 30)
+    assert len(idx) == 61  # video duration = simulated duration
+    assert np.allclose(t[idx], np.arange(61) / 30, atol=0.0005)
+
+
+def _read(path):
+    import imageio.v2 as imageio
+
+    reader = imageio.get_reader(str(path))
+    try:
+        first = reader.get_data(0)
+        count = reader.count_frames()
+        fps = reader.get_meta_data()["fps"]
+    finally:
+        reader.close()
+    return first, count, fps
+
+
+def test_video_is_written_real_time_and_shows_the_link(tmp_path, capsys, gl_backend):
+    out_dir = tmp_path / "r"
+    code = main(["run", "pendulum", "--video", "--no-plots", "--out", str(out_dir), "--set", "duration=1"])
+    assert code == 0, capsys.readouterr().err
+    first, count, fps = _read(out_dir / "video.mp4")
+    assert count == 31 and fps == 30  # 1 s of simulation -> 1 s of video
+    assert first.shape == (480, 640, 3)
+    # At t = 0 the link is horizontal toward +x: its blue pixels lie right of the pivot (image centre).
+    r, g, b = (first[..., i].astype(int) for i in range(3))
+    blue = (b > 150) & (b > r + 60) & (b > g + 30)
+    ys, xs = np.nonzero(blue)
+    assert xs.size > 200
+    assert xs.mean() > 340 and abs(ys.mean() - 240) < 40
+    record = json.loads((out_dir / "run.json").read_text())
+    assert (
+        record["video"]["written"] and record["video"]["frames"] == 31 and record["video"]["gl_backend"] == gl_backend
+    )
+
+
+def test_high_quality_preset_and_custom_size(tmp_path, capsys, gl_backend):
+    out_dir = tmp_path / "r"
+    argv = ["run", "pendulum-undamped", "--video", "--quality", "high", "--size", "320x240", "--fps", "10"]
+    code = main([*argv, "--no-plots", "--out", str(out_dir), "--set", "duration=0.5"])
+    assert code == 0, capsys.readouterr().err
+    first, count, _ = _read(out_dir / "video.mp4")
+    assert first.shape == (240, 320, 3) and count == 6
+
+
+def test_progress_bar_only_on_a_terminal():
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    tty, pipe = Tty(), io.StringIO()
+    for stream in (tty, pipe):
+        bar = ProgressBar("video", stream)
+        for i in range(1, 11):
+            bar(i, 10)
+    assert "100% (10/10)" in tty.getvalue() and pipe.getvalue() == ""
