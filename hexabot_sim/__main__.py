@@ -141,7 +141,7 @@ def _format(value: Any, unit: str) -> str:
     if value is None:
         return "n/a"
     if isinstance(value, float):
-        return f"{value:.6g}{' ' + unit if unit and unit != '1' else ''}"
+        return f"{value:.8g}{' ' + unit if unit and unit != '1' else ''}"
     return f"{value}{' ' + unit if unit and unit != '1' else ''}"
 
 
@@ -191,6 +191,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                 height=height,
                 fps=args.fps,
                 quality=args.quality,
+                markers=result.markers,
                 progress=ProgressBar("video"),
             )
             files.append(output.VIDEO_NAME)

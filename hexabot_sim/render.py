@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import mujoco
 import numpy as np
+
+from hexabot_sim.scenarios.base import Marker
 
 
 @dataclasses.dataclass(frozen=True)
@@ -42,6 +44,20 @@ def frame_indices(t: np.ndarray, fps: float) -> np.ndarray:
     return np.where(nearer_left, idx - 1, idx)
 
 
+def add_segment(scene: mujoco.MjvScene, marker: Marker) -> None:
+    """Appends a capsule from marker.start to marker.end to the scene (if there is room)."""
+    if scene.ngeom >= scene.maxgeom:
+        return
+    geom = scene.geoms[scene.ngeom]
+    mujoco.mjv_initGeom(
+        geom, mujoco.mjtGeom.mjGEOM_CAPSULE, np.zeros(3), np.zeros(3), np.eye(3).ravel(), np.array(marker.rgba, "f4")
+    )
+    mujoco.mjv_connector(
+        geom, mujoco.mjtGeom.mjGEOM_CAPSULE, marker.radius, np.array(marker.start, float), np.array(marker.end, float)
+    )
+    scene.ngeom += 1
+
+
 def render_video(
     model: mujoco.MjModel,
     t: np.ndarray,
@@ -53,12 +69,14 @@ def render_video(
     height: int = 480,
     fps: int = FPS,
     quality: str = "preview",
+    markers: Sequence[Marker] = (),
     progress: Progress | None = None,
     decorate: Decorate | None = None,
 ) -> int:
     """Renders the recorded states (t: (n,), qpos: (n, nq)) from `camera` into an MP4 at `path`.
 
-    Frames are encoded as they are rendered; only one frame is held in memory.
+    Frames are encoded as they are rendered; only one frame is held in memory. `markers` are drawn
+    in every frame; `decorate(scene, row)` may add per-frame geoms (e.g. a trail).
 
     Returns:
         Number of frames written.
@@ -96,6 +114,8 @@ def render_video(
                 mujoco.mj_kinematics(model, data)
                 mujoco.mj_camlight(model, data)
                 renderer.update_scene(data, camera=camera_id)
+                for marker in markers:
+                    add_segment(renderer.scene, marker)
                 if decorate is not None:
                     decorate(renderer.scene, int(row))
                 writer.append_data(renderer.render())

@@ -20,6 +20,16 @@ class Metric:
     doc: str
 
 
+@dataclasses.dataclass(frozen=True)
+class Marker:
+    """A segment drawn into every video frame (e.g. a predicted rest angle), world frame [m]."""
+
+    start: tuple[float, float, float]
+    end: tuple[float, float, float]
+    radius: float
+    rgba: tuple[float, float, float, float]
+
+
 @dataclasses.dataclass
 class ScenarioResult:
     """Everything a run produced in memory; output.py, plots.py and render.py read it, nothing else."""
@@ -35,4 +45,5 @@ class ScenarioResult:
     summary: list[str]  # metric names shown after the run
     camera: str  # camera the video is rendered from
     figures: str  # name of the figure set in plots.py
+    markers: list[Marker] = dataclasses.field(default_factory=list)  # drawn into the video
     extras: dict[str, Any] = dataclasses.field(default_factory=dict)  # scenario data for plots

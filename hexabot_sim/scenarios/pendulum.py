@@ -10,7 +10,7 @@ import numpy as np
 
 from hexabot_sim import models
 from hexabot_sim.params import param
-from hexabot_sim.scenarios.base import Metric, ScenarioResult
+from hexabot_sim.scenarios.base import Marker, Metric, ScenarioResult
 from hexabot_sim.simulate import simulate, step_count
 
 INTEGRATORS = ("RK4", "Euler", "implicit", "implicitfast")
@@ -246,6 +246,22 @@ def run(name: str, p: PendulumParams) -> ScenarioResult:
     if k > 0:
         metrics["target_deg"] = Metric(math.degrees(target), "deg", "spring equilibrium position")
 
+    markers = []
+    if rest is not None and b > 0:  # the predicted rest angle, drawn in green beside the link
+        pivot = model.body("link").pos
+        length = float(np.linalg.norm(model.site("tip").pos))
+        markers.append(
+            Marker(
+                start=(pivot[0], pivot[1] - 0.02 * length, pivot[2]),
+                end=(
+                    pivot[0] + length * math.sin(rest),
+                    pivot[1] - 0.02 * length,
+                    pivot[2] - length * math.cos(rest),
+                ),
+                radius=0.008 * length,
+                rgba=(0.1, 0.75, 0.2, 0.6),
+            )
+        )
     summary = {
         "pendulum-undamped": ["period_measured", "period_exact", "period_rel_error", "energy_drift_rel"],
         "pendulum-damped": ["settling_time", "final_theta_deg", "energy_drift_rel"],
@@ -281,6 +297,7 @@ def run(name: str, p: PendulumParams) -> ScenarioResult:
         summary=[m for m in summary if m in metrics],
         camera="side",
         figures="pendulum",
+        markers=markers,
         extras={
             "rest_angle": rest,
             "target": target if k > 0 else None,

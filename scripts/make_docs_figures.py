@@ -1,0 +1,47 @@
+"""Regenerates the figures and the video frame shown in README.md (docs/*.png).
+
+Usage: python scripts/make_docs_figures.py
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+from hexabot_sim.__main__ import main  # the same path a user takes
+
+DOCS = Path(__file__).resolve().parent.parent / "docs"
+
+
+def run(scenario: str, *extra: str) -> Path:
+    out = Path(tempfile.mkdtemp()) / scenario
+    code = main(["run", scenario, "--out", str(out), *extra])
+    if code != 0:
+        sys.exit(code)
+    return out
+
+
+def main_() -> int:
+    import imageio.v2 as imageio
+
+    DOCS.mkdir(exist_ok=True)
+    spring = run("pendulum", "--video")
+    for name in ("angle_velocity", "phase", "energy"):
+        (DOCS / f"pendulum_{name}.png").write_bytes((spring / f"{name}.png").read_bytes())
+    reader = imageio.get_reader(str(spring / "video.mp4"))
+    try:
+        imageio.imwrite(DOCS / "pendulum_frame.png", reader.get_data(12))  # t = 0.4 s
+    finally:
+        reader.close()
+    undamped = run("pendulum-undamped")
+    (DOCS / "pendulum_undamped_angle_velocity.png").write_bytes((undamped / "angle_velocity.png").read_bytes())
+    print(f"wrote figures to {DOCS}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main_())
