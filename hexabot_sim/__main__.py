@@ -157,7 +157,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
         backend, no_video_reason = gl.choose()
 
-    p = params_mod.resolve(scenario.params_type, scenario.defaults, config, sets)
+    p: Any = params_mod.resolve(scenario.params_type, scenario.defaults, config, sets)
     out = Path(args.out) if args.out else None
 
     from hexabot_sim import output
@@ -259,7 +259,13 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def console() -> NoReturn:
     """Entry point of the `hexabot-sim` console script."""
-    sys.exit(main())
+    try:
+        code = main()
+        sys.stdout.flush()
+    except BrokenPipeError:  # e.g. `hexabot-sim list | head`: the reader left; not an error of ours
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        code = 0
+    sys.exit(code)
 
 
 if __name__ == "__main__":

@@ -52,10 +52,10 @@ def infos(cls: type) -> dict[str, tuple[ParamInfo, Any]]:
 def _convert(name: str, raw: Any, info: ParamInfo, kind: type) -> Any:
     """Converts one raw value (a string from --set or a TOML value) and checks its range."""
     if info.choices is not None:
-        value = str(raw) if not isinstance(raw, str) else raw
-        if value not in info.choices:
+        text = str(raw)
+        if text not in info.choices:
             raise UsageError(f"parameter '{name}' must be one of {', '.join(info.choices)}; got {raw!r}")
-        return value
+        return text
     phrase = CHECKS[info.check][0]
     if isinstance(raw, bool):
         raise UsageError(f"parameter '{name}' must be {phrase}; got {raw!r}")
@@ -123,7 +123,7 @@ def resolve(cls: type[T], defaults: Mapping[str, Any], *layers: Mapping[str, Any
         UsageError: naming the unknown parameter or the bad value and what is allowed.
     """
     known = infos(cls)
-    kinds = {f.name: type(f.default) for f in dataclasses.fields(cls)}
+    kinds = {f.name: type(f.default) for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
     values: dict[str, Any] = {}
     for layer in (defaults, *layers):
         for name, raw in layer.items():

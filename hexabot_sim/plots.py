@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any
 
 import matplotlib
 
@@ -14,8 +15,8 @@ from matplotlib.figure import Figure
 
 from hexabot_sim.scenarios.base import ScenarioResult
 
-TARGET_STYLE = {"color": "tab:red", "linestyle": "--", "linewidth": 1.2}
-REST_STYLE = {"color": "tab:green", "linestyle": ":", "linewidth": 1.5}
+TARGET_STYLE: dict[str, Any] = {"color": "tab:red", "linestyle": "--", "linewidth": 1.2}
+REST_STYLE: dict[str, Any] = {"color": "tab:green", "linestyle": ":", "linewidth": 1.5}
 
 
 def _title(result: ScenarioResult, text: str) -> str:
