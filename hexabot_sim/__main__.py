@@ -192,6 +192,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                 fps=args.fps,
                 quality=args.quality,
                 markers=result.markers,
+                trail=result.trail,
                 progress=ProgressBar("video"),
             )
             files.append(output.VIDEO_NAME)

@@ -96,8 +96,97 @@ def pendulum_figures(result: ScenarioResult) -> dict[str, Figure]:
     return figures
 
 
+def _shade_singular(ax: plt.Axes, t: np.ndarray, near: np.ndarray, label: bool = False) -> None:
+    """Shades the intervals where sigma_min(J) is below the damping threshold."""
+    edges = np.flatnonzero(np.diff(np.r_[0, near.astype(int), 0]))
+    for n, (start, stop) in enumerate(zip(edges[::2], edges[1::2], strict=True)):
+        ax.axvspan(
+            t[start], t[min(stop, len(t) - 1)], color="tab:red", alpha=0.12, lw=0,
+            label="near-singular (σ_min < threshold)" if label and n == 0 else None,
+        )  # fmt: skip
+
+
+def _min_span(ax: plt.Axes, span: float) -> None:
+    """Keeps a y axis at least `span` tall so round-off (1e-17) is not blown up to full height."""
+    low, high = ax.get_ylim()
+    if high - low < span:
+        mid = 0.5 * (low + high)
+        ax.set_ylim(mid - span / 2, mid + span / 2)
+
+
+def _leg_title(result: ScenarioResult, text: str) -> str:
+    p = result.params
+    return (
+        f"{result.scenario}: {text}\n"
+        f"{p.mode}, v_x = {p.amplitude * 1000:g} mm/s · {'sin' if p.profile == 'sine' else 'cos'}({p.omega:g} t), "
+        f"start ({p.start_x * 1000:g}, {p.start_y * 1000:g}, {p.start_z * 1000:g}) mm"
+    )
+
+
+def leg_figures(result: ScenarioResult) -> dict[str, Figure]:
+    """Report Figs. 11-16 (foot position, velocity, joints, foot orientation) plus det J and tracking error."""
+    c = result.columns
+    t, near = c["t"], result.extras["near_singular"]
+    figures: dict[str, Figure] = {}
+
+    def triple(
+        names: tuple[str, ...], labels: tuple[str, ...], unit: str, scale: float, title: str, des: bool
+    ) -> Figure:
+        fig, axes = plt.subplots(len(names), 1, sharex=True, figsize=(9, 7), constrained_layout=True)
+        for n, (ax, name, label) in enumerate(zip(axes, names, labels, strict=True)):
+            ax.plot(t, c[name] * scale, color="tab:blue", label="measured (MuJoCo)")
+            if des:
+                ax.plot(t, c[f"{name}_des"] * scale, "--", color="black", linewidth=1, label="desired")
+            _shade_singular(ax, t, near, label=n == 0)
+            _min_span(ax, 1e-3)
+            ax.set_ylabel(f"{label} [{unit}]")
+            ax.grid(alpha=0.3)
+        axes[0].legend(fontsize=8, loc="upper right")
+        axes[-1].set_xlabel("time t [s]")
+        axes[0].set_title(_leg_title(result, title), fontsize=10)
+        return fig
+
+    figures["foot_position"] = triple(
+        ("foot_x", "foot_y", "foot_z"), ("x", "y", "z"), "mm", 1000, "foot position, world frame (report Fig. 11)", True
+    )
+    figures["foot_velocity"] = triple(
+        ("vx", "vy", "vz"), ("v_x", "v_y", "v_z"), "mm/s", 1000, "foot velocity (report Fig. 12)", True
+    )
+    figures["joints"] = triple(
+        ("q1", "q2", "q3"), ("q1 coxa", "q2 femur", "q3 tibia"), "rad", 1, "joint angles (report Figs. 13-15)", False
+    )
+    figures["foot_orientation"] = triple(
+        ("roll", "pitch", "yaw"),
+        ("roll", "pitch", "yaw"),
+        "rad",
+        1,
+        "foot orientation, ZYX angles (report Fig. 16)",
+        False,
+    )
+
+    fig, (ax1, ax2) = plt.subplots(2, 1, sharex=True, figsize=(9, 6), constrained_layout=True)
+    ax1.semilogy(t, np.maximum(np.abs(c["det_j"]), 1e-12), label="|det J| [m³/rad³]")
+    ax1.semilogy(t, np.maximum(c["sigma_min"], 1e-12), label="σ_min(J) [m/rad]")
+    ax1.axhline(result.params.sigma_threshold, **TARGET_STYLE, label="damping threshold")
+    _shade_singular(ax1, t, near, label=True)
+    ax1.legend(fontsize=8, loc="lower left")
+    ax1.grid(alpha=0.3, which="both")
+    ax1.set_title(_leg_title(result, "distance to singularity and tracking error"), fontsize=10)
+    err = np.linalg.norm(
+        np.c_[c["foot_x"] - c["foot_x_des"], c["foot_y"] - c["foot_y_des"], c["foot_z"] - c["foot_z_des"]], axis=1
+    )
+    ax2.semilogy(t, np.maximum(err * 1000, 1e-9), color="black", linewidth=0.9)
+    _shade_singular(ax2, t, near)
+    ax2.set_ylabel("|foot − foot_des| [mm]")
+    ax2.set_xlabel("time t [s]")
+    ax2.grid(alpha=0.3, which="both")
+    figures["singularity"] = fig
+    return figures
+
+
 FIGURES: dict[str, Callable[[ScenarioResult], dict[str, Figure]]] = {
     "pendulum": pendulum_figures,
+    "leg": leg_figures,
 }
 
 

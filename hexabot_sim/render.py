@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import itertools
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -44,17 +45,32 @@ def frame_indices(t: np.ndarray, fps: float) -> np.ndarray:
     return np.where(nearer_left, idx - 1, idx)
 
 
+TRAIL_SEGMENTS: int = 150  # at most this many line segments draw a trail (cost grows per segment)
+TRAIL_WIDTH: float = 3.0  # [px]
+TRAIL_RGBA = np.array([1.0, 0.85, 0.1, 1.0], dtype=np.float32)
+
+
 def add_segment(scene: mujoco.MjvScene, marker: Marker) -> None:
     """Appends a capsule from marker.start to marker.end to the scene (if there is room)."""
+    _connector(scene, mujoco.mjtGeom.mjGEOM_CAPSULE, marker.radius, marker.start, marker.end, marker.rgba)
+
+
+def add_polyline(scene: mujoco.MjvScene, points: np.ndarray, width: float, rgba: np.ndarray) -> None:
+    """Appends thin lines through points (k, 3), subsampled to at most TRAIL_SEGMENTS segments."""
+    if len(points) < 2:
+        return
+    step = -(-(len(points) - 1) // TRAIL_SEGMENTS)
+    keep = np.r_[points[:-1:step], points[-1:]]  # always ends at the newest point
+    for a, b in itertools.pairwise(keep):
+        _connector(scene, mujoco.mjtGeom.mjGEOM_LINE, width, a, b, rgba)
+
+
+def _connector(scene: mujoco.MjvScene, kind: int, width: float, start, end, rgba) -> None:
     if scene.ngeom >= scene.maxgeom:
         return
     geom = scene.geoms[scene.ngeom]
-    mujoco.mjv_initGeom(
-        geom, mujoco.mjtGeom.mjGEOM_CAPSULE, np.zeros(3), np.zeros(3), np.eye(3).ravel(), np.array(marker.rgba, "f4")
-    )
-    mujoco.mjv_connector(
-        geom, mujoco.mjtGeom.mjGEOM_CAPSULE, marker.radius, np.array(marker.start, float), np.array(marker.end, float)
-    )
+    mujoco.mjv_initGeom(geom, kind, np.zeros(3), np.zeros(3), np.eye(3).ravel(), np.asarray(rgba, np.float32))
+    mujoco.mjv_connector(geom, kind, width, np.asarray(start, float), np.asarray(end, float))
     scene.ngeom += 1
 
 
@@ -70,13 +86,15 @@ def render_video(
     fps: int = FPS,
     quality: str = "preview",
     markers: Sequence[Marker] = (),
+    trail: np.ndarray | None = None,
     progress: Progress | None = None,
     decorate: Decorate | None = None,
 ) -> int:
     """Renders the recorded states (t: (n,), qpos: (n, nq)) from `camera` into an MP4 at `path`.
 
     Frames are encoded as they are rendered; only one frame is held in memory. `markers` are drawn
-    in every frame; `decorate(scene, row)` may add per-frame geoms (e.g. a trail).
+    in every frame; `trail` (n, 3) world points are drawn as the path travelled up to each frame;
+    `decorate(scene, row)` may add further per-frame geoms.
 
     Returns:
         Number of frames written.
@@ -104,7 +122,7 @@ def render_video(
         output_params=["-preset", preset.x264_preset],
     )
     try:
-        with mujoco.Renderer(model, height, width) as renderer:
+        with mujoco.Renderer(model, height, width, max_geom=model.ngeom + TRAIL_SEGMENTS + 100) as renderer:
             if preset.shadowsize == 0:
                 renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
             for n, row in enumerate(indices):
@@ -116,6 +134,8 @@ def render_video(
                 renderer.update_scene(data, camera=camera_id)
                 for marker in markers:
                     add_segment(renderer.scene, marker)
+                if trail is not None:  # the path travelled so far
+                    add_polyline(renderer.scene, trail[indices[: n + 1]], TRAIL_WIDTH, TRAIL_RGBA)
                 if decorate is not None:
                     decorate(renderer.scene, int(row))
                 writer.append_data(renderer.render())

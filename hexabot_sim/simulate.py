@@ -52,6 +52,7 @@ def simulate(
     data: mujoco.MjData,
     n_steps: int,
     controller: Controller | None = None,
+    step: Controller = mujoco.mj_step,
 ) -> Trajectory:
     """Steps `data` n_steps times from its current state, recording every step.
 
@@ -60,6 +61,7 @@ def simulate(
         data: State to start from; it is advanced in place.
         n_steps: Number of mj_step calls.
         controller: Called before every step to set data.ctrl (or the state, for kinematic playback).
+        step: Advances data by one timestep: mj_step (dynamics) or a kinematic update.
 
     Raises:
         SimulationError: naming the time and the cause, when MuJoCo warns or the state is non-finite.
@@ -69,7 +71,6 @@ def simulate(
     qvel = np.empty((n_steps + 1, model.nv))  # (n, nv)
     ctrl = np.empty((n_steps + 1, model.nu))  # (n, nu)
     warnings0 = warning_counts(data)
-    step = mujoco.mj_step
     # Views into mjData, bound once: reading them in the loop costs only the copy into the record.
     data_qpos, data_qvel, data_ctrl = data.qpos, data.qvel, data.ctrl
 
@@ -123,3 +124,32 @@ def _check(
     else:
         cause = "non-finite state"
     raise SimulationError(f"simulation diverged after t = {t_last:.6g} s ({cause}); try a smaller timestep")
+
+
+@dataclasses.dataclass(frozen=True)
+class SiteTrajectory:
+    """A site's pose and velocity along a trajectory, as MuJoCo computes them, world frame."""
+
+    pos: np.ndarray  # (n, 3) [m]
+    xmat: np.ndarray  # (n, 3, 3)
+    vel: np.ndarray  # (n, 3) [m/s], linear velocity = mj_jacSite(q) qvel
+
+
+def site_trajectory(model: mujoco.MjModel, traj: Trajectory, site: str) -> SiteTrajectory:
+    """Replays the recorded states through MuJoCo's kinematics and reads the site at every row."""
+    data = mujoco.MjData(model)
+    site_id = model.site(site).id
+    n = len(traj.t)
+    pos = np.empty((n, 3))  # (n, 3)
+    xmat = np.empty((n, 3, 3))  # (n, 3, 3)
+    vel = np.empty((n, 3))  # (n, 3)
+    jacp = np.empty((3, model.nv))  # (3, nv)
+    for i in range(n):
+        data.qpos[:] = traj.qpos[i]
+        mujoco.mj_kinematics(model, data)
+        mujoco.mj_comPos(model, data)
+        mujoco.mj_jacSite(model, data, jacp, None, site_id)
+        pos[i] = data.site_xpos[site_id]
+        xmat[i] = data.site_xmat[site_id].reshape(3, 3)
+        vel[i] = jacp @ traj.qvel[i]
+    return SiteTrajectory(pos=pos, xmat=xmat, vel=vel)

@@ -64,6 +64,13 @@ SCENARIOS: dict[str, Scenario] = {
             "PendulumParams",
             {},
         ),
+        Scenario(
+            "leg-step",
+            "hexabot leg: resolved-rate forward step of the foot along the ground X axis (reports 000/002/004)",
+            "leg",
+            "LegStepParams",
+            {},
+        ),
     )
 }
 

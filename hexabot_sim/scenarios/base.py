@@ -46,4 +46,5 @@ class ScenarioResult:
     camera: str  # camera the video is rendered from
     figures: str  # name of the figure set in plots.py
     markers: list[Marker] = dataclasses.field(default_factory=list)  # drawn into the video
+    trail: np.ndarray | None = None  # (n, 3) world points whose path the video draws (e.g. the foot)
     extras: dict[str, Any] = dataclasses.field(default_factory=dict)  # scenario data for plots

@@ -1,0 +1,1 @@
+"""Controllers: given state and targets, return commands (no file I/O, no MuJoCo)."""

@@ -1,0 +1,1 @@
+"""Analytic kinematics in pure numpy: DH transforms, forward kinematics, Jacobians, inverse kinematics."""

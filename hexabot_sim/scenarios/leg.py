@@ -1,0 +1,310 @@
+"""Hexabot leg forward step (reports 000, 002, 004): resolved-rate control of the foot along the ground X axis."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import mujoco
+import numpy as np
+
+from hexabot_sim import models
+from hexabot_sim.control.resolved_rate import ResolvedRateController, ResolvedRateGains
+from hexabot_sim.errors import UsageError
+from hexabot_sim.kinematics import leg as leg_kin
+from hexabot_sim.params import param
+from hexabot_sim.scenarios.base import Marker, Metric, ScenarioResult
+from hexabot_sim.simulate import simulate, site_trajectory, step_count
+
+GEOMETRY = leg_kin.LegGeometry()  # the lengths models/leg.xml is built with (tested against it)
+JOINTS = ("coxa", "femur", "tibia")
+# In dynamic mode the servos overshoot a commanded speed transient by ~2 % (measured with the
+# defaults driven out of the workspace): the command keeps this margin below max_joint_speed.
+SERVO_SPEED_MARGIN: float = 0.95
+INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")
+
+
+@dataclasses.dataclass(frozen=True)
+class LegStepParams:
+    """Parameters of the leg-step scenario (hip frame: x forward along the ground, z up)."""
+
+    amplitude: float = param(0.05, "m/s", "A in v_x = A sin(omega t) (report: 10, 50, 100, 80 mm/s)")
+    omega: float = param(1.0, "rad/s", "omega of the velocity command (report: 1 and pi/6)", "positive")
+    duration: float = param(0.0, "s", "simulated time; 0 = two periods of the command, 4 pi / omega", "nonnegative")
+    profile: str = param(
+        "sine", "", "sine: v = A sin wt (report; x from x0 to x0 + 2A/w); cosine: v = A cos wt (symmetric)",
+        choices=("sine", "cosine"),
+    )  # fmt: skip
+    mode: str = param(
+        "dynamic", "", "dynamic: servos + MuJoCo dynamics; kinematic: q imposed (report's Simulink)",
+        choices=("dynamic", "kinematic"),
+    )  # fmt: skip
+    max_joint_speed: float = param(5.0, "rad/s", "limit on every joint speed", "positive")
+    max_joint_acceleration: float = param(50.0, "rad/s^2", "limit on every commanded joint acceleration", "positive")
+    task_gain: float = param(50.0, "1/s", "K: feedback on the foot position error", "nonnegative")
+    sigma_threshold: float = param(0.01, "m/rad", "smallest singular value of J below which DLS damps", "positive")
+    max_damping: float = param(0.01, "m/rad", "DLS damping lambda reached at a singularity", "nonnegative")
+    start_x: float = param(0.05, "m", "start foot position in the hip frame (under the femur axis)")
+    start_y: float = param(0.0, "m", "start foot position in the hip frame")
+    start_z: float = param(-0.08, "m", "start foot position in the hip frame (80 mm below the hip)")
+    gravity_compensation: str = param("on", "", "servo feedforward of the exact gravity torque", choices=("on", "off"))
+    timestep: float = param(0.001, "s", "integration and control period", "positive")
+    integrator: str = param("implicitfast", "", "MuJoCo integrator (dynamic mode)", choices=INTEGRATORS)
+
+    def __post_init__(self) -> None:
+        if self.duration == 0:
+            object.__setattr__(self, "duration", 4 * math.pi / self.omega)
+        if self.timestep > self.duration:
+            raise ValueError(
+                f"parameter 'timestep' must not exceed 'duration' ({self.duration} s); got {self.timestep}"
+            )
+        if step_count(self.duration, self.timestep) > 2_000_000:
+            raise ValueError("duration / timestep must be at most 2e6 steps; raise 'timestep' or lower 'duration'")
+
+
+def reference(p: LegStepParams, start: np.ndarray):
+    """x_des(t) in the hip frame: the integral of the velocity command from the start point."""
+    x0, y0, z0 = (float(v) for v in start)
+    a, w = p.amplitude, p.omega
+    if p.profile == "sine":
+        return lambda t: (x0 + a / w * (1.0 - math.cos(w * t)), y0, z0)
+    return lambda t: (x0 + a / w * math.sin(w * t), y0, z0)
+
+
+def reference_velocity(p: LegStepParams, t: np.ndarray) -> np.ndarray:
+    """v_x,des(t) [m/s]."""
+    return p.amplitude * (np.sin(p.omega * t) if p.profile == "sine" else np.cos(p.omega * t))
+
+
+def line_reach(start: np.ndarray, geom: leg_kin.LegGeometry = GEOMETRY) -> tuple[float, float]:
+    """How far the foot can travel along +x and -x from `start` before leaving the reachable set [m].
+
+    A point is reachable iff (sqrt(x^2 + y^2) - l1)^2 + z^2 <= (l2 + l3)^2 (coxa free); going
+    backward the coxa stays near 0 so the foot passes behind its axis with rho = x < 0.
+    """
+    x0, y0, z0 = (float(v) for v in start)
+    span = (geom.l2 + geom.l3) ** 2 - z0**2
+    if span < 0:
+        return 0.0, 0.0
+    forward = math.sqrt(max((geom.l1 + math.sqrt(span)) ** 2 - y0**2, 0.0)) - x0
+    backward = x0 + math.sqrt(span) - geom.l1
+    return forward, backward
+
+
+def excursion(p: LegStepParams) -> tuple[float, float]:
+    """Largest travel (forward, backward) [m] the command asks for: 2A/w (sine) or A/w each way (cosine)."""
+    s = p.amplitude / p.omega
+    if p.profile == "sine":
+        return (2 * s, 0.0) if s >= 0 else (0.0, -2 * s)
+    return abs(s), abs(s)
+
+
+def start_pose(p: LegStepParams, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """IK of the start point on the branch inside the joint ranges (front of the coxa, knee out)."""
+    target = np.array([p.start_x, p.start_y, p.start_z])
+    try:
+        branches = leg_kin.ik(target, GEOMETRY)
+    except UsageError as e:
+        raise UsageError(f"start pose {tuple(target.tolist())} m is outside the workspace: {e}") from None
+    inside = [q for q in branches if np.all(q >= lower - 1e-12) and np.all(q <= upper + 1e-12)]
+    if not inside:
+        raise UsageError(
+            f"start pose {tuple(target.tolist())} m is reachable only outside the joint ranges "
+            f"(coxa, femur within +-90 deg, tibia 0..160 deg)"
+        )
+    return min(inside, key=lambda q: (-q[2] > 0, abs(q[0])))
+
+
+def build_xml(p: LegStepParams) -> str:
+    """The leg scene with the run's options written in."""
+    root = models.load_tree("leg_scene")
+    models.find(root, "option").attrib.update(timestep=models.fmt(p.timestep), integrator=p.integrator)
+    for name in JOINTS:
+        models.find(root, "body", name).set("gravcomp", "1" if p.gravity_compensation == "on" else "0")
+    return models.to_xml(root)
+
+
+def run(name: str, p: LegStepParams) -> ScenarioResult:
+    """Drives the foot along the hip-frame X axis with the resolved-rate controller."""
+    xml = build_xml(p)
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    qadr = [int(model.joint(j).qposadr[0]) for j in JOINTS]
+    dadr = [int(model.joint(j).dofadr[0]) for j in JOINTS]
+    lower = np.array([model.jnt_range[model.joint(j).id][0] for j in JOINTS])
+    upper = np.array([model.jnt_range[model.joint(j).id][1] for j in JOINTS])
+    q0 = start_pose(p, lower, upper)
+    start = np.array([p.start_x, p.start_y, p.start_z])
+
+    controller = ResolvedRateController(
+        GEOMETRY,
+        ResolvedRateGains(
+            p.task_gain,
+            p.sigma_threshold,
+            p.max_damping,
+            p.max_joint_speed * (SERVO_SPEED_MARGIN if p.mode == "dynamic" else 1.0),
+            p.max_joint_acceleration,
+        ),
+        reference(p, start),
+        tuple(q0.tolist()),
+        tuple(lower.tolist()),
+        tuple(upper.tolist()),
+    )
+    pos_act = [model.actuator(j).id for j in JOINTS]
+    vel_act = [model.actuator(f"{j}_velocity").id for j in JOINTS]
+    data.qpos[qadr] = q0
+    data.ctrl[pos_act] = q0
+    mujoco.mj_forward(model, data)
+    dt = model.opt.timestep
+
+    def control(model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        # Measure q, advance the command, hand it to the servos (position + velocity feedforward).
+        q = data.qpos.tolist()
+        controller.update((q[qadr[0]], q[qadr[1]], q[qadr[2]]), data.time, dt)
+        data.ctrl[pos_act] = controller.q_cmd
+        data.ctrl[vel_act] = controller.dq
+
+    def kinematic_step(model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        # The report's Simulink: the integrated q is imposed, no dynamics.
+        data.qpos[qadr] = controller.q_cmd
+        data.qvel[dadr] = controller.dq
+        data.time += dt
+        mujoco.mj_kinematics(model, data)
+
+    traj = simulate(
+        model,
+        data,
+        step_count(p.duration, p.timestep),
+        controller=control,
+        step=mujoco.mj_step if p.mode == "dynamic" else kinematic_step,
+    )
+    return _result(name, p, model, xml, traj, start, qadr, dadr)
+
+
+def _result(name, p, model, xml, traj, start, qadr, dadr) -> ScenarioResult:
+    t = traj.t
+    q = traj.qpos[:, qadr]  # (n, 3)
+    dq = traj.qvel[:, dadr]  # (n, 3)
+    foot = site_trajectory(model, traj, "foot")
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    hip_pos = data.site("hip").xpos.copy()
+    hip_rot = data.site("hip").xmat.reshape(3, 3).copy()
+
+    ref = reference(p, start)
+    des_hip = np.array([ref(float(ti)) for ti in t])  # (n, 3) hip frame
+    des = hip_pos + des_hip @ hip_rot.T  # (n, 3) world
+    vdes = np.zeros((len(t), 3))
+    vdes[:, 0] = reference_velocity(p, t)
+    vdes = vdes @ hip_rot.T
+    det_j = leg_kin.det_jacobian(q, GEOMETRY)
+    sig_min, _ = leg_kin.singular_values(q, GEOMETRY)
+    roll, pitch, yaw = leg_kin.rpy(np.einsum("ij,njk->nik", hip_rot.T, foot.xmat))
+    near = sig_min < p.sigma_threshold
+
+    err = foot.pos - des
+    x_dir, y_dir, z_dir = hip_rot[:, 0], hip_rot[:, 1], hip_rot[:, 2]
+    start_world = hip_pos + hip_rot @ start
+    lateral = (foot.pos - start_world) @ y_dir
+    vertical = (foot.pos - start_world) @ z_dir
+    x_err = err @ x_dir
+    reach_fwd, reach_back = line_reach(start)
+    exc_fwd, exc_back = excursion(p)
+
+    first = float(t[np.argmax(near)]) if near.any() else None
+    family = None
+    if near.any():
+        i = int(np.argmax(near))
+        rho = float(np.hypot(*foot_hip(q[i])[:2]))
+        family = (
+            "foot on the coxa axis (rho = 0)" if rho < p.sigma_threshold else "knee stretched or folded (sin q3 = 0)"
+        )
+    dt = float(np.median(np.diff(t)))
+    metrics = {
+        "max_lateral_deviation": Metric(
+            float(np.max(np.abs(lateral))), "m", "max |y - y0|: sideways drift off the line"
+        ),
+        "max_vertical_deviation": Metric(float(np.max(np.abs(vertical))), "m", "max |z - z0|: vertical drift"),
+        "max_x_error": Metric(float(np.max(np.abs(x_err))), "m", "max |x - x_des| along the line"),
+        "max_tracking_error": Metric(float(np.max(np.linalg.norm(err, axis=1))), "m", "max |foot - foot_des|"),
+        "min_abs_det_j": Metric(float(np.min(np.abs(det_j))), "m^3/rad^3", "smallest |det J| along the run"),
+        "min_sigma": Metric(float(np.min(sig_min)), "m/rad", "smallest singular value of J along the run"),
+        "max_joint_speed_reached": Metric(float(np.max(np.abs(dq))), "rad/s", "largest |dq_i|"),
+        "singular_first_time": Metric(first, "s", "first time sigma_min(J) < sigma_threshold (null: never)"),
+        "singular_duration": Metric(float(near.sum() * dt), "s", "time spent with sigma_min(J) < sigma_threshold"),
+        "singular_family": Metric(family, "", "which singular set was approached first"),
+        "excursion_forward": Metric(exc_fwd, "m", "travel the command asks for along +x: 2A/omega (sine)"),
+        "reach_forward": Metric(reach_fwd, "m", "travel along +x before leaving the reachable workspace"),
+        "excursion_backward": Metric(exc_back, "m", "travel the command asks for along -x"),
+        "reach_backward": Metric(reach_back, "m", "travel along -x before leaving the workspace (coxa near 0)"),
+        "predicted_to_leave_workspace": Metric(
+            bool(exc_fwd > reach_fwd or exc_back > reach_back), "", "excursion exceeds reach (before running)"
+        ),
+    }
+    columns = {
+        "t": t,
+        "q1": q[:, 0],
+        "q2": q[:, 1],
+        "q3": q[:, 2],
+        "dq1": dq[:, 0],
+        "dq2": dq[:, 1],
+        "dq3": dq[:, 2],
+        "foot_x": foot.pos[:, 0],
+        "foot_y": foot.pos[:, 1],
+        "foot_z": foot.pos[:, 2],
+        "foot_x_des": des[:, 0],
+        "foot_y_des": des[:, 1],
+        "foot_z_des": des[:, 2],
+        "vx": foot.vel[:, 0],
+        "vy": foot.vel[:, 1],
+        "vz": foot.vel[:, 2],
+        "vx_des": vdes[:, 0],
+        "vy_des": vdes[:, 1],
+        "vz_des": vdes[:, 2],
+        "det_j": det_j,
+        "sigma_min": sig_min,
+        "roll": roll,
+        "pitch": pitch,
+        "yaw": yaw,
+        "near_singular": near.astype(float),
+    }
+    units = {k: "rad" for k in ("q1", "q2", "q3", "roll", "pitch", "yaw")}
+    units |= {k: "rad/s" for k in ("dq1", "dq2", "dq3")}
+    units |= {k: "m" for k in columns if k.startswith("foot_")}
+    units |= {k: "m/s" for k in columns if k.startswith("v")}
+    units |= {"t": "s", "det_j": "m^3/rad^3", "sigma_min": "m/rad", "near_singular": "1"}
+    return ScenarioResult(
+        scenario=name,
+        params=p,
+        model=model,
+        model_xml=xml,
+        trajectory=traj,
+        columns=columns,
+        column_units={k: units[k] for k in columns},
+        metrics=metrics,
+        summary=[
+            "max_lateral_deviation",
+            "max_vertical_deviation",
+            "max_x_error",
+            "min_abs_det_j",
+            "singular_first_time",
+            "singular_family",
+        ],
+        camera="three_quarter",
+        figures="leg",
+        markers=[
+            Marker(
+                tuple(des[0]),
+                tuple(start_world + x_dir * (exc_fwd if exc_fwd else 0) - x_dir * exc_back),
+                0.0015,
+                (0.9, 0.2, 0.15, 0.6),
+            )
+        ],
+        trail=foot.pos,
+        extras={"foot_world": foot.pos, "near_singular": near, "start_world": start_world, "hip": hip_pos},
+    )
+
+
+def foot_hip(q: np.ndarray) -> np.ndarray:
+    """Foot position in the hip frame for joint angles q (3,)."""
+    return leg_kin.fk(q, GEOMETRY)
