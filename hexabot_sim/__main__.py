@@ -102,6 +102,8 @@ def cmd_list() -> int:
         print(f"{scenario.name}\n  {scenario.summary}")
         for name, (info, default) in params_mod.infos(cls).items():
             value = scenario.defaults.get(name, default)
+            if isinstance(value, tuple):
+                value = ",".join(f"{v:.6g}" for v in value)
             unit = f" [{info.unit}]" if info.unit else ""
             allowed = f" (one of: {', '.join(info.choices)})" if info.choices else ""
             print(f"    {name:<12} = {value!s:<8}{unit:<12} {info.doc}{allowed}")
@@ -165,19 +167,21 @@ def cmd_run(args: argparse.Namespace) -> int:
     out = out if out is not None else output.default_out(scenario.name)
     with output.run_folder(out, force=args.force) as folder:
         started = time.perf_counter()
-        result = scenario.runner(scenario.name, p)
+        result = scenario.runner(scenario.name, p, progress=ProgressBar(scenario.name))
         sim_seconds = time.perf_counter() - started
 
-        output.write_csv(folder / output.CSV_NAME, result.columns)
+        output.write_csv(folder / result.csv_name, result.columns)
         output.write_text(folder / output.MODEL_NAME, result.model_xml)
-        files = [output.CSV_NAME, output.JSON_NAME, output.MODEL_NAME]
+        files = [result.csv_name, output.JSON_NAME, output.MODEL_NAME]
         if not args.no_plots:
             from hexabot_sim import plots
 
             files += output.write_figures(plots.figures(result), folder)
 
+        if args.video and (result.camera is None or result.trajectory is None):
+            backend, no_video_reason = None, f"{scenario.name} produces no trajectory to film"
         video: dict[str, Any] = {"written": False, "reason": no_video_reason}
-        if args.video and backend is not None:
+        if args.video and backend is not None and result.trajectory is not None and result.camera is not None:
             from hexabot_sim import render
 
             width, height = args.size
@@ -222,15 +226,19 @@ def cmd_run(args: argparse.Namespace) -> int:
                 "files": files,
                 "video": video,
                 "simulation": {
-                    "steps": len(result.trajectory.t) - 1,
-                    "simulated_time": float(result.trajectory.t[-1]),
+                    "steps": None if result.trajectory is None else len(result.trajectory.t) - 1,
+                    "simulated_time": None if result.trajectory is None else float(result.trajectory.t[-1]),
                     "wall_time": sim_seconds,
                 },
                 "versions": output.versions(),
             },
         )
 
-    simulated = f"{result.trajectory.t[-1]:.6g} s simulated in {sim_seconds:.2f} s"
+    simulated = (
+        f"{result.trajectory.t[-1]:.6g} s simulated in {sim_seconds:.2f} s"
+        if result.trajectory is not None
+        else f"finished in {sim_seconds:.2f} s"
+    )
     print(f"{scenario.name}: {simulated} -> {output.display_path(out)}")
     for name in result.summary:
         metric = result.metrics[name]

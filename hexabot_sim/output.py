@@ -18,7 +18,6 @@ import numpy as np
 
 from hexabot_sim.errors import SimulationError, UsageError
 
-CSV_NAME = "timeseries.csv"
 JSON_NAME = "run.json"
 MODEL_NAME = "model.xml"
 VIDEO_NAME = "video.mp4"

@@ -51,6 +51,11 @@ def infos(cls: type) -> dict[str, tuple[ParamInfo, Any]]:
 
 def _convert(name: str, raw: Any, info: ParamInfo, kind: type) -> Any:
     """Converts one raw value (a string from --set or a TOML value) and checks its range."""
+    if kind is tuple:  # a list of numbers: "0.01,0.05" on the command line, [0.01, 0.05] in TOML
+        items = raw.split(",") if isinstance(raw, str) else raw
+        if not isinstance(items, (list, tuple)) or not items or any(str(v).strip() == "" for v in items):
+            raise UsageError(f"parameter '{name}' must be a comma-separated list of numbers; got {raw!r}")
+        return tuple(_convert(name, v, info, float) for v in items)
     if info.choices is not None:
         text = str(raw)
         if text not in info.choices:

@@ -181,12 +181,131 @@ def leg_figures(result: ScenarioResult) -> dict[str, Figure]:
     ax2.set_xlabel("time t [s]")
     ax2.grid(alpha=0.3, which="both")
     figures["singularity"] = fig
+    figures["workspace"] = workspace_figure(result)
     return figures
+
+
+def workspace_figure(result: ScenarioResult) -> Figure:
+    """The leg's vertical plane (coxa at 0): reachable region within the joint ranges, coloured by |det J|."""
+    from hexabot_sim.kinematics import leg as leg_kin
+    from hexabot_sim.scenarios.leg import GEOMETRY, excursion, line_reach
+
+    p, model = result.params, result.model
+    lower = [model.jnt_range[model.joint(j).id][0] for j in ("femur", "tibia")]
+    upper = [model.jnt_range[model.joint(j).id][1] for j in ("femur", "tibia")]
+    q2, q3 = np.meshgrid(np.linspace(lower[0], upper[0], 700), np.linspace(lower[1], upper[1], 700))
+    q = np.stack([np.zeros_like(q2), q2, q3], axis=-1).reshape(-1, 3)  # (N, 3)
+    foot = leg_kin.fk(q, GEOMETRY)  # (N, 3)
+    det = np.abs(leg_kin.det_jacobian(q, GEOMETRY)) * 1e6  # [cm^3/rad^3]
+    # Rasterise: each pixel keeps the best |det J| of the configurations that reach it.
+    extent = GEOMETRY.l1 + GEOMETRY.l2 + GEOMETRY.l3
+    edges_x = np.linspace(-extent, extent, 301)
+    edges_z = np.linspace(-extent, extent, 301)
+    ix = np.clip(np.digitize(foot[:, 0], edges_x) - 1, 0, 299)
+    iz = np.clip(np.digitize(foot[:, 2], edges_z) - 1, 0, 299)
+    image = np.full((300, 300), np.nan)
+    np.fmax.at(image, (iz, ix), det)
+
+    fig, ax = plt.subplots(figsize=(8, 7), constrained_layout=True)
+    mesh = ax.pcolormesh(edges_x * 1000, edges_z * 1000, image, cmap="viridis", shading="flat")
+    fig.colorbar(mesh, ax=ax, label="|det J| [cm³/rad³] (0 = singular)")
+    ax.axvline(0, color="tab:red", linestyle=":", label="coxa axis: ρ = 0, singular (missed by report 000)")
+    circle = np.linspace(0, 2 * np.pi, 400)
+    reach = GEOMETRY.l2 + GEOMETRY.l3
+    ax.plot(
+        (GEOMETRY.l1 + reach * np.cos(circle)) * 1000, reach * np.sin(circle) * 1000, "--", color="tab:red",
+        label="leg stretched: q3 = 0, singular",
+    )  # fmt: skip
+    start = np.array([p.start_x, p.start_y, p.start_z])
+    forward, backward = excursion(p) if hasattr(p, "amplitude") else (line_reach(start)[0], 0.0)
+    ax.plot(
+        [(start[0] - backward) * 1000, (start[0] + forward) * 1000], [start[2] * 1000] * 2, color="tab:orange", lw=2.5,
+        label="commanded line x0 .. x0 + 2A/ω" if hasattr(p, "amplitude") else "reachable part of the line",
+    )  # fmt: skip
+    ax.plot(start[0] * 1000, start[2] * 1000, "o", color="tab:orange", markeredgecolor="black", label="start")
+    ax.plot(0, 0, "s", color="black", label="hip (coxa axis)")
+    ax.set_xlabel("x in the hip frame [mm]")
+    ax.set_ylabel("z in the hip frame [mm]")
+    ax.set_aspect("equal")
+    ax.set_xlim(-extent * 1000 * 0.75, extent * 1000 * 1.05)
+    ax.set_ylim(-extent * 1000, extent * 1000)
+    ax.legend(fontsize=8, loc="upper left")
+    ax.set_title(
+        "leg workspace in its vertical plane (q1 = 0), joint ranges respected\n"
+        f"reach along the line from the start: {line_reach(start)[0] * 1000:.0f} mm",
+        fontsize=10,
+    )
+    return fig
+
+
+def leg_sweep_figures(result: ScenarioResult) -> dict[str, Figure]:
+    """Heatmap of the deviation over amplitude x omega with the predicted boundary 2A/omega = reach."""
+    c = result.columns
+    amps, omegas = np.unique(c["amplitude"]), np.unique(c["omega"])
+    grid = np.full((len(amps), len(omegas)), np.nan)
+    for a, w, d in zip(c["amplitude"], c["omega"], c["max_deviation"], strict=True):
+        grid[np.searchsorted(amps, a), np.searchsorted(omegas, w)] = d
+    reach = float(c["reach_forward"][0])
+
+    def edges(v: np.ndarray, log: bool) -> np.ndarray:
+        x = np.log(v) if log else v
+        mid = 0.5 * (x[1:] + x[:-1])
+        first, last = (x[0] - (mid[0] - x[0]), x[-1] + (x[-1] - mid[-1])) if len(x) > 1 else (x[0] - 0.1, x[0] + 0.1)
+        out = np.r_[first, mid, last]
+        return np.exp(out) if log else out
+
+    from matplotlib.colors import LogNorm
+
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(14, 6), constrained_layout=True)
+    dev_mm = np.maximum(grid * 1000, 1e-6)
+    mesh = ax.pcolormesh(
+        edges(omegas, True), edges(amps, False) * 1000, dev_mm, norm=LogNorm(vmin=1e-6, vmax=max(dev_mm.max(), 1e-3)),
+        cmap="magma",
+    )  # fmt: skip
+    fig.colorbar(mesh, ax=ax, label="max deviation from the line, y and z [mm]")
+    w_line = np.geomspace(edges(omegas, True)[0], edges(omegas, True)[-1], 200)
+    ax.plot(w_line, reach * w_line / 2 * 1000, color="cyan", lw=2, label=f"2A/ω = reach ({reach * 1000:.0f} mm)")
+    ax.set_xscale("log")
+    ax.set_ylim(edges(amps, False)[0] * 1000, edges(amps, False)[-1] * 1000)
+    cases = [(0.01, 1.0), (0.05, 1.0), (0.10, 1.0), (0.08, 1.0), (0.08, np.pi / 6)]
+    for a, w in cases:
+        ax.plot(w, a * 1000, "o", mfc="none", mec="white", ms=11, mew=1.5)
+        ax.annotate(f"{a * 1000:.0f} mm/s, ω={w:.3g}", (w, a * 1000), (6, 6), textcoords="offset points",
+                    color="white", fontsize=8)  # fmt: skip
+    from matplotlib.ticker import NullFormatter, NullLocator
+
+    ax.xaxis.set_minor_locator(NullLocator())
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_xticks(omegas, [f"{w:.3g}" for w in omegas])
+    ax.set_xlabel("ω [rad/s]")
+    ax.set_ylabel("amplitude A [mm/s]")
+    ax.legend(loc="lower right", fontsize=8)
+    ax.set_title("deviation over the grid; circles: the reports' cases", fontsize=10)
+
+    scatter = ax2.scatter(
+        c["excursion_forward"] / reach, np.maximum(c["max_deviation"] * 1000, 1e-6), c=c["omega"], cmap="viridis",
+        norm=LogNorm(),
+    )  # fmt: skip
+    fig.colorbar(scatter, ax=ax2, label="ω [rad/s]")
+    ax2.axvline(1.0, color="tab:red", linestyle="--", label="excursion = reach")
+    ax2.set_yscale("log")
+    ax2.set_xlabel("excursion 2A/ω ÷ reach along the line")
+    ax2.set_ylabel("max deviation [mm]")
+    ax2.legend(fontsize=8)
+    ax2.grid(alpha=0.3, which="both")
+    ax2.set_title("all frequencies collapse onto the excursion: it is A/ω, not ω, that matters", fontsize=10)
+    p = result.params
+    fig.suptitle(
+        f"{result.scenario}: {p.mode} mode, sine profile, {p.periods:g} periods per cell, start "
+        f"({p.start_x * 1000:g}, {p.start_y * 1000:g}, {p.start_z * 1000:g}) mm"
+    )
+    return {"sweep": fig, "workspace": workspace_figure(result)}
 
 
 FIGURES: dict[str, Callable[[ScenarioResult], dict[str, Figure]]] = {
     "pendulum": pendulum_figures,
     "leg": leg_figures,
+    "leg_sweep": leg_sweep_figures,
 }
 
 

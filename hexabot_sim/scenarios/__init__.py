@@ -71,6 +71,13 @@ SCENARIOS: dict[str, Scenario] = {
             "LegStepParams",
             {},
         ),
+        Scenario(
+            "leg-sweep",
+            "hexabot leg: amplitude x frequency grid of forward steps; deviation vs the workspace excursion 2A/omega",
+            "leg_sweep",
+            "LegSweepParams",
+            {},
+        ),
     )
 }
 

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from typing import Any
 
 import mujoco
 import numpy as np
 
 from hexabot_sim.simulate import Trajectory
+
+Progress = Callable[[int, int], None]  # (done, total): scenarios report long work through it
 
 
 @dataclasses.dataclass(frozen=True)
@@ -38,13 +41,14 @@ class ScenarioResult:
     params: Any  # the scenario's frozen parameter dataclass
     model: mujoco.MjModel
     model_xml: str  # the exact MJCF that compiled to `model`
-    trajectory: Trajectory
-    columns: dict[str, np.ndarray]  # CSV columns in order; the first is "t"
+    trajectory: Trajectory | None  # None for results that are not one trajectory (a parameter sweep)
+    columns: dict[str, np.ndarray]  # CSV columns in order; the first is "t" for a time series
     column_units: dict[str, str]
     metrics: dict[str, Metric]
     summary: list[str]  # metric names shown after the run
-    camera: str  # camera the video is rendered from
+    camera: str | None  # camera the video is rendered from (None: this result has no video)
     figures: str  # name of the figure set in plots.py
+    csv_name: str = "timeseries.csv"
     markers: list[Marker] = dataclasses.field(default_factory=list)  # drawn into the video
     trail: np.ndarray | None = None  # (n, 3) world points whose path the video draws (e.g. the foot)
     extras: dict[str, Any] = dataclasses.field(default_factory=dict)  # scenario data for plots

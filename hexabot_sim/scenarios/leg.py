@@ -13,7 +13,7 @@ from hexabot_sim.control.resolved_rate import ResolvedRateController, ResolvedRa
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.params import param
-from hexabot_sim.scenarios.base import Marker, Metric, ScenarioResult
+from hexabot_sim.scenarios.base import Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import simulate, site_trajectory, step_count
 
 GEOMETRY = leg_kin.LegGeometry()  # the lengths models/leg.xml is built with (tested against it)
@@ -25,12 +25,9 @@ INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")
 
 
 @dataclasses.dataclass(frozen=True)
-class LegStepParams:
-    """Parameters of the leg-step scenario (hip frame: x forward along the ground, z up)."""
+class LegParams:
+    """Leg, controller and simulation settings shared by leg-step and leg-sweep (hip frame: x forward, z up)."""
 
-    amplitude: float = param(0.05, "m/s", "A in v_x = A sin(omega t) (report: 10, 50, 100, 80 mm/s)")
-    omega: float = param(1.0, "rad/s", "omega of the velocity command (report: 1 and pi/6)", "positive")
-    duration: float = param(0.0, "s", "simulated time; 0 = two periods of the command, 4 pi / omega", "nonnegative")
     profile: str = param(
         "sine", "", "sine: v = A sin wt (report; x from x0 to x0 + 2A/w); cosine: v = A cos wt (symmetric)",
         choices=("sine", "cosine"),
@@ -50,6 +47,15 @@ class LegStepParams:
     gravity_compensation: str = param("on", "", "servo feedforward of the exact gravity torque", choices=("on", "off"))
     timestep: float = param(0.001, "s", "integration and control period", "positive")
     integrator: str = param("implicitfast", "", "MuJoCo integrator (dynamic mode)", choices=INTEGRATORS)
+
+
+@dataclasses.dataclass(frozen=True)
+class LegStepParams(LegParams):
+    """Parameters of the leg-step scenario."""
+
+    amplitude: float = param(0.05, "m/s", "A in v_x = A sin(omega t) (report: 10, 50, 100, 80 mm/s)")
+    omega: float = param(1.0, "rad/s", "omega of the velocity command (report: 1 and pi/6)", "positive")
+    duration: float = param(0.0, "s", "simulated time; 0 = two periods of the command, 4 pi / omega", "nonnegative")
 
     def __post_init__(self) -> None:
         if self.duration == 0:
@@ -115,7 +121,7 @@ def start_pose(p: LegStepParams, lower: np.ndarray, upper: np.ndarray) -> np.nda
     return min(inside, key=lambda q: (-q[2] > 0, abs(q[0])))
 
 
-def build_xml(p: LegStepParams) -> str:
+def build_xml(p: LegParams) -> str:
     """The leg scene with the run's options written in."""
     root = models.load_tree("leg_scene")
     models.find(root, "option").attrib.update(timestep=models.fmt(p.timestep), integrator=p.integrator)
@@ -124,8 +130,13 @@ def build_xml(p: LegStepParams) -> str:
     return models.to_xml(root)
 
 
-def run(name: str, p: LegStepParams) -> ScenarioResult:
+def run(name: str, p: LegStepParams, progress: Progress | None = None) -> ScenarioResult:
     """Drives the foot along the hip-frame X axis with the resolved-rate controller."""
+    return _result(name, p, *simulate_step(p))
+
+
+def simulate_step(p: LegStepParams):
+    """Builds the model and runs the control loop; returns what _result needs."""
     xml = build_xml(p)
     model = mujoco.MjModel.from_xml_string(xml)
     data = mujoco.MjData(model)
@@ -178,7 +189,7 @@ def run(name: str, p: LegStepParams) -> ScenarioResult:
         controller=control,
         step=mujoco.mj_step if p.mode == "dynamic" else kinematic_step,
     )
-    return _result(name, p, model, xml, traj, start, qadr, dadr)
+    return model, xml, traj, start, qadr, dadr
 
 
 def _result(name, p, model, xml, traj, start, qadr, dadr) -> ScenarioResult:

@@ -10,7 +10,7 @@ import numpy as np
 
 from hexabot_sim import models
 from hexabot_sim.params import param
-from hexabot_sim.scenarios.base import Marker, Metric, ScenarioResult
+from hexabot_sim.scenarios.base import Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import simulate, step_count
 
 INTEGRATORS = ("RK4", "Euler", "implicit", "implicitfast")
@@ -167,7 +167,7 @@ def build_xml(p: PendulumParams) -> str:
     return models.to_xml(root)
 
 
-def run(name: str, p: PendulumParams) -> ScenarioResult:
+def run(name: str, p: PendulumParams, progress: Progress | None = None) -> ScenarioResult:
     """Simulates the pendulum from rest at theta0 and derives energies and metrics."""
     from scipy.integrate import cumulative_simpson
 
