@@ -34,7 +34,6 @@ class Trajectory:
     t: np.ndarray  # (n,) [s]
     qpos: np.ndarray  # (n, nq)
     qvel: np.ndarray  # (n, nv)
-    ctrl: np.ndarray  # (n, nu)
 
 
 def step_count(duration: float, timestep: float) -> int:
@@ -69,32 +68,33 @@ def simulate(
     t = np.empty(n_steps + 1)  # (n,)
     qpos = np.empty((n_steps + 1, model.nq))  # (n, nq)
     qvel = np.empty((n_steps + 1, model.nv))  # (n, nv)
-    ctrl = np.empty((n_steps + 1, model.nu))  # (n, nu)
     warnings0 = warning_counts(data)
     # Views into mjData, bound once: reading them in the loop costs only the copy into the record.
-    data_qpos, data_qvel, data_ctrl = data.qpos, data.qvel, data.ctrl
+    data_qpos, data_qvel = data.qpos, data.qvel
 
     # MuJoCo prints its warnings by default; collect them instead, for one clear error message.
     messages: list[str] = []
     previous_handler = mujoco.get_mju_user_warning()
     mujoco.set_mju_user_warning(messages.append)
     try:
-        t[0], qpos[0], qvel[0], ctrl[0] = data.time, data_qpos, data_qvel, data_ctrl
-        checked = 0
-        for i in range(1, n_steps + 1):
-            # Command, step, record.
-            if controller is not None:
-                controller(model, data)
-            step(model, data)
-            t[i], qpos[i], qvel[i], ctrl[i] = data.time, data_qpos, data_qvel, data_ctrl
-            if i % CHECK_EVERY == 0 or i == n_steps:
-                _check(data, warnings0, messages, t, qpos, qvel, checked, i)
-                checked = i
+        t[0], qpos[0], qvel[0] = data.time, data_qpos, data_qvel
+        for first in range(1, n_steps + 1, CHECK_EVERY):
+            last = min(first + CHECK_EVERY - 1, n_steps)
+            if controller is None:
+                for i in range(first, last + 1):
+                    # Step, record.
+                    step(model, data)
+                    t[i], qpos[i], qvel[i] = data.time, data_qpos, data_qvel
+            else:
+                for i in range(first, last + 1):
+                    # Command, step, record.
+                    controller(model, data)
+                    step(model, data)
+                    t[i], qpos[i], qvel[i] = data.time, data_qpos, data_qvel
+            _check(data, warnings0, messages, t, qpos, qvel, first - 1, last)
     finally:
         mujoco.set_mju_user_warning(previous_handler)
-    if controller is not None:
-        ctrl[0] = ctrl[1]  # the command that acted from t = 0 on
-    return Trajectory(t=t, qpos=qpos, qvel=qvel, ctrl=ctrl)
+    return Trajectory(t=t, qpos=qpos, qvel=qvel)
 
 
 def _check(

@@ -5,6 +5,8 @@ Usage: python scripts/bench.py [--repeat N] [--check]
   sim-loop   the pendulum scenario's stepping loop (simulate(): recording + divergence checks)
              vs a bare `mj_step` loop over the same model and number of steps   target <= 1.5x
   video      frames rendered and encoded per second, 640x480, preview preset     target >= 100 fps
+  leg-loop   the leg-step loop (resolved-rate controller + recording + mj_step, dynamic mode)
+             vs a bare `mj_step` loop over the same model and number of steps   target <= 2x
   list       wall time of `hexabot-sim list` (python -m hexabot_sim list)        target <= 0.5 s
 
 Timings alternate between the two sides of a ratio and keep each side's best (least disturbed)
@@ -26,7 +28,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 import mujoco
 
 from hexabot_sim import gl, params, render, scenarios
-from hexabot_sim.scenarios import pendulum
+from hexabot_sim.scenarios import leg, pendulum
 from hexabot_sim.simulate import simulate, step_count
 
 
@@ -49,6 +51,30 @@ def bench_sim_loop(repeat: int) -> dict[str, float]:
         start = time.perf_counter()
         simulate(model, data, n)
         loop.append(time.perf_counter() - start)
+    return {
+        "steps": n,
+        "bare_us_per_step": min(bare) / n * 1e6,
+        "loop_us_per_step": min(loop) / n * 1e6,
+        "ratio": min(loop) / min(bare),
+    }
+
+
+def bench_leg_loop(repeat: int) -> dict[str, float]:
+    scenario = scenarios.get("leg-step")
+    p = params.resolve(scenario.params_type, scenario.defaults)
+    bare, loop = [], []
+    for _ in range(repeat):
+        run = leg.prepare(p)
+        start = time.perf_counter()
+        for _ in range(run.n_steps):
+            mujoco.mj_step(run.model, run.data)
+        bare.append(time.perf_counter() - start)
+
+        run = leg.prepare(p)
+        start = time.perf_counter()
+        simulate(run.model, run.data, run.n_steps, controller=run.control, step=run.step)
+        loop.append(time.perf_counter() - start)
+    n = run.n_steps
     return {
         "steps": n,
         "bare_us_per_step": min(bare) / n * 1e6,
@@ -104,6 +130,15 @@ def main() -> int:
     print(
         f"sim-loop  {sim['steps']} steps: bare mj_step {sim['bare_us_per_step']:.2f} us/step, "
         f"simulate() {sim['loop_us_per_step']:.2f} us/step, ratio {sim['ratio']:.2f}x (target <= 1.5x) "
+        f"{'ok' if ok else 'MISSED'}"
+    )
+
+    legloop = bench_leg_loop(args.repeat)
+    ok = legloop["ratio"] <= 2.0
+    failures += [] if ok else ["leg-loop"]
+    print(
+        f"leg-loop  {legloop['steps']} steps: bare mj_step {legloop['bare_us_per_step']:.2f} us/step, "
+        f"leg-step loop {legloop['loop_us_per_step']:.2f} us/step, ratio {legloop['ratio']:.2f}x (target <= 2x) "
         f"{'ok' if ok else 'MISSED'}"
     )
 

@@ -36,17 +36,17 @@ class ResolvedRateGains:
     max_joint_acceleration: float = math.inf
 
 
-def sigma_min(jac: Mat3, rho: float, l3: float, sin_q3: float, l2: float) -> float:
+def sigma_min(rho: float, sin_q3: float, cos_q3: float, l2: float, l3: float) -> float:
     """Smallest singular value of the leg Jacobian [m/rad], in closed form.
 
     Column 1 is rho (-s1, c1, 0), orthogonal to columns 2 and 3 (the leg's vertical plane), so the
-    singular values are |rho| and those of the planar 2x2 block, whose Frobenius norm^2 F and
-    determinant D = l2 l3 sin q3 give sigma^2 = 2 D^2 / (F + sqrt(F^2 - 4 D^2)).
+    singular values are |rho| and those of the planar 2x2 block. That block has Frobenius norm^2
+    F = |femur axis to foot|^2 + l3^2 = l2^2 + 2 l3^2 + 2 l2 l3 cos q3 and determinant D = l2 l3 sin q3,
+    so sigma^2 = 2 D^2 / (F + sqrt(F^2 - 4 D^2)).
     """
-    f = jac[0][1] ** 2 + jac[1][1] ** 2 + jac[2][1] ** 2 + jac[0][2] ** 2 + jac[1][2] ** 2 + jac[2][2] ** 2
+    f = l2 * l2 + 2 * l3 * l3 + 2 * l2 * l3 * cos_q3
     d = l2 * l3 * sin_q3
-    disc = math.sqrt(max(f * f - 4 * d * d, 0.0))
-    planar = math.sqrt(2 * d * d / (f + disc)) if f > 0 else 0.0
+    planar = math.sqrt(2 * d * d / (f + math.sqrt(max(f * f - 4 * d * d, 0.0))))
     return min(abs(rho), planar)
 
 
@@ -87,15 +87,6 @@ def damped_solve(jac: Mat3, u: Vec3, lam: float) -> Vec3:
     )
 
 
-@dataclasses.dataclass
-class StepInfo:
-    """What the controller saw and did at the last call (for recording)."""
-
-    sigma: float = math.inf  # smallest singular value of J [m/rad]
-    damping: float = 0.0  # lambda used [m/rad]
-    speed_scale: float = 1.0  # < 1 when the joint speed limit was active
-
-
 class ResolvedRateController:
     """Integrates dq = J^+ (v_des + K (x_des - x)) into a joint command q_cmd.
 
@@ -121,41 +112,60 @@ class ResolvedRateController:
         self.dq: Vec3 = (0.0, 0.0, 0.0)
         self.q_lower = q_lower
         self.q_upper = q_upper
-        self.info = StepInfo()
+        self._next_t = math.nan  # time and reference point of the next expected call
+        self._next_ref: Vec3 = (0.0, 0.0, 0.0)
+        # Constants unpacked once per call (attribute lookups dominate a pure-Python 1 kHz loop).
+        self._consts = (
+            geometry.l1, geometry.l2, geometry.l3, gains.task_gain, gains.sigma_threshold, gains.max_damping,
+            gains.max_joint_speed, gains.max_joint_acceleration,
+        )  # fmt: skip
 
     def update(self, q: Vec3, t: float, dt: float) -> None:
         """Advances q_cmd from t to t + dt given the measured joint angles q at time t."""
-        g, k = self.geometry, self.gains
-        (x, y, z), jac = foot_and_jacobian(q[0], q[1], q[2], g.l1, g.l2, g.l3)
+        l1, l2, l3, gain, threshold, max_damping, max_speed, max_acceleration = self._consts
+        q1, q2, q3 = q
+        (x, y, z), jac = foot_and_jacobian(q1, q2, q3, l1, l2, l3)
         # Feedforward: the reference's exact mean velocity over the step; feedback: K times the error.
-        xd0, yd0, zd0 = self.reference(t)
-        xd1, yd1, zd1 = self.reference(t + dt)
+        if t == self._next_t:  # the previous call's t + dt: reuse its reference point
+            xd0, yd0, zd0 = self._next_ref
+        else:
+            xd0, yd0, zd0 = self.reference(t)
+        self._next_t = t + dt
+        self._next_ref = xd1, yd1, zd1 = self.reference(self._next_t)
         u = (
-            (xd1 - xd0) / dt + k.task_gain * (xd0 - x),
-            (yd1 - yd0) / dt + k.task_gain * (yd0 - y),
-            (zd1 - zd0) / dt + k.task_gain * (zd0 - z),
+            (xd1 - xd0) / dt + gain * (xd0 - x),
+            (yd1 - yd0) / dt + gain * (yd0 - y),
+            (zd1 - zd0) / dt + gain * (zd0 - z),
         )
         # Damping grows only inside the singular neighbourhood.
-        rho = -jac[0][0] * math.sin(q[0]) + jac[1][0] * math.cos(q[0])
-        sigma = sigma_min(jac, rho, g.l3, math.sin(q[2]), g.l2)
-        ratio = sigma / k.sigma_threshold
-        lam = k.max_damping * math.sqrt(1.0 - ratio * ratio) if ratio < 1.0 else 0.0
-        dq = list(damped_solve(jac, u, lam))
-        # Joint ranges: no speed further into a limit the command already sits at.
-        for i in range(3):
-            if (self.q_cmd[i] <= self.q_lower[i] and dq[i] < 0) or (self.q_cmd[i] >= self.q_upper[i] and dq[i] > 0):
-                dq[i] = 0.0
+        ratio = sigma_min(math.hypot(x, y), math.sin(q3), math.cos(q3), l2, l3) / threshold
+        if ratio < 1.0:
+            d1, d2, d3 = damped_solve(jac, u, max_damping * math.sqrt(1.0 - ratio * ratio))
+        else:
+            d1, d2, d3 = _solve3(jac, u)
         # Joint speed limit, applied to dq as a whole so the foot keeps its direction.
-        fastest = max(abs(dq[0]), abs(dq[1]), abs(dq[2]))
-        scale = k.max_joint_speed / fastest if fastest > k.max_joint_speed else 1.0
-        dq = [dq[0] * scale, dq[1] * scale, dq[2] * scale]
-        # Joint acceleration limit on the change of the command, again as a whole.
-        change = [dq[i] - self.dq[i] for i in range(3)]
-        largest = max(abs(change[0]), abs(change[1]), abs(change[2]))
-        limit = k.max_joint_acceleration * dt
+        fastest = max(abs(d1), abs(d2), abs(d3))
+        if fastest > max_speed:
+            scale = max_speed / fastest
+            d1, d2, d3 = d1 * scale, d2 * scale, d3 * scale
+        # Joint ranges: never faster toward a limit than braking at max_acceleration allows.
+        c1, c2, c3 = self.q_cmd
+        lo1, lo2, lo3 = self.q_lower
+        hi1, hi2, hi3 = self.q_upper
+        two_a = 2.0 * max_acceleration
+        d1 = min(max(d1, -math.sqrt(two_a * max(c1 - lo1, 0.0))), math.sqrt(two_a * max(hi1 - c1, 0.0)))
+        d2 = min(max(d2, -math.sqrt(two_a * max(c2 - lo2, 0.0))), math.sqrt(two_a * max(hi2 - c2, 0.0)))
+        d3 = min(max(d3, -math.sqrt(two_a * max(c3 - lo3, 0.0))), math.sqrt(two_a * max(hi3 - c3, 0.0)))
+        # Joint acceleration limit on the change of the command, as a whole.
+        p1, p2, p3 = self.dq
+        largest = max(abs(d1 - p1), abs(d2 - p2), abs(d3 - p3))
+        limit = max_acceleration * dt
         if largest > limit:
-            dq = [self.dq[i] + change[i] * limit / largest for i in range(3)]
-        self.dq = (dq[0], dq[1], dq[2])
-        for i in range(3):
-            self.q_cmd[i] = min(max(self.q_cmd[i] + self.dq[i] * dt, self.q_lower[i]), self.q_upper[i])
-        self.info.sigma, self.info.damping, self.info.speed_scale = sigma, lam, scale
+            f = limit / largest
+            d1, d2, d3 = p1 + (d1 - p1) * f, p2 + (d2 - p2) * f, p3 + (d3 - p3) * f
+        # Integrate inside the ranges; dq is what q_cmd actually does, even where a range cuts it.
+        n1 = min(max(c1 + d1 * dt, lo1), hi1)
+        n2 = min(max(c2 + d2 * dt, lo2), hi2)
+        n3 = min(max(c3 + d3 * dt, lo3), hi3)
+        self.q_cmd = [n1, n2, n3]
+        self.dq = ((n1 - c1) / dt, (n2 - c2) / dt, (n3 - c3) / dt)

@@ -14,14 +14,14 @@ from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.params import param
 from hexabot_sim.scenarios.base import Marker, Metric, Progress, ScenarioResult
-from hexabot_sim.simulate import simulate, site_trajectory, step_count
+from hexabot_sim.simulate import Controller, simulate, site_trajectory, step_count
 
 GEOMETRY = leg_kin.LegGeometry()  # the lengths models/leg.xml is built with (tested against it)
 JOINTS = ("coxa", "femur", "tibia")
 # In dynamic mode the servos overshoot a commanded speed transient by ~2 % (measured with the
 # defaults driven out of the workspace): the command keeps this margin below max_joint_speed.
 SERVO_SPEED_MARGIN: float = 0.95
-INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")
+INTEGRATORS = ("RK4", "implicitfast", "Euler", "implicit")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -45,8 +45,9 @@ class LegParams:
     start_y: float = param(0.0, "m", "start foot position in the hip frame")
     start_z: float = param(-0.08, "m", "start foot position in the hip frame (80 mm below the hip)")
     gravity_compensation: str = param("on", "", "servo feedforward of the exact gravity torque", choices=("on", "off"))
-    timestep: float = param(0.001, "s", "integration and control period", "positive")
-    integrator: str = param("implicitfast", "", "MuJoCo integrator (dynamic mode)", choices=INTEGRATORS)
+    timestep: float = param(0.001, "s", "control period (the controller runs once per timestep)", "positive")
+    substeps: int = param(1, "1", "MuJoCo steps per control period (physics dt = timestep / substeps)", "positive")
+    integrator: str = param("RK4", "", "MuJoCo integrator (dynamic mode)", choices=INTEGRATORS)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -82,19 +83,41 @@ def reference_velocity(p: LegStepParams, t: np.ndarray) -> np.ndarray:
     return p.amplitude * (np.sin(p.omega * t) if p.profile == "sine" else np.cos(p.omega * t))
 
 
-def line_reach(start: np.ndarray, geom: leg_kin.LegGeometry = GEOMETRY) -> tuple[float, float]:
-    """How far the foot can travel along +x and -x from `start` before leaving the reachable set [m].
+# Joint ranges of models/leg.xml (coxa, femur, tibia) [rad]; tests check them against the model.
+JOINT_LOWER = np.array([-math.pi / 2, -math.pi / 2, 0.0])
+JOINT_UPPER = np.array([math.pi / 2, math.pi / 2, math.radians(160)])
+REACH_TOL: float = 1e-7  # [m] resolution of line_reach
 
-    A point is reachable iff (sqrt(x^2 + y^2) - l1)^2 + z^2 <= (l2 + l3)^2 (coxa free); going
-    backward the coxa stays near 0 so the foot passes behind its axis with rho = x < 0.
+
+def reachable(point: np.ndarray, geom: leg_kin.LegGeometry = GEOMETRY) -> bool:
+    """True if some IK branch puts the foot at `point` (hip frame) with every joint inside its range."""
+    try:
+        branches = leg_kin.ik(point, geom, q1=0.0)  # q1 = 0 on the coxa axis, where any q1 reaches it
+    except UsageError:
+        return False
+    return any(np.all(q >= JOINT_LOWER - 1e-12) and np.all(q <= JOINT_UPPER + 1e-12) for q in branches)
+
+
+def line_reach(start: np.ndarray, geom: leg_kin.LegGeometry = GEOMETRY) -> tuple[float, float]:
+    """How far the foot can travel along +x and -x from `start` inside the workspace [m].
+
+    Walks out in 1 mm steps while every point has an IK solution inside the joint ranges, then
+    bisects the last step down to REACH_TOL.
     """
-    x0, y0, z0 = (float(v) for v in start)
-    span = (geom.l2 + geom.l3) ** 2 - z0**2
-    if span < 0:
-        return 0.0, 0.0
-    forward = math.sqrt(max((geom.l1 + math.sqrt(span)) ** 2 - y0**2, 0.0)) - x0
-    backward = x0 + math.sqrt(span) - geom.l1
-    return forward, backward
+    out = []
+    for direction in (1.0, -1.0):
+        inside, step = 0.0, 1e-3
+        while inside < 1.0 and reachable(start + np.array([direction * (inside + step), 0.0, 0.0]), geom):
+            inside += step
+        outside = inside + step
+        while outside - inside > REACH_TOL:
+            mid = 0.5 * (inside + outside)
+            if reachable(start + np.array([direction * mid, 0.0, 0.0]), geom):
+                inside = mid
+            else:
+                outside = mid
+        out.append(inside)
+    return out[0], out[1]
 
 
 def excursion(p: LegStepParams) -> tuple[float, float]:
@@ -109,7 +132,7 @@ def start_pose(p: LegStepParams, lower: np.ndarray, upper: np.ndarray) -> np.nda
     """IK of the start point on the branch inside the joint ranges (front of the coxa, knee out)."""
     target = np.array([p.start_x, p.start_y, p.start_z])
     try:
-        branches = leg_kin.ik(target, GEOMETRY)
+        branches = leg_kin.ik(target, GEOMETRY, q1=0.0)  # q1 = 0 if the start is on the coxa axis
     except UsageError as e:
         raise UsageError(f"start pose {tuple(target.tolist())} m is outside the workspace: {e}") from None
     inside = [q for q in branches if np.all(q >= lower - 1e-12) and np.all(q <= upper + 1e-12)]
@@ -124,19 +147,37 @@ def start_pose(p: LegStepParams, lower: np.ndarray, upper: np.ndarray) -> np.nda
 def build_xml(p: LegParams) -> str:
     """The leg scene with the run's options written in."""
     root = models.load_tree("leg_scene")
-    models.find(root, "option").attrib.update(timestep=models.fmt(p.timestep), integrator=p.integrator)
+    physics_dt = p.timestep / p.substeps
+    models.find(root, "option").attrib.update(timestep=models.fmt(physics_dt), integrator=p.integrator)
     for name in JOINTS:
         models.find(root, "body", name).set("gravcomp", "1" if p.gravity_compensation == "on" else "0")
     return models.to_xml(root)
 
 
+@dataclasses.dataclass
+class LegLoop:
+    """A ready-to-run leg-step loop: model and state at the start pose, controller hook and step function."""
+
+    xml: str
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    n_steps: int
+    control: Controller
+    step: Controller
+    start: np.ndarray  # (3,) start foot position, hip frame [m]
+    qadr: list[int]
+    dadr: list[int]
+
+
 def run(name: str, p: LegStepParams, progress: Progress | None = None) -> ScenarioResult:
     """Drives the foot along the hip-frame X axis with the resolved-rate controller."""
-    return _result(name, p, *simulate_step(p))
+    loop = prepare(p)
+    traj = simulate(loop.model, loop.data, loop.n_steps, controller=loop.control, step=loop.step)
+    return _result(name, p, loop.model, loop.xml, traj, loop.start, loop.qadr, loop.dadr)
 
 
-def simulate_step(p: LegStepParams):
-    """Builds the model and runs the control loop; returns what _result needs."""
+def prepare(p: LegStepParams) -> LegLoop:
+    """Builds the model, puts the leg at the start pose and wires the controller to the servos."""
     xml = build_xml(p)
     model = mujoco.MjModel.from_xml_string(xml)
     data = mujoco.MjData(model)
@@ -163,17 +204,19 @@ def simulate_step(p: LegStepParams):
     )
     pos_act = [model.actuator(j).id for j in JOINTS]
     vel_act = [model.actuator(f"{j}_velocity").id for j in JOINTS]
+    if pos_act + vel_act != list(range(6)) or qadr != [0, 1, 2]:
+        raise ValueError("leg.xml must list the position then the velocity actuators of coxa, femur, tibia first")
     data.qpos[qadr] = q0
     data.ctrl[pos_act] = q0
     mujoco.mj_forward(model, data)
-    dt = model.opt.timestep
+    dt = p.timestep  # control period; MuJoCo steps p.substeps times per period
+
+    qpos, ctrl = data.qpos, data.ctrl  # views into mjData, bound once
 
     def control(model: mujoco.MjModel, data: mujoco.MjData) -> None:
         # Measure q, advance the command, hand it to the servos (position + velocity feedforward).
-        q = data.qpos.tolist()
-        controller.update((q[qadr[0]], q[qadr[1]], q[qadr[2]]), data.time, dt)
-        data.ctrl[pos_act] = controller.q_cmd
-        data.ctrl[vel_act] = controller.dq
+        controller.update(qpos.tolist(), data.time, dt)
+        ctrl[:] = (*controller.q_cmd, *controller.dq)
 
     def kinematic_step(model: mujoco.MjModel, data: mujoco.MjData) -> None:
         # The report's Simulink: the integrated q is imposed, no dynamics.
@@ -182,14 +225,14 @@ def simulate_step(p: LegStepParams):
         data.time += dt
         mujoco.mj_kinematics(model, data)
 
-    traj = simulate(
-        model,
-        data,
-        step_count(p.duration, p.timestep),
-        controller=control,
-        step=mujoco.mj_step if p.mode == "dynamic" else kinematic_step,
-    )
-    return model, xml, traj, start, qadr, dadr
+    substeps = range(p.substeps)
+
+    def dynamic_step(model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        for _ in substeps:
+            mujoco.mj_step(model, data)
+
+    step = dynamic_step if p.mode == "dynamic" else kinematic_step
+    return LegLoop(xml, model, data, step_count(p.duration, p.timestep), control, step, start, qadr, dadr)
 
 
 def _result(name, p, model, xml, traj, start, qadr, dadr) -> ScenarioResult:

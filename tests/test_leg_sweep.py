@@ -1,0 +1,62 @@
+"""leg-sweep: the grid, its prediction from the workspace, and the CLI run folder."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from hexabot_sim import params, scenarios
+from hexabot_sim.__main__ import main
+from hexabot_sim.errors import UsageError
+
+
+def test_small_grid_matches_the_workspace_prediction():
+    s = scenarios.get("leg-sweep")
+    p = params.resolve(s.params_type, s.defaults, {"amplitudes": "0.05,0.1", "omegas": "1", "periods": "1"})
+    result = s.runner("leg-sweep", p)
+    c = result.columns
+    assert list(c["amplitude"]) == [0.05, 0.1] and list(c["omega"]) == [1.0, 1.0]
+    # Independent reach along x at z = -80 mm: (x - L1)^2 + z^2 = (L2 + L3)^2.
+    reach = 0.05 + math.sqrt(0.2**2 - 0.08**2) - 0.05
+    assert c["reach_forward"] == pytest.approx([reach, reach])
+    assert c["excursion_forward"] == pytest.approx([0.1, 0.2])  # 2A/omega
+    assert list(c["predicted_to_leave"]) == [0.0, 1.0]
+    assert list(c["reached_singular"]) == [0.0, 1.0]
+    assert c["max_deviation"][0] < 1e-6 < 1e-3 < c["max_deviation"][1]
+    assert result.metrics["prediction_agreement"].value == 1.0
+
+
+def test_sweep_reports_cases_run_in_parallel_like_serially():
+    s = scenarios.get("leg-sweep")
+    grid = {"amplitudes": "0.08", "omegas": f"1,{math.pi / 6}", "periods": "1"}
+    serial = s.runner("leg-sweep", params.resolve(s.params_type, s.defaults, grid | {"workers": "1"}))
+    parallel = s.runner("leg-sweep", params.resolve(s.params_type, s.defaults, grid | {"workers": "2"}))
+    for name in serial.columns:
+        assert np.array_equal(serial.columns[name], parallel.columns[name]), name
+    # 80 mm/s: inside at 1 rad/s (160 mm < 183 mm), out at pi/6 (306 mm): excursion, not frequency.
+    assert list(serial.columns["predicted_to_leave"]) == [0.0, 1.0]
+
+
+@pytest.mark.parametrize(
+    ("value", "fragment"),
+    [("0.1,,0.2", "comma-separated list"), ("0.1,-1", "must be a finite number > 0"), ("a", "finite number > 0")],
+)
+def test_bad_grid(value, fragment):
+    s = scenarios.get("leg-sweep")
+    with pytest.raises(UsageError) as info:
+        params.resolve(s.params_type, s.defaults, {"omegas": value})
+    assert fragment in str(info.value)
+
+
+def test_cli_writes_grid_and_figures(tmp_path, capsys):
+    out = tmp_path / "sweep"
+    argv = ["run", "leg-sweep", "--set", "amplitudes=0.02,0.1", "--set", "omegas=1,2", "--set", "periods=0.5"]
+    assert main([*argv, "--out", str(out), "--video"]) == 0
+    err = capsys.readouterr().err
+    assert "no video: leg-sweep produces no trajectory to film" in err
+    assert {p.name for p in out.iterdir()} == {"grid.csv", "run.json", "model.xml", "sweep.png", "workspace.png"}
+    header = (out / "grid.csv").read_text().splitlines()[0].split(",")
+    assert header[:2] == ["amplitude", "omega"] and "max_deviation" in header
+    record = json.loads((out / "run.json").read_text())
+    assert record["params"]["omegas"] == [1.0, 2.0] and record["metrics"]["cells"] == 4
