@@ -87,6 +87,13 @@ def damped_solve(jac: Mat3, u: Vec3, lam: float) -> Vec3:
     )
 
 
+def _brake(dq: float, room_below: float, room_above: float, max_acceleration: float) -> float:
+    """Caps a joint speed so the joint can still stop at max_acceleration before either range limit."""
+    down = math.sqrt(2.0 * max_acceleration * max(room_below, 0.0))
+    up = math.sqrt(2.0 * max_acceleration * max(room_above, 0.0))
+    return min(max(dq, -down), up)
+
+
 class ResolvedRateController:
     """Integrates dq = J^+ (v_des + K (x_des - x)) into a joint command q_cmd.
 
@@ -114,14 +121,20 @@ class ResolvedRateController:
         self.q_upper = q_upper
         self._next_t = math.nan  # time and reference point of the next expected call
         self._next_ref: Vec3 = (0.0, 0.0, 0.0)
+        self._brake_zone = gains.max_joint_speed**2 / (2 * gains.max_joint_acceleration)  # [rad]
+        self._f0, self._f1 = geometry.l2**2 + 2 * geometry.l3**2, 2 * geometry.l2 * geometry.l3  # F = f0 + f1 c3
         # Constants unpacked once per call (attribute lookups dominate a pure-Python 1 kHz loop).
         self._consts = (
             geometry.l1, geometry.l2, geometry.l3, gains.task_gain, gains.sigma_threshold, gains.max_damping,
             gains.max_joint_speed, gains.max_joint_acceleration,
         )  # fmt: skip
 
-    def update(self, q: Vec3, t: float, dt: float) -> None:
-        """Advances q_cmd from t to t + dt given the measured joint angles q at time t."""
+    def update(self, q: Vec3, t: float, dt: float) -> tuple[float, ...]:
+        """Advances q_cmd from t to t + dt given the measured joint angles q at time t.
+
+        Returns:
+            (q_cmd..., dq...): the new joint command [rad] and the joint velocity [rad/s] it moves at.
+        """
         l1, l2, l3, gain, threshold, max_damping, max_speed, max_acceleration = self._consts
         q1, q2, q3 = q
         (x, y, z), jac = foot_and_jacobian(q1, q2, q3, l1, l2, l3)
@@ -137,8 +150,12 @@ class ResolvedRateController:
             (yd1 - yd0) / dt + gain * (yd0 - y),
             (zd1 - zd0) / dt + gain * (zd0 - z),
         )
-        # Damping grows only inside the singular neighbourhood.
-        ratio = sigma_min(math.hypot(x, y), math.sin(q3), math.cos(q3), l2, l3) / threshold
+        # Damping grows only inside the singular neighbourhood. Cheap exit first: sigma_min >= min(|rho|,
+        # D / sqrt(F)) with the planar block's D = l2 l3 sin q3 and F >= sigma_max^2 (see sigma_min).
+        rho, sin3, cos3 = math.hypot(x, y), math.sin(q3), math.cos(q3)
+        planar_d = l2 * l3 * sin3
+        far = rho >= threshold and planar_d * planar_d >= threshold * threshold * (self._f0 + self._f1 * cos3)
+        ratio = 1.0 if far else sigma_min(rho, sin3, cos3, l2, l3) / threshold
         if ratio < 1.0:
             d1, d2, d3 = damped_solve(jac, u, max_damping * math.sqrt(1.0 - ratio * ratio))
         else:
@@ -148,14 +165,18 @@ class ResolvedRateController:
         if fastest > max_speed:
             scale = max_speed / fastest
             d1, d2, d3 = d1 * scale, d2 * scale, d3 * scale
-        # Joint ranges: never faster toward a limit than braking at max_acceleration allows.
+        # Joint ranges: never faster toward a limit than braking at max_acceleration allows
+        # (only matters within max_speed^2 / (2 max_acceleration) of a limit).
         c1, c2, c3 = self.q_cmd
         lo1, lo2, lo3 = self.q_lower
         hi1, hi2, hi3 = self.q_upper
-        two_a = 2.0 * max_acceleration
-        d1 = min(max(d1, -math.sqrt(two_a * max(c1 - lo1, 0.0))), math.sqrt(two_a * max(hi1 - c1, 0.0)))
-        d2 = min(max(d2, -math.sqrt(two_a * max(c2 - lo2, 0.0))), math.sqrt(two_a * max(hi2 - c2, 0.0)))
-        d3 = min(max(d3, -math.sqrt(two_a * max(c3 - lo3, 0.0))), math.sqrt(two_a * max(hi3 - c3, 0.0)))
+        zone = self._brake_zone
+        if c1 - lo1 < zone or hi1 - c1 < zone:
+            d1 = _brake(d1, c1 - lo1, hi1 - c1, max_acceleration)
+        if c2 - lo2 < zone or hi2 - c2 < zone:
+            d2 = _brake(d2, c2 - lo2, hi2 - c2, max_acceleration)
+        if c3 - lo3 < zone or hi3 - c3 < zone:
+            d3 = _brake(d3, c3 - lo3, hi3 - c3, max_acceleration)
         # Joint acceleration limit on the change of the command, as a whole.
         p1, p2, p3 = self.dq
         largest = max(abs(d1 - p1), abs(d2 - p2), abs(d3 - p3))
@@ -168,4 +189,5 @@ class ResolvedRateController:
         n2 = min(max(c2 + d2 * dt, lo2), hi2)
         n3 = min(max(c3 + d3 * dt, lo3), hi3)
         self.q_cmd = [n1, n2, n3]
-        self.dq = ((n1 - c1) / dt, (n2 - c2) / dt, (n3 - c3) / dt)
+        self.dq = v1, v2, v3 = (n1 - c1) / dt, (n2 - c2) / dt, (n3 - c3) / dt
+        return n1, n2, n3, v1, v2, v3

@@ -215,8 +215,7 @@ def prepare(p: LegStepParams) -> LegLoop:
 
     def control(model: mujoco.MjModel, data: mujoco.MjData) -> None:
         # Measure q, advance the command, hand it to the servos (position + velocity feedforward).
-        controller.update(qpos.tolist(), data.time, dt)
-        ctrl[:] = (*controller.q_cmd, *controller.dq)
+        ctrl[:] = controller.update(qpos.tolist(), data.time, dt)
 
     def kinematic_step(model: mujoco.MjModel, data: mujoco.MjData) -> None:
         # The report's Simulink: the integrated q is imposed, no dynamics.
