@@ -39,6 +39,20 @@ def main_() -> int:
         reader.close()
     undamped = run("pendulum-undamped")
     (DOCS / "pendulum_undamped_angle_velocity.png").write_bytes((undamped / "angle_velocity.png").read_bytes())
+
+    step = run("leg-step", "--video")
+    for name in ("foot_position", "joints", "singularity", "workspace"):
+        (DOCS / f"leg_{name}.png").write_bytes((step / f"{name}.png").read_bytes())
+    outside = run("leg-step", "--set", "amplitude=0.1", "--set", "omega=0.5236", "--video")
+    for name in ("foot_position", "singularity"):
+        (DOCS / f"leg_outside_{name}.png").write_bytes((outside / f"{name}.png").read_bytes())
+    reader = imageio.get_reader(str(outside / "video.mp4"))
+    try:
+        imageio.imwrite(DOCS / "leg_outside_frame.png", reader.get_data(150))  # t = 5 s: stretched, off the line
+    finally:
+        reader.close()
+    sweep = run("leg-sweep")
+    (DOCS / "leg_sweep.png").write_bytes((sweep / "sweep.png").read_bytes())
     print(f"wrote figures to {DOCS}")
     return 0
 
