@@ -47,7 +47,7 @@ def _fps(text: str) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog=PROG, description="Robotics-course simulations on MuJoCo: run named scenarios.")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser, metavar="{list,run,check}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser, metavar="{list,run,check,kin}")
     sub.add_parser("list", help="scenarios and their parameters with defaults and units")
     run = sub.add_parser("run", help="run a scenario and write a run folder")
     run.add_argument("scenario", help="scenario name (see 'hexabot-sim list')")
@@ -70,6 +70,13 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--fps", type=_fps, default=30, help="video frame rate (default: 30)")
     run.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     sub.add_parser("check", help="MuJoCo version, working OpenGL backend, ffmpeg")
+    kin = sub.add_parser("kin", help="kinematics of a robot: T0n, J, singularities, IK branches")
+    kin.add_argument("robot", help="rrp, elbow, stanford, scara or leg")
+    kin.add_argument("--q", metavar="Q1,Q2,...", help="joint values (rad for revolute, m for prismatic)")
+    kin.add_argument("--target", metavar="X,Y,Z", help="tool position for IK (stanford: x,y,z,roll,pitch,yaw)")
+    kin.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE", help="link length [m]")
+    kin.add_argument("--json", action="store_true", help="machine-readable output")
+    kin.add_argument("--symbolic", action="store_true", help="also derive T0n and J symbolically (needs sympy)")
     return parser
 
 
@@ -136,6 +143,40 @@ def cmd_check() -> int:
         ffmpeg_ok = False
     video = "available" if working and ffmpeg_ok else "unavailable (CSV and plots still work)"
     print(f"video         {video}; MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r}")
+    return 0
+
+
+def cmd_kin(args: argparse.Namespace) -> int:
+    import json
+
+    from hexabot_sim import kinreport
+
+    lengths = {}
+    for name, raw in params_mod.parse_assignments(args.sets).items():
+        lengths[name] = kinreport.parse_numbers(raw, f"length '{name}'")[0]
+    report = kinreport.describe(args.robot, lengths)
+    if args.q is not None:
+        report |= kinreport.at_configuration(args.robot, kinreport.parse_numbers(args.q, "--q"), lengths)
+    if args.target is not None:
+        report |= kinreport.solve(args.robot, kinreport.parse_numbers(args.target, "--target"), lengths)
+    if args.symbolic:
+        try:
+            from hexabot_sim.kinematics import symbolic
+        except ImportError:
+            raise UsageError("--symbolic needs sympy: pip install 'hexabot-sim[symbolic]'") from None
+        chain = symbolic.symbolic_chain(args.robot)
+        report["symbolic"] = {
+            "T0n": symbolic.pretty(symbolic.transforms(chain)[-1]),
+            "J": symbolic.pretty(symbolic.jacobian(chain)),
+            "T0n_latex": symbolic.latex(symbolic.transforms(chain)[-1]),
+            "J_latex": symbolic.latex(symbolic.jacobian(chain)),
+        }
+    if args.json:
+        print(json.dumps(report, indent=2, allow_nan=False))
+    else:
+        print(kinreport.text(report))
+        if args.symbolic:
+            print(f"symbolic T0n:\n{report['symbolic']['T0n']}\nsymbolic J:\n{report['symbolic']['J']}")
     return 0
 
 
@@ -257,6 +298,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return cmd_list()
         if args.command == "check":
             return cmd_check()
+        if args.command == "kin":
+            return cmd_kin(args)
         return cmd_run(args)
     except HexabotError as e:
         print(f"{PROG}: error: {e}", file=sys.stderr)

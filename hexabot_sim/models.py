@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 from hexabot_sim.errors import UsageError
@@ -30,26 +30,37 @@ def model_path(name: str) -> Path:
     return path
 
 
-def load_tree(name: str) -> ET.Element:
-    """Parses `models/<name>.xml` with every `<include file=...>` inlined: one self-contained MJCF."""
-    return _load(model_path(name))
+def load_tree(name: str, replace: Mapping[str, str] | None = None) -> ET.Element:
+    """Parses `models/<name>.xml` with every `<include file=...>` inlined: one self-contained MJCF.
+
+    Args:
+        name: Model file stem in models/.
+        replace: Included file name -> MJCF text to inline instead of that file (e.g. a robot
+            regenerated with other link lengths inside its committed scene).
+    """
+    return _load(model_path(name), replace or {})
 
 
-def _load(path: Path) -> ET.Element:
+def _load(path: Path, replace: Mapping[str, str]) -> ET.Element:
     root = ET.parse(path).getroot()
-    _inline_includes(root, path.parent)
+    _inline_includes(root, path.parent, replace)
     return root
 
 
-def _inline_includes(element: ET.Element, base: Path) -> None:
+def _inline_includes(element: ET.Element, base: Path, replace: Mapping[str, str]) -> None:
     for index, child in enumerate(list(element)):
         if child.tag == "include":
-            included = _load(base / child.attrib["file"])
+            name = child.attrib["file"]
+            if name in replace:
+                included = ET.fromstring(replace[name])
+                _inline_includes(included, base, replace)
+            else:
+                included = _load(base / name, replace)
             element.remove(child)
             for offset, grandchild in enumerate(included):
                 element.insert(index + offset, grandchild)
         else:
-            _inline_includes(child, base)
+            _inline_includes(child, base, replace)
 
 
 def fmt(value: float | Iterable[float]) -> str:

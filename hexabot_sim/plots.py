@@ -302,10 +302,39 @@ def leg_sweep_figures(result: ScenarioResult) -> dict[str, Figure]:
     return {"sweep": fig, "workspace": workspace_figure(result)}
 
 
+def rrp_velocity_figures(result: ScenarioResult) -> dict[str, Figure]:
+    """Report 001 part 5: the tool's linear and angular velocity in the base frame, and the joints."""
+    c = result.columns
+    t = c["t"]
+    p = result.params
+    title = f"{result.scenario}: q = (sin t, cos 2t, sin 3t), d1 = {p.d1:g} m, a2 = {p.a2:g} m"
+    fig, (ax1, ax2, ax3) = plt.subplots(3, 1, sharex=True, figsize=(9, 8), constrained_layout=True)
+    for axis in ("vx", "vy", "vz"):
+        ax1.plot(t, c[axis], label=f"{axis} (J q̇)")
+    ax1.plot(t, c["vx_mujoco"], ":", color="black", linewidth=1, label="MuJoCo site velocity")
+    ax1.set_ylabel("linear velocity [m/s]")
+    for axis in ("wx", "wy", "wz"):
+        ax2.plot(t, c[axis], label=f"{axis} (J q̇)")
+    ax2.plot(t, c["wx_mujoco"], ":", color="black", linewidth=1, label="MuJoCo site velocity")
+    ax2.set_ylabel("angular velocity [rad/s]")
+    ax3.plot(t, c["q1"], label="q1 [rad]")
+    ax3.plot(t, c["q2"], label="q2 [rad]")
+    ax3.plot(t, c["d3"], label="d3 [m]")
+    ax3.plot(t, c["det_jv"], "--", color="gray", label="det Jv = (a2 + d3)² cos q2 [m²]")
+    ax3.set_ylabel("joints")
+    ax3.set_xlabel("time t [s]")
+    for ax in (ax1, ax2, ax3):
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="upper right", ncol=2)
+    ax1.set_title(title, fontsize=10)
+    return {"velocity": fig}
+
+
 FIGURES: dict[str, Callable[[ScenarioResult], dict[str, Figure]]] = {
     "pendulum": pendulum_figures,
     "leg": leg_figures,
     "leg_sweep": leg_sweep_figures,
+    "rrp_velocity": rrp_velocity_figures,
 }
 
 

@@ -44,6 +44,10 @@ class Joint:
     def __post_init__(self) -> None:
         if self.kind not in ("revolute", "prismatic"):
             raise UsageError(f"joint '{self.name}': kind must be revolute or prismatic; got {self.kind!r}")
+        if (self.lower is None) != (self.upper is None):
+            raise UsageError(f"joint '{self.name}': give both lower and upper limits, or neither")
+        if self.lower is not None and self.upper is not None and not self.lower <= self.upper:
+            raise UsageError(f"joint '{self.name}': lower limit {self.lower} exceeds upper limit {self.upper}")
 
     @property
     def prismatic(self) -> bool:

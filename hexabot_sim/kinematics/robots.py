@@ -39,7 +39,8 @@ class RobotSpec:
         for name, value in (overrides or {}).items():
             if name not in self.lengths:
                 raise UsageError(f"unknown length '{name}' for {self.name}; known: {', '.join(self.lengths)}")
-            ok = math.isfinite(value) and (value >= 0 if self.lengths[name].allow_zero else value > 0)
+            ok = isinstance(value, (int, float)) and math.isfinite(value)
+            ok = ok and (value >= 0 if self.lengths[name].allow_zero else value > 0)
             if not ok:
                 allowed = "a finite number >= 0" if self.lengths[name].allow_zero else "a finite number > 0"
                 raise UsageError(f"length '{name}' of {self.name} must be {allowed} [m]; got {value!r}")
@@ -55,11 +56,10 @@ def _rrp(p: Mapping[str, float]) -> SerialChain:
         Joint("q2", theta=HALF_PI, d=0.0, a=0.0, alpha=HALF_PI),
         Joint("d3", kind="prismatic", d=p["a2"], lower=-p["a2"], upper=2.0),
     )
-    chain = SerialChain("rrp", joints, "standard")
-    # Tool: the report's frame orientation Rz(q1) Ry(-q2); the DH frame differs from it by a constant rotation.
-    report = _rz(0.0) @ _tz(p["d1"]) @ _ry(0.0) @ _tx(p["a2"])
-    tool = np.linalg.solve(chain.fk(np.zeros(3)), report)
-    return dataclasses.replace(chain, tool=tool)
+    # Tool: the report's frame Rz(q1) Ry(-q2) differs from DH frame 3 by a constant rotation (x3 = z, z3 = x,
+    # y3 = -y of the report's frame); tests check fk == H at random q.
+    tool = np.array([[0.0, 0.0, 1.0, 0.0], [0.0, -1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+    return SerialChain("rrp", joints, "standard", tool=tool)
 
 
 def _elbow(p: Mapping[str, float]) -> SerialChain:

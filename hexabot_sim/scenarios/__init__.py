@@ -78,6 +78,13 @@ SCENARIOS: dict[str, Scenario] = {
             "LegSweepParams",
             {},
         ),
+        Scenario(
+            "rrp-velocity",
+            "RRP arm (report 001): tool linear and angular velocity for q(t) = (sin t, cos 2t, sin 3t), t = 0..20 s",
+            "rrp_velocity",
+            "RrpVelocityParams",
+            {},
+        ),
     )
 }
 

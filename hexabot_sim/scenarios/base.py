@@ -18,7 +18,7 @@ Progress = Callable[[int, int], None]  # (done, total): scenarios report long wo
 class Metric:
     """One scalar result of a run, with its unit and meaning."""
 
-    value: float | int | str | bool | None
+    value: Any  # float, int, str, bool, None or a list of those
     unit: str
     doc: str
 
