@@ -141,6 +141,16 @@ def resolve(cls: type[T], defaults: Mapping[str, Any], *layers: Mapping[str, Any
         raise UsageError(str(e)) from None
 
 
+def check_duration(duration: float, timestep: float, max_steps: int) -> None:
+    """Cross-field check shared by time-stepped scenarios (raises ValueError, reported as a usage error)."""
+    if timestep > duration:
+        raise ValueError(f"parameter 'timestep' must not exceed 'duration' ({duration} s); got {timestep}")
+    if duration / timestep > max_steps:
+        raise ValueError(
+            f"duration / timestep must be at most {max_steps:.0e} steps; raise 'timestep' or lower 'duration'"
+        )
+
+
 def as_dict(obj: Any) -> dict[str, Any]:
     """Parameter values of a resolved object, in declaration order."""
     return {name: getattr(obj, name) for name in infos(type(obj))}

@@ -32,55 +32,61 @@ from hexabot_sim.scenarios import leg, pendulum
 from hexabot_sim.simulate import simulate, step_count
 
 
-def bench_sim_loop(repeat: int) -> dict[str, float]:
-    scenario = scenarios.get("pendulum")
-    p = params.resolve(scenario.params_type, scenario.defaults)
-    model = mujoco.MjModel.from_xml_string(pendulum.build_xml(p))
-    data = mujoco.MjData(model)
-    n = step_count(p.duration, p.timestep)
-    home = model.key("home").id
-    bare, loop = [], []
+def paired_loops(prepare, loop, repeat: int) -> dict[str, float]:
+    """Best-of-`repeat` seconds per step of a bare mj_step loop and of `loop`, alternating on fresh states.
+
+    Args:
+        prepare: () -> (model, data, n_steps), a fresh start state each call.
+        loop: (model, data, n_steps) -> None, the loop under test.
+    """
+    bare, timed = [], []
     for _ in range(repeat):
-        mujoco.mj_resetDataKeyframe(model, data, home)
+        model, data, n = prepare()
         start = time.perf_counter()
         for _ in range(n):
             mujoco.mj_step(model, data)
         bare.append(time.perf_counter() - start)
 
-        mujoco.mj_resetDataKeyframe(model, data, home)
+        model, data, n = prepare()
         start = time.perf_counter()
-        simulate(model, data, n)
-        loop.append(time.perf_counter() - start)
+        loop(model, data, n)
+        timed.append(time.perf_counter() - start)
     return {
         "steps": n,
         "bare_us_per_step": min(bare) / n * 1e6,
-        "loop_us_per_step": min(loop) / n * 1e6,
-        "ratio": min(loop) / min(bare),
+        "loop_us_per_step": min(timed) / n * 1e6,
+        "ratio": min(timed) / min(bare),
     }
+
+
+def bench_sim_loop(repeat: int) -> dict[str, float]:
+    """The pendulum scenario's simulate() (recording + divergence checks) vs bare mj_step."""
+    scenario = scenarios.get("pendulum")
+    p = params.resolve(scenario.params_type, scenario.defaults)
+    model = mujoco.MjModel.from_xml_string(pendulum.build_xml(p))
+    data = mujoco.MjData(model)
+
+    def prepare():
+        mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+        return model, data, step_count(p.duration, p.timestep)
+
+    return paired_loops(prepare, simulate, repeat)
 
 
 def bench_leg_loop(repeat: int) -> dict[str, float]:
+    """The leg-step loop (resolved-rate controller + recording + mj_step) vs bare mj_step."""
     scenario = scenarios.get("leg-step")
     p = params.resolve(scenario.params_type, scenario.defaults)
-    bare, loop = [], []
-    for _ in range(repeat):
-        run = leg.prepare(p)
-        start = time.perf_counter()
-        for _ in range(run.n_steps):
-            mujoco.mj_step(run.model, run.data)
-        bare.append(time.perf_counter() - start)
+    runs = []
 
-        run = leg.prepare(p)
-        start = time.perf_counter()
-        simulate(run.model, run.data, run.n_steps, controller=run.control, step=run.step)
-        loop.append(time.perf_counter() - start)
-    n = run.n_steps
-    return {
-        "steps": n,
-        "bare_us_per_step": min(bare) / n * 1e6,
-        "loop_us_per_step": min(loop) / n * 1e6,
-        "ratio": min(loop) / min(bare),
-    }
+    def prepare():
+        runs.append(leg.prepare(p))
+        return runs[-1].model, runs[-1].data, runs[-1].n_steps
+
+    def loop(model, data, n):
+        simulate(model, data, n, controller=runs[-1].control, step=runs[-1].step)
+
+    return paired_loops(prepare, loop, repeat)
 
 
 def bench_video(repeat: int) -> dict[str, float] | str:
@@ -124,23 +130,17 @@ def main() -> int:
     args = parser.parse_args()
 
     failures = []
-    sim = bench_sim_loop(args.repeat)
-    ok = sim["ratio"] <= 1.5
-    failures += [] if ok else ["sim-loop"]
-    print(
-        f"sim-loop  {sim['steps']} steps: bare mj_step {sim['bare_us_per_step']:.2f} us/step, "
-        f"simulate() {sim['loop_us_per_step']:.2f} us/step, ratio {sim['ratio']:.2f}x (target <= 1.5x) "
-        f"{'ok' if ok else 'MISSED'}"
-    )
-
-    legloop = bench_leg_loop(args.repeat)
-    ok = legloop["ratio"] <= 2.0
-    failures += [] if ok else ["leg-loop"]
-    print(
-        f"leg-loop  {legloop['steps']} steps: bare mj_step {legloop['bare_us_per_step']:.2f} us/step, "
-        f"leg-step loop {legloop['loop_us_per_step']:.2f} us/step, ratio {legloop['ratio']:.2f}x (target <= 2x) "
-        f"{'ok' if ok else 'MISSED'}"
-    )
+    for label, result, target in (
+        ("sim-loop", bench_sim_loop(args.repeat), 1.5),
+        ("leg-loop", bench_leg_loop(args.repeat), 2.0),
+    ):
+        ok = result["ratio"] <= target
+        failures += [] if ok else [label]
+        print(
+            f"{label:<9} {result['steps']} steps: bare mj_step {result['bare_us_per_step']:.2f} us/step, "
+            f"loop {result['loop_us_per_step']:.2f} us/step, ratio {result['ratio']:.2f}x (target <= {target:g}x) "
+            f"{'ok' if ok else 'MISSED'}"
+        )
 
     video = bench_video(max(1, args.repeat // 2))
     if isinstance(video, str):

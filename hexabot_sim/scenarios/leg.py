@@ -12,7 +12,7 @@ from hexabot_sim import models
 from hexabot_sim.control.resolved_rate import ResolvedRateController, ResolvedRateGains
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import leg as leg_kin
-from hexabot_sim.params import param
+from hexabot_sim.params import check_duration, param
 from hexabot_sim.scenarios.base import Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import Controller, simulate, site_trajectory, step_count
 
@@ -61,12 +61,7 @@ class LegStepParams(LegParams):
     def __post_init__(self) -> None:
         if self.duration == 0:
             object.__setattr__(self, "duration", 4 * math.pi / self.omega)
-        if self.timestep > self.duration:
-            raise ValueError(
-                f"parameter 'timestep' must not exceed 'duration' ({self.duration} s); got {self.timestep}"
-            )
-        if step_count(self.duration, self.timestep) > 2_000_000:
-            raise ValueError("duration / timestep must be at most 2e6 steps; raise 'timestep' or lower 'duration'")
+        check_duration(self.duration, self.timestep, 2_000_000)
 
 
 def reference(p: LegStepParams, start: np.ndarray):

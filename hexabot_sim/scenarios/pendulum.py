@@ -9,7 +9,7 @@ import mujoco
 import numpy as np
 
 from hexabot_sim import models
-from hexabot_sim.params import param
+from hexabot_sim.params import check_duration, param
 from hexabot_sim.scenarios.base import Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import simulate, step_count
 
@@ -36,12 +36,7 @@ class PendulumParams:
     def __post_init__(self) -> None:
         if self.radius >= self.length:
             raise ValueError(f"parameter 'radius' must be smaller than 'length' ({self.length} m); got {self.radius}")
-        if self.timestep > self.duration:
-            raise ValueError(
-                f"parameter 'timestep' must not exceed 'duration' ({self.duration} s); got {self.timestep}"
-            )
-        if step_count(self.duration, self.timestep) > 10_000_000:
-            raise ValueError("duration / timestep must be at most 1e7 steps; raise 'timestep' or lower 'duration'")
+        check_duration(self.duration, self.timestep, 10_000_000)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -10,7 +10,7 @@ import numpy as np
 from hexabot_sim import models
 from hexabot_sim.kinematics import robots
 from hexabot_sim.kinematics.mjcf import to_mjcf
-from hexabot_sim.params import param
+from hexabot_sim.params import check_duration, param
 from hexabot_sim.scenarios.base import Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import Trajectory, step_count
 
@@ -27,10 +27,7 @@ class RrpVelocityParams:
     timestep: float = param(0.001, "s", "sample period", "positive")
 
     def __post_init__(self) -> None:
-        if self.timestep > self.duration:
-            raise ValueError(f"parameter 'timestep' must not exceed 'duration' ({self.duration} s)")
-        if step_count(self.duration, self.timestep) > 2_000_000:
-            raise ValueError("duration / timestep must be at most 2e6 samples")
+        check_duration(self.duration, self.timestep, 2_000_000)
 
 
 def joint_trajectory(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
