@@ -69,3 +69,10 @@ def test_bad_input_exit_2_one_line(capsys, argv, fragment):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("hexabot-sim: error: ") and err.count("\n") == 1 and fragment in err, err
+
+
+def test_symbolic_output(capsys):
+    pytest.importorskip("sympy")
+    report = run_json(capsys, "leg", "--symbolic")
+    assert "c23" in report["symbolic"]["T0n"] and "c_{23}" in report["symbolic"]["T0n_latex"]
+    assert "s1" in report["symbolic"]["J"]
