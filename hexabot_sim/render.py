@@ -33,7 +33,6 @@ QUALITY: dict[str, Quality] = {
 FPS: int = 30  # [frames/s] video frame rate
 
 Progress = Callable[[int, int], None]
-Decorate = Callable[[mujoco.MjvScene, int], None]
 
 
 def frame_indices(t: np.ndarray, fps: float) -> np.ndarray:
@@ -88,13 +87,11 @@ def render_video(
     markers: Sequence[Marker] = (),
     trail: np.ndarray | None = None,
     progress: Progress | None = None,
-    decorate: Decorate | None = None,
 ) -> int:
     """Renders the recorded states (t: (n,), qpos: (n, nq)) from `camera` into an MP4 at `path`.
 
     Frames are encoded as they are rendered; only one frame is held in memory. `markers` are drawn
-    in every frame; `trail` (n, 3) world points are drawn as the path travelled up to each frame;
-    `decorate(scene, row)` may add further per-frame geoms.
+    in every frame; `trail` (n, 3) world points are drawn as the path travelled up to each frame.
 
     Returns:
         Number of frames written.
@@ -136,8 +133,6 @@ def render_video(
                     add_segment(renderer.scene, marker)
                 if trail is not None:  # the path travelled so far
                     add_polyline(renderer.scene, trail[indices[: n + 1]], TRAIL_WIDTH, TRAIL_RGBA)
-                if decorate is not None:
-                    decorate(renderer.scene, int(row))
                 writer.append_data(renderer.render())
                 if progress is not None:
                     progress(n + 1, len(indices))
