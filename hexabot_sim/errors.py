@@ -17,3 +17,11 @@ class SimulationError(HexabotError):
     """The simulation went unstable (MuJoCo warning or non-finite state)."""
 
     exit_code = 1
+
+
+def lookup(table: dict, name: str, what: str):
+    """table[name], or a UsageError "unknown <what> '<name>'; known: ..." listing the allowed names."""
+    try:
+        return table[name]
+    except KeyError:
+        raise UsageError(f"unknown {what} '{name}'; known: {', '.join(table)}") from None

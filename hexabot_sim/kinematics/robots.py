@@ -8,7 +8,7 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from hexabot_sim.errors import UsageError
+from hexabot_sim.errors import UsageError, lookup
 from hexabot_sim.kinematics.chain import Joint, SerialChain
 
 HALF_PI = math.pi / 2
@@ -181,7 +181,4 @@ ROBOTS: dict[str, RobotSpec] = {
 
 def get(name: str) -> RobotSpec:
     """The robot called `name`."""
-    try:
-        return ROBOTS[name]
-    except KeyError:
-        raise UsageError(f"unknown robot '{name}'; known: {', '.join(ROBOTS)}") from None
+    return lookup(ROBOTS, name, "robot")

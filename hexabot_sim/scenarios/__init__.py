@@ -7,7 +7,7 @@ import importlib
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from hexabot_sim.errors import UsageError
+from hexabot_sim.errors import lookup
 
 
 @dataclasses.dataclass(frozen=True)
@@ -91,7 +91,4 @@ SCENARIOS: dict[str, Scenario] = {
 
 def get(name: str) -> Scenario:
     """The scenario called `name`."""
-    try:
-        return SCENARIOS[name]
-    except KeyError:
-        raise UsageError(f"unknown scenario '{name}'; known: {', '.join(SCENARIOS)}") from None
+    return lookup(SCENARIOS, name, "scenario")

@@ -12,6 +12,7 @@ from hexabot_sim import models
 from hexabot_sim.control.resolved_rate import ResolvedRateController, ResolvedRateGains
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import leg as leg_kin
+from hexabot_sim.kinematics import robots
 from hexabot_sim.params import check_duration, param
 from hexabot_sim.scenarios.base import Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import Controller, simulate, site_trajectory, step_count
@@ -78,9 +79,9 @@ def reference_velocity(p: LegStepParams, t: np.ndarray) -> np.ndarray:
     return p.amplitude * (np.sin(p.omega * t) if p.profile == "sine" else np.cos(p.omega * t))
 
 
-# Joint ranges of models/leg.xml (coxa, femur, tibia) [rad]; tests check them against the model.
-JOINT_LOWER = np.array([-math.pi / 2, -math.pi / 2, 0.0])
-JOINT_UPPER = np.array([math.pi / 2, math.pi / 2, math.radians(160)])
+# Joint ranges (coxa, femur, tibia) [rad] from the leg's DH table; tests check them against models/leg.xml.
+JOINT_LOWER = np.array([j.lower for j in robots.get("leg").chain().joints])
+JOINT_UPPER = np.array([j.upper for j in robots.get("leg").chain().joints])
 REACH_TOL: float = 1e-7  # [m] resolution of line_reach
 
 
