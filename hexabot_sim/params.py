@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
+import stat
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
@@ -11,37 +13,90 @@ from typing import Any, TypeVar
 
 from hexabot_sim.errors import UsageError
 
-# Allowed range of a numeric parameter, with the phrase used in error messages.
-CHECKS: dict[str, tuple[str, Any]] = {
-    "finite": ("a finite number", lambda v: True),
-    "positive": ("a finite number > 0", lambda v: v > 0),
-    "nonnegative": ("a finite number >= 0", lambda v: v >= 0),
-}
+MAX_LIST_ITEMS: int = 400  # longest comma-separated list a parameter takes (a grid axis)
+MAX_CONFIG_BYTES: int = 1 << 20  # a parameter file is a few lines; more than 1 MiB is not one
+MAX_SHOWN: int = 40  # characters of a bad value quoted back in an error message
+
+# What one run may cost, checked before it starts (check_budget). Measured on the 2-core
+# development machine (numbers in the report of issue 8): a pendulum mj_step costs 7.5-10 us,
+# a leg control period with its controller 17 us; writing the CSV costs 4-9 us per value
+# (np.savetxt) and a recorded row holds 400-600 bytes in memory until the run folder is written.
+MAX_STEPS: int = 20_000_000  # physics steps (substeps included): ~3-6 min of bare stepping
+MAX_MEMORY_BYTES: float = 2e9  # recorded arrays, derived columns and the CSV table
+MAX_OUTPUT_BYTES: float = 2e9  # CSV text
+MAX_SECONDS: float = 3600.0  # estimated wall time of the run including the CSV
+CSV_BYTES_PER_VALUE: int = 25  # '%.17g' plus a comma
+CSV_SECONDS_PER_VALUE: float = 8e-6  # np.savetxt with '%.17g', measured
 
 
 @dataclasses.dataclass(frozen=True)
 class ParamInfo:
-    """What `hexabot-sim list` shows of a parameter and how its values are checked."""
+    """What `hexabot-sim list` shows of a parameter and how its values are checked.
+
+    Attributes:
+        unit: Unit as shown to users, e.g. "kg" or "rad/s"; "" for none.
+        doc: One-line description.
+        ge, gt: Lower bound, inclusive or exclusive (exactly one is set for a number).
+        le, lt: Upper bound, inclusive or exclusive (exactly one is set for a number).
+        choices: Allowed strings of a text parameter (matched case-insensitively).
+        typo: (unit, size in this unit) of a unit users often type by mistake, e.g. ("mm/s", 1e-3):
+            a value out of range, at least 10 in size and in range in that unit gets a "did you mean" hint.
+    """
 
     unit: str
     doc: str
-    check: str = "finite"
+    ge: float | None = None
+    gt: float | None = None
+    le: float | None = None
+    lt: float | None = None
     choices: tuple[str, ...] | None = None
+    typo: tuple[str, float] | None = None
+
+    def contains(self, value: float) -> bool:
+        """True if the number is inside the allowed range."""
+        return (
+            (self.ge is None or value >= self.ge)
+            and (self.gt is None or value > self.gt)
+            and (self.le is None or value <= self.le)
+            and (self.lt is None or value < self.lt)
+        )
 
 
-def param(default: Any, unit: str, doc: str, check: str = "finite", choices: tuple[str, ...] | None = None) -> Any:
+def param(
+    default: Any,
+    unit: str,
+    doc: str,
+    *,
+    ge: float | None = None,
+    gt: float | None = None,
+    le: float | None = None,
+    lt: float | None = None,
+    choices: tuple[str, ...] | None = None,
+    typo: tuple[str, float] | None = None,
+) -> Any:
     """Declares a field of a scenario's parameter dataclass.
 
-    Args:
-        default: Value used when neither a config file nor `--set` gives one.
-        unit: Unit in brackets as shown to users, e.g. "kg" or "rad/s"; "" for none.
-        doc: One-line description.
-        check: "finite", "positive" or "nonnegative" for numbers.
-        choices: Allowed strings for a text parameter.
+    A number needs a range with both ends (ge or gt, le or lt): every value that passes is one the
+    scenario can run. A text parameter needs its choices.
     """
-    if check not in CHECKS:
-        raise ValueError(f"unknown check {check!r}")
-    return dataclasses.field(default=default, metadata={"param": ParamInfo(unit, doc, check, choices)})
+    if choices is None and ((ge is None) == (gt is None) or (le is None) == (lt is None)):
+        raise ValueError(f"parameter {doc!r}: give exactly one lower (ge, gt) and one upper (le, lt) bound")
+    info = ParamInfo(unit, doc, ge, gt, le, lt, choices, typo)
+    return dataclasses.field(default=default, metadata={"param": info})
+
+
+def _number(value: float) -> str:
+    return f"{value:.6g}"
+
+
+def describe_range(info: ParamInfo, name: str = "value") -> str:
+    """The allowed values in words, e.g. "0 < mass <= 1000 kg" or "one of RK4, Euler, implicit"."""
+    if info.choices is not None:
+        return f"one of {', '.join(info.choices)}"
+    low = f"{_number(info.ge)} <= " if info.ge is not None else f"{_number(info.gt)} < "  # type: ignore[arg-type]
+    high = f" <= {_number(info.le)}" if info.le is not None else f" < {_number(info.lt)}"  # type: ignore[arg-type]
+    unit = f" {info.unit}" if info.unit and info.unit != "1" else ""
+    return f"{low}{name}{high}{unit}"
 
 
 def infos(cls: type) -> dict[str, tuple[ParamInfo, Any]]:
@@ -49,35 +104,72 @@ def infos(cls: type) -> dict[str, tuple[ParamInfo, Any]]:
     return {f.name: (f.metadata["param"], f.default) for f in dataclasses.fields(cls) if "param" in f.metadata}
 
 
+def _show(raw: Any) -> str:
+    """A bad value as quoted back to the user: short, on one line."""
+    if isinstance(raw, float):
+        text = repr(raw)
+    elif isinstance(raw, int) and not isinstance(raw, bool):
+        text = str(raw) if raw.bit_length() < 128 else f"an integer of {len(str(abs(raw)))} digits"
+    else:
+        text = repr(raw)
+    return text if len(text) <= MAX_SHOWN else text[: MAX_SHOWN - 3] + "..."
+
+
+def _to_float(raw: Any) -> float | None:
+    """A number from a --set string or a TOML value (None if it is not one); huge integers become inf."""
+    if isinstance(raw, bool):
+        return None
+    if isinstance(raw, str):
+        text = raw.strip()
+        if len(text) > 100:
+            return None
+        try:
+            return float(text)
+        except ValueError:
+            return None
+    if isinstance(raw, int):
+        try:
+            return float(raw)
+        except OverflowError:
+            return math.inf if raw > 0 else -math.inf
+    if isinstance(raw, float):
+        return raw
+    return None
+
+
 def _convert(name: str, raw: Any, info: ParamInfo, kind: type) -> Any:
     """Converts one raw value (a string from --set or a TOML value) and checks its range."""
     if kind is tuple:  # a list of numbers: "0.01,0.05" on the command line, [0.01, 0.05] in TOML
-        items = raw.split(",") if isinstance(raw, str) else raw
-        if not isinstance(items, (list, tuple)) or not items or any(str(v).strip() == "" for v in items):
-            raise UsageError(f"parameter '{name}' must be a comma-separated list of numbers; got {raw!r}")
+        items = raw.split(",", MAX_LIST_ITEMS) if isinstance(raw, str) else raw
+        if not isinstance(items, (list, tuple)) or not items or any(str(v).strip() == "" for v in items[:3]):
+            raise UsageError(
+                f"parameter '{name}' must be a comma-separated list of numbers, each {describe_range(info, 'x')}; "
+                f"got {_show(raw)}"
+            )
+        if len(items) > MAX_LIST_ITEMS:
+            raise UsageError(f"parameter '{name}' takes at most {MAX_LIST_ITEMS} numbers; got more")
         return tuple(_convert(name, v, info, float) for v in items)
     if info.choices is not None:
-        text = str(raw)
-        if text not in info.choices:
-            raise UsageError(f"parameter '{name}' must be one of {', '.join(info.choices)}; got {raw!r}")
-        return text
-    phrase = CHECKS[info.check][0]
-    if isinstance(raw, bool):
-        raise UsageError(f"parameter '{name}' must be {phrase}; got {raw!r}")
-    if isinstance(raw, str):
-        try:
-            value = float(raw.strip())
-        except ValueError:
-            raise UsageError(f"parameter '{name}' must be {phrase}; got {raw!r}") from None
-    elif isinstance(raw, (int, float)):
-        value = float(raw)
-    else:
-        raise UsageError(f"parameter '{name}' must be {phrase}; got {raw!r}")
-    if not math.isfinite(value) or not CHECKS[info.check][1](value):
-        raise UsageError(f"parameter '{name}' must be {phrase}; got {raw!r}")
+        text = raw.strip() if isinstance(raw, str) else None
+        canonical = {c.casefold(): c for c in info.choices}
+        if text is None or text.casefold() not in canonical:
+            raise UsageError(f"parameter '{name}' must be one of {', '.join(info.choices)}; got {_show(raw)}")
+        return canonical[text.casefold()]
+    value = _to_float(raw)
+    allowed = describe_range(info, name)
+    if value is None or math.isnan(value):
+        raise UsageError(f"parameter '{name}' must be a number with {allowed}; got {_show(raw)}")
+    value += 0.0  # -0.0 -> 0.0
+    if not info.contains(value):
+        hint = ""
+        if info.typo is not None and math.isfinite(value) and abs(value) >= 10:  # mm, mm/s, deg/s come as big numbers
+            typo_unit, size = info.typo
+            if info.contains(value * size):
+                hint = f"; did you mean {_number(value)} {typo_unit} = {_number(value * size)} {info.unit}?"
+        raise UsageError(f"parameter '{name}' must be a number with {allowed}; got {_show(raw)}{hint}")
     if kind is int:
         if value != int(value):
-            raise UsageError(f"parameter '{name}' must be a whole number; got {raw!r}")
+            raise UsageError(f"parameter '{name}' must be a whole number with {allowed}; got {_show(raw)}")
         return int(value)
     return value
 
@@ -89,33 +181,87 @@ def parse_assignments(items: list[str]) -> dict[str, str]:
         name, sep, value = item.partition("=")
         name = name.strip()
         if not sep or not name or not value.strip():
-            raise UsageError(f"malformed --set {item!r}: expected name=value, e.g. --set mass=0.2")
+            raise UsageError(f"malformed --set {_show(item)}: expected name=value, e.g. --set mass=0.2")
         out[name] = value
     return out
 
 
-def read_config(path: str | Path) -> dict[str, Any]:
-    """Reads a TOML file of `name = value` lines (a `[params]` table is accepted too)."""
-    path = Path(path)
+def _read_bounded(path: Path) -> bytes:
+    """At most MAX_CONFIG_BYTES of a regular file; never blocks on a FIFO or reads a device."""
+    shown = repr(str(path))  # a path is shown whole: cut short, it would not name the file
     try:
-        with path.open("rb") as f:
-            data = tomllib.load(f)
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
     except FileNotFoundError:
-        raise UsageError(f"config file {str(path)!r} not found") from None
+        raise UsageError(f"config file {shown} not found") from None
     except IsADirectoryError:
-        raise UsageError(f"config file {str(path)!r} is a directory, expected a TOML file") from None
+        raise UsageError(f"config file {shown} is a directory, expected a TOML file") from None
+    except (OSError, ValueError) as e:  # ValueError: a NUL byte in the name
+        raise UsageError(f"config file {shown} cannot be read: {getattr(e, 'strerror', None) or e}") from None
+    try:
+        mode = os.fstat(fd).st_mode
+        if stat.S_ISDIR(mode):
+            raise UsageError(f"config file {shown} is a directory, expected a TOML file")
+        if not stat.S_ISREG(mode):
+            raise UsageError(f"config file {shown} is not a regular file (a device, FIFO or socket)")
+        chunks, size = [], 0
+        while size <= MAX_CONFIG_BYTES:
+            chunk = os.read(fd, MAX_CONFIG_BYTES + 1 - size)
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
     except OSError as e:
-        raise UsageError(f"config file {str(path)!r} cannot be read: {e.strerror}") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
-        raise UsageError(f"config file {str(path)!r} is not valid TOML: {e}") from None
-    if set(data) == {"params"} and isinstance(data["params"], dict):
-        data = data["params"]
+        raise UsageError(f"config file {shown} cannot be read: {e.strerror or e}") from None
+    finally:
+        os.close(fd)
+    if size > MAX_CONFIG_BYTES:
+        raise UsageError(
+            f"config file {shown} is larger than {MAX_CONFIG_BYTES // 1024} KiB; a parameter file is a few lines"
+        )
+    return b"".join(chunks)
+
+
+def read_config(path: str | Path) -> dict[str, Any]:
+    """Reads a TOML file of `name = value` lines, at the top level or in a `[params]` table (or both).
+
+    Raises:
+        UsageError: for a missing, unreadable, oversized or non-regular file, invalid TOML, another
+            table than [params], or a name given both at the top level and in [params].
+    """
+    path = Path(path)
+    shown = repr(str(path))  # a path is shown whole: cut short, it would not name the file
+    raw = _read_bounded(path)
+    try:
+        data = tomllib.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise UsageError(f"config file {shown} is not valid TOML: not UTF-8 text") from None
+    except tomllib.TOMLDecodeError as e:
+        raise UsageError(f"config file {shown} is not valid TOML: {_first_line(e)}") from None
+    except (RecursionError, MemoryError):
+        raise UsageError(f"config file {shown} is not a parameter file: nested too deeply") from None
+    except ValueError as e:  # e.g. an integer longer than Python converts
+        raise UsageError(f"config file {shown} is not valid TOML: {_first_line(e)}") from None
+    table = data.pop("params", None)
+    if table is not None:
+        if not isinstance(table, dict):
+            raise UsageError(f"config file {shown}: 'params' must be a table ([params]); got {_show(table)}")
+        both = sorted(set(table) & set(data))
+        if both:
+            raise UsageError(
+                f"config file {shown}: parameter '{both[0]}' is given both at the top level and in [params]"
+            )
+        data = {**data, **table}
     for key, value in data.items():
         if isinstance(value, dict):
             raise UsageError(
-                f"config file {str(path)!r}: unexpected table [{key}]; write parameters as 'name = value' lines"
+                f"config file {shown}: unexpected table [{_show(key)[1:-1]}]; write parameters as 'name = value' lines"
             )
     return data
+
+
+def _first_line(e: Exception) -> str:
+    text = str(e).splitlines()[0] if str(e) else type(e).__name__
+    return text if len(text) <= 120 else text[:117] + "..."
 
 
 T = TypeVar("T")
@@ -133,7 +279,7 @@ def resolve(cls: type[T], defaults: Mapping[str, Any], *layers: Mapping[str, Any
     for layer in (defaults, *layers):
         for name, raw in layer.items():
             if name not in known:
-                raise UsageError(f"unknown parameter '{name}'; known: {', '.join(known)}")
+                raise UsageError(f"unknown parameter {_show(name)}; known: {', '.join(known)}")
             values[name] = _convert(name, raw, known[name][0], kinds[name])
     try:
         return cls(**values)
@@ -141,14 +287,60 @@ def resolve(cls: type[T], defaults: Mapping[str, Any], *layers: Mapping[str, Any
         raise UsageError(str(e)) from None
 
 
-def check_duration(duration: float, timestep: float, max_steps: int) -> None:
+def check_duration(duration: float, timestep: float) -> None:
     """Cross-field check shared by time-stepped scenarios (raises ValueError, reported as a usage error)."""
     if timestep > duration:
-        raise ValueError(f"parameter 'timestep' must not exceed 'duration' ({duration} s); got {timestep}")
-    if duration / timestep > max_steps:
-        raise ValueError(
-            f"duration / timestep must be at most {max_steps:.0e} steps; raise 'timestep' or lower 'duration'"
-        )
+        raise ValueError(f"parameter 'timestep' must not exceed 'duration' ({duration:g} s); got {timestep:g}")
+
+
+def _size(n: float) -> str:
+    if n >= 1e11:
+        return f"{n / 1e9:,.0f} GB"
+    return f"{n / 1e9:.3g} GB" if n >= 1e8 else f"{n / 1e6:.3g} MB"
+
+
+def _time(seconds: float) -> str:
+    if seconds >= 3600:
+        return f"{seconds / 3600:.3g} h"
+    return f"{seconds / 60:.2g} min" if seconds >= 60 else f"{seconds:.2g} s"
+
+
+def check_budget(steps: float, memory_bytes: float, output_bytes: float, seconds: float, fix: str) -> None:
+    """Refuses, before it starts, a run that would not fit in memory or on disk or would take hours.
+
+    Args:
+        steps: Physics steps (MuJoCo steps or kinematic updates) of the whole run.
+        memory_bytes: Estimated peak memory of the recorded and derived arrays [bytes].
+        output_bytes: Estimated size of the CSV [bytes].
+        seconds: Estimated wall time on the development machine [s].
+        fix: What to change, e.g. "raise 'timestep' or lower 'duration'".
+
+    Raises:
+        ValueError: (reported as a usage error) with the estimates and the limits.
+    """
+    fits = steps <= MAX_STEPS and memory_bytes <= MAX_MEMORY_BYTES and output_bytes <= MAX_OUTPUT_BYTES
+    if fits and seconds <= MAX_SECONDS:
+        return
+    raise ValueError(
+        f"this run would take {steps:.3g} steps (~{_size(output_bytes)} of output, ~{_size(memory_bytes)} in memory, "
+        f"~{_time(seconds)}); the limit is {MAX_STEPS:.0e} steps, {_size(MAX_OUTPUT_BYTES)} of output, "
+        f"{_size(MAX_MEMORY_BYTES)} in memory and {_time(MAX_SECONDS)}: {fix}"
+    )
+
+
+def check_run_cost(
+    steps: int, rows: int, columns: int, step_seconds: float, row_seconds: float, row_bytes: float, fix: str
+) -> None:
+    """check_budget for one recorded run: `rows` CSV rows of `columns` values after `steps` physics steps.
+
+    Args:
+        step_seconds: Measured cost of one physics step [s].
+        row_seconds: Measured cost of recording and post-processing one row, the CSV excluded [s].
+        row_bytes: Measured peak memory per recorded row [bytes].
+    """
+    output = float(rows) * columns * CSV_BYTES_PER_VALUE
+    seconds = steps * step_seconds + rows * (row_seconds + columns * CSV_SECONDS_PER_VALUE)
+    check_budget(steps, float(rows) * row_bytes, output, seconds, fix)
 
 
 def as_dict(obj: Any) -> dict[str, Any]:

@@ -425,10 +425,13 @@ def test_joint_command_never_leaves_the_ranges(velocity, joint, bound):
     ("setting", "fragment"),
     [
         ("mode=fast", "parameter 'mode' must be one of dynamic, kinematic; got 'fast'"),
-        ("max_joint_speed=-1", "parameter 'max_joint_speed' must be a finite number > 0"),
-        ("omega=0", "parameter 'omega' must be a finite number > 0"),
-        ("start_x=0.5", "start pose (0.5, 0.0, -0.08) m is outside the workspace"),
-        ("start_x=-0.1", "start pose (-0.1, 0.0, -0.08) m is reachable only outside the joint ranges"),
+        ("max_joint_speed=-1", "parameter 'max_joint_speed' must be a number with 0.001 <= max_joint_speed"),
+        ("omega=0", "parameter 'omega' must be a number with 0.01 <= omega <= 20 rad/s"),
+        ("start_x=0.5", "parameter 'start_x' must be a number with -0.25 <= start_x <= 0.25 m; got '0.5'"),
+        (
+            "start_x=-0.1",
+            "the start point (-0.1, 0.0, -0.08) m is outside the leg's workspace or reachable only outside",
+        ),
     ],
 )
 def test_bad_input_exit_2_one_line_nothing_written(tmp_path, capsys, setting, fragment):
@@ -454,7 +457,7 @@ def test_cli_run_writes_the_columns_and_metrics(tmp_path, capsys):
     code = main(["run", "leg-step", "--out", str(out), "--no-plots"])
     _, err = capsys.readouterr()
     assert code == 0, err
-    assert {f.name for f in out.iterdir()} == {"timeseries.csv", "run.json", "model.xml"}
+    assert {f.name for f in out.iterdir()} == {"timeseries.csv", "run.json", "model.xml", "trajectory.npz"}
     header = (out / "timeseries.csv").read_text().splitlines()[0].split(",")
     assert set(COLUMNS) <= set(header) and header[0] == "t"
     record = json.loads((out / "run.json").read_text())

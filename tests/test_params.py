@@ -27,18 +27,21 @@ def test_scenario_defaults():
     ("overrides", "fragment"),
     [
         ({"dampin": "1"}, "unknown parameter 'dampin'; known: mass, length"),
-        ({"mass": "abc"}, "'mass' must be a finite number > 0; got 'abc'"),
-        ({"mass": "nan"}, "'mass' must be a finite number > 0"),
-        ({"mass": "inf"}, "'mass' must be a finite number > 0"),
-        ({"mass": "0"}, "'mass' must be a finite number > 0"),
-        ({"damping": "-0.1"}, "'damping' must be a finite number >= 0"),
-        ({"duration": "0"}, "'duration' must be a finite number > 0"),
-        ({"timestep": "-1e-3"}, "'timestep' must be a finite number > 0"),
-        ({"theta0_deg": "-inf"}, "'theta0_deg' must be a finite number"),
+        ({"mass": "abc"}, "'mass' must be a number with 0.001 <= mass <= 1000 kg; got 'abc'"),
+        ({"mass": "nan"}, "'mass' must be a number with 0.001 <= mass <= 1000 kg; got 'nan'"),
+        ({"mass": "inf"}, "'mass' must be a number with 0.001 <= mass <= 1000 kg; got 'inf'"),
+        ({"mass": "0"}, "'mass' must be a number with 0.001 <= mass <= 1000 kg; got '0'"),
+        ({"damping": "-0.1"}, "'damping' must be a number with 0 <= damping <= 1e+06 N*m*s/rad"),
+        ({"duration": "0"}, "'duration' must be a number with 0 < duration <= 86400 s"),
+        ({"timestep": "-1e-3"}, "'timestep' must be a number with 1e-06 <= timestep <= 0.1 s"),
+        ({"theta0_deg": "-inf"}, "'theta0_deg' must be a number with -720 <= theta0_deg <= 720 deg"),
         ({"integrator": "rk45"}, "'integrator' must be one of RK4, Euler, implicit, implicitfast"),
-        ({"timestep": "2", "duration": "1"}, "'timestep' must not exceed 'duration'"),
+        ({"integrator": 4}, "'integrator' must be one of RK4, Euler, implicit, implicitfast; got 4"),
+        ({"timestep": "0.1", "duration": "0.05"}, "'timestep' must not exceed 'duration'"),
         ({"radius": "0.5"}, "'radius' must be smaller than 'length'"),
-        ({"mass": True}, "'mass' must be a finite number > 0"),
+        ({"mass": True}, "'mass' must be a number with 0.001 <= mass <= 1000 kg; got True"),
+        ({"mass": 10**400}, "got an integer of 401 digits"),
+        ({"mass": "x" * 200}, "got 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx..."),
     ],
 )
 def test_bad_values_name_the_problem(overrides, fragment):
@@ -60,6 +63,18 @@ def test_config_file(tmp_path):
     assert params.read_config(path) == {"mass": 0.25, "integrator": "Euler"}
     path.write_text("[params]\nlength = 0.5\n")
     assert params.read_config(path) == {"length": 0.5}
+    path.write_text("mass = 0.25\n[params]\nlength = 0.5\n")  # top-level lines and [params] together
+    assert params.read_config(path) == {"mass": 0.25, "length": 0.5}
+
+
+def test_negative_zero_and_whole_numbers():
+    p = params.resolve(PendulumParams, {}, {"damping": "-0", "stiffness": -0.0})
+    assert str(p.damping) == "0.0" and str(p.stiffness) == "0.0"
+    from hexabot_sim.scenarios.leg import LegStepParams
+
+    assert params.resolve(LegStepParams, {}, {"substeps": "2.0"}).substeps == 2
+    with pytest.raises(UsageError, match="'substeps' must be a whole number"):
+        params.resolve(LegStepParams, {}, {"substeps": "2.5"})
 
 
 @pytest.mark.parametrize(

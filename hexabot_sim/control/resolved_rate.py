@@ -10,11 +10,17 @@ import dataclasses
 import math
 from collections.abc import Callable
 
-from hexabot_sim.kinematics.leg import LegGeometry, foot_and_jacobian
+from hexabot_sim.kinematics.leg import LegGeometry
 
 Vec3 = tuple[float, float, float]
 Mat3 = tuple[Vec3, Vec3, Vec3]
 Reference = Callable[[float], Vec3]  # t [s] -> desired foot position in the hip frame [m]
+# Smallest damping lambda [m/rad] the singular neighbourhood uses, whatever max_damping asks for.
+# J J^T + lambda^2 I must stay invertible in floating point: with |J|^2 ~ 0.06 m^2/rad^2 for this
+# leg, lambda^2 = 1e-10 is 1e-9 of it (far above rounding, 1e-16), so the solve keeps ~7 digits at an
+# exact singularity (q3 at its 0 limit), where a smaller lambda would divide by zero. It changes
+# dq only where it is capped by max_joint_speed anyway (|dq| ~ |u| / lambda there).
+MIN_DAMPING: float = 1e-5
 
 
 @dataclasses.dataclass(frozen=True)
@@ -24,7 +30,7 @@ class ResolvedRateGains:
     Attributes:
         task_gain: K in [1/s]: how fast a foot position error decays; removes integration drift.
         sigma_threshold: Smallest singular value of J [m/rad] below which damping switches on.
-        max_damping: Damping lambda [m/rad] reached exactly at a singularity.
+        max_damping: Damping lambda [m/rad] reached exactly at a singularity (at least MIN_DAMPING is used).
         max_joint_speed: Limit on every |dq_i| [rad/s]; dq is scaled as a whole to keep its direction.
         max_joint_acceleration: Limit on every |ddq_i| [rad/s^2] of the command, so servos can follow it.
     """
@@ -121,13 +127,7 @@ class ResolvedRateController:
         self.q_upper = q_upper
         self._next_t = math.nan  # time and reference point of the next expected call
         self._next_ref: Vec3 = (0.0, 0.0, 0.0)
-        self._brake_zone = gains.max_joint_speed**2 / (2 * gains.max_joint_acceleration)  # [rad]
-        self._f0, self._f1 = geometry.l2**2 + 2 * geometry.l3**2, 2 * geometry.l2 * geometry.l3  # F = f0 + f1 c3
-        # Constants unpacked once per call (attribute lookups dominate a pure-Python 1 kHz loop).
-        self._consts = (
-            geometry.l1, geometry.l2, geometry.l3, gains.task_gain, gains.sigma_threshold, gains.max_damping,
-            gains.max_joint_speed, gains.max_joint_acceleration,
-        )  # fmt: skip
+        self._k = step_constants(geometry, gains, q_lower, q_upper)
 
     def update(self, q: Vec3, t: float, dt: float) -> tuple[float, ...]:
         """Advances q_cmd from t to t + dt given the measured joint angles q at time t.
@@ -135,59 +135,115 @@ class ResolvedRateController:
         Returns:
             (q_cmd..., dq...): the new joint command [rad] and the joint velocity [rad/s] it moves at.
         """
-        l1, l2, l3, gain, threshold, max_damping, max_speed, max_acceleration = self._consts
-        q1, q2, q3 = q
-        (x, y, z), jac = foot_and_jacobian(q1, q2, q3, l1, l2, l3)
-        # Feedforward: the reference's exact mean velocity over the step; feedback: K times the error.
-        if t == self._next_t:  # the previous call's t + dt: reuse its reference point
+        # The reference at t (cached from the previous call when it asked for this t) and at t + dt.
+        if t == self._next_t:
             xd0, yd0, zd0 = self._next_ref
         else:
             xd0, yd0, zd0 = self.reference(t)
         self._next_t = t + dt
         self._next_ref = xd1, yd1, zd1 = self.reference(self._next_t)
-        u = (
-            (xd1 - xd0) / dt + gain * (xd0 - x),
-            (yd1 - yd0) / dt + gain * (yd0 - y),
-            (zd1 - zd0) / dt + gain * (zd0 - z),
-        )
-        # Damping grows only inside the singular neighbourhood. Cheap exit first: sigma_min >= min(|rho|,
-        # D / sqrt(F)) with the planar block's D = l2 l3 sin q3 and F >= sigma_max^2 (see sigma_min).
-        rho, sin3, cos3 = math.hypot(x, y), math.sin(q3), math.cos(q3)
-        planar_d = l2 * l3 * sin3
-        far = rho >= threshold and planar_d * planar_d >= threshold * threshold * (self._f0 + self._f1 * cos3)
-        ratio = 1.0 if far else sigma_min(rho, sin3, cos3, l2, l3) / threshold
-        if ratio < 1.0:
-            d1, d2, d3 = damped_solve(jac, u, max_damping * math.sqrt(1.0 - ratio * ratio))
-        else:
-            d1, d2, d3 = _solve3(jac, u)
-        # Joint speed limit, applied to dq as a whole so the foot keeps its direction.
-        fastest = max(abs(d1), abs(d2), abs(d3))
-        if fastest > max_speed:
-            scale = max_speed / fastest
-            d1, d2, d3 = d1 * scale, d2 * scale, d3 * scale
-        # Joint ranges: never faster toward a limit than braking at max_acceleration allows
-        # (only matters within max_speed^2 / (2 max_acceleration) of a limit).
         c1, c2, c3 = self.q_cmd
-        lo1, lo2, lo3 = self.q_lower
-        hi1, hi2, hi3 = self.q_upper
-        zone = self._brake_zone
-        if c1 - lo1 < zone or hi1 - c1 < zone:
-            d1 = _brake(d1, c1 - lo1, hi1 - c1, max_acceleration)
-        if c2 - lo2 < zone or hi2 - c2 < zone:
-            d2 = _brake(d2, c2 - lo2, hi2 - c2, max_acceleration)
-        if c3 - lo3 < zone or hi3 - c3 < zone:
-            d3 = _brake(d3, c3 - lo3, hi3 - c3, max_acceleration)
-        # Joint acceleration limit on the change of the command, as a whole.
         p1, p2, p3 = self.dq
-        largest = max(abs(d1 - p1), abs(d2 - p2), abs(d3 - p3))
-        limit = max_acceleration * dt
-        if largest > limit:
-            f = limit / largest
-            d1, d2, d3 = p1 + (d1 - p1) * f, p2 + (d2 - p2) * f, p3 + (d3 - p3) * f
-        # Integrate inside the ranges; dq is what q_cmd actually does, even where a range cuts it.
-        n1 = min(max(c1 + d1 * dt, lo1), hi1)
-        n2 = min(max(c2 + d2 * dt, lo2), hi2)
-        n3 = min(max(c3 + d3 * dt, lo3), hi3)
+        n1, n2, n3, v1, v2, v3 = rate_step(self._k, *q, c1, c2, c3, p1, p2, p3, xd0, yd0, zd0, xd1, yd1, zd1, dt)
         self.q_cmd = [n1, n2, n3]
-        self.dq = v1, v2, v3 = (n1 - c1) / dt, (n2 - c2) / dt, (n3 - c3) / dt
+        self.dq = (v1, v2, v3)
         return n1, n2, n3, v1, v2, v3
+
+
+# Constants of one leg for rate_step, unpacked once per call (attribute lookups dominate a pure-Python loop).
+StepConstants = tuple[float, ...]
+
+
+def step_constants(geometry: LegGeometry, gains: ResolvedRateGains, q_lower: Vec3, q_upper: Vec3) -> StepConstants:
+    """(l1, l2, l3, K, sigma threshold, lambda max, speed limit, acceleration limit, braking zone, lower, upper)."""
+    zone = gains.max_joint_speed**2 / (2 * gains.max_joint_acceleration)  # [rad]
+    return (
+        geometry.l1, geometry.l2, geometry.l3, gains.task_gain, gains.sigma_threshold, gains.max_damping,
+        gains.max_joint_speed, gains.max_joint_acceleration, zone, *q_lower, *q_upper,
+    )  # fmt: skip
+
+
+def rate_step(
+    k: StepConstants,
+    q1: float, q2: float, q3: float,
+    c1: float, c2: float, c3: float,
+    p1: float, p2: float, p3: float,
+    xd0: float, yd0: float, zd0: float,
+    xd1: float, yd1: float, zd1: float,
+    dt: float,
+) -> tuple[float, float, float, float, float, float]:  # fmt: skip
+    """One resolved-rate step of one leg: dq = J^+ (v_des + K (x_des - x)), limited, integrated into q_cmd.
+
+    The leg's Jacobian has a block structure that gives its inverse in closed form: column 1 is
+    rho (-s1, c1, 0), orthogonal to the leg plane spanned by columns 2 and 3, so the tangential rate
+    is u_t / rho and the (femur, tibia) rates solve the planar 2x2 block B (det B = -l2 l3 sin q3).
+    Near a singularity (sigma_min < threshold) damped least squares J^T (J J^T + lambda^2 I)^-1 u
+    decouples the same way. The ranges, the speed and the acceleration limits then apply as in
+    ResolvedRateController.
+
+    Args:
+        k: step_constants of the leg.
+        q1, q2, q3: Measured joint angles [rad] at t.
+        c1, c2, c3: Joint command q_cmd [rad] at t (the controller's state).
+        p1, p2, p3: Joint rate of the previous step [rad/s].
+        xd0, yd0, zd0: Desired foot position [m] at t, hip frame.
+        xd1, yd1, zd1: Desired foot position [m] at t + dt.
+        dt: Control period [s].
+
+    Returns:
+        (q_cmd at t + dt [rad], dq [rad/s]): the new command and the rate it moved at.
+    """
+    l1, l2, l3, gain, threshold, max_damping, max_speed, max_acc, zone, lo1, lo2, lo3, hi1, hi2, hi3 = k
+    s1, co1 = math.sin(q1), math.cos(q1)
+    s2, co2 = math.sin(q2), math.cos(q2)
+    s23, c23 = math.sin(q2 + q3), math.cos(q2 + q3)
+    rho = l1 + l2 * co2 + l3 * c23  # horizontal distance of the foot from the coxa axis
+    h = l2 * s2 + l3 * s23  # depth of the foot below the hip
+    # Task-space rate: the reference's mean velocity over the step plus K times the position error.
+    ux = (xd1 - xd0) / dt + gain * (xd0 - co1 * rho)
+    uy = (yd1 - yd0) / dt + gain * (yd0 - s1 * rho)
+    uz = (zd1 - zd0) / dt + gain * (zd0 + h)
+    # Tangential part (coxa column) and the leg plane (radial, vertical).
+    ut = co1 * uy - s1 * ux
+    ur = co1 * ux + s1 * uy
+    b11, b12, b21, b22 = -h, -l3 * s23, -(l2 * co2 + l3 * c23), -l3 * c23
+    det = b11 * b22 - b12 * b21
+    frob = b11 * b11 + b12 * b12 + b21 * b21 + b22 * b22
+    # sigma_min >= min(|rho|, |det| / sqrt(frob)): far from every singularity, the exact inverse.
+    if abs(rho) >= threshold and det * det >= threshold * threshold * frob:
+        d1 = ut / rho
+        d2 = (b22 * ur - b12 * uz) / det
+        d3 = (b11 * uz - b21 * ur) / det
+    else:
+        planar = math.sqrt(2 * det * det / (frob + math.sqrt(max(frob * frob - 4 * det * det, 0.0))))
+        ratio = min(abs(rho), planar) / threshold
+        lam = max(max_damping * math.sqrt(max(1.0 - ratio * ratio, 0.0)), MIN_DAMPING) if ratio < 1.0 else 0.0
+        lam2 = lam * lam
+        d1 = rho * ut / (rho * rho + lam2) if rho * rho + lam2 > 0 else 0.0
+        a11, a12, a22 = b11 * b11 + b12 * b12 + lam2, b11 * b21 + b12 * b22, b21 * b21 + b22 * b22 + lam2
+        da = a11 * a22 - a12 * a12
+        w1, w2 = (a22 * ur - a12 * uz) / da, (a11 * uz - a12 * ur) / da
+        d2, d3 = b11 * w1 + b21 * w2, b12 * w1 + b22 * w2
+    # Joint speed limit, applied to dq as a whole so the foot keeps its direction.
+    fastest = max(abs(d1), abs(d2), abs(d3))
+    if fastest > max_speed:
+        scale = max_speed / fastest
+        d1, d2, d3 = d1 * scale, d2 * scale, d3 * scale
+    # Joint ranges: never faster toward a limit than braking at max_acc allows.
+    if c1 - lo1 < zone or hi1 - c1 < zone:
+        d1 = _brake(d1, c1 - lo1, hi1 - c1, max_acc)
+    if c2 - lo2 < zone or hi2 - c2 < zone:
+        d2 = _brake(d2, c2 - lo2, hi2 - c2, max_acc)
+    if c3 - lo3 < zone or hi3 - c3 < zone:
+        d3 = _brake(d3, c3 - lo3, hi3 - c3, max_acc)
+    # Joint acceleration limit on the change of the command, as a whole.
+    largest = max(abs(d1 - p1), abs(d2 - p2), abs(d3 - p3))
+    limit = max_acc * dt
+    if largest > limit:
+        f = limit / largest
+        d1, d2, d3 = p1 + (d1 - p1) * f, p2 + (d2 - p2) * f, p3 + (d3 - p3) * f
+    # Integrate inside the ranges; the returned rate is what q_cmd actually did.
+    n1 = min(max(c1 + d1 * dt, lo1), hi1)
+    n2 = min(max(c2 + d2 * dt, lo2), hi2)
+    n3 = min(max(c3 + d3 * dt, lo3), hi3)
+    return n1, n2, n3, (n1 - c1) / dt, (n2 - c2) / dt, (n3 - c3) / dt

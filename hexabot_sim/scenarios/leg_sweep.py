@@ -2,19 +2,22 @@
 
 from __future__ import annotations
 
-import concurrent.futures
 import dataclasses
 import math
 import multiprocessing
+import multiprocessing.pool
 import os
+import signal
+import sys
 from typing import Any
 
 import mujoco
 import numpy as np
 
-from hexabot_sim.params import param
+from hexabot_sim.params import CSV_BYTES_PER_VALUE, check_budget, param
 from hexabot_sim.scenarios import leg
 from hexabot_sim.scenarios.base import Metric, Progress, ScenarioResult
+from hexabot_sim.simulate import step_count
 
 # Grid columns written to grid.csv, from each cell's leg-step metrics.
 CELL_METRICS = (
@@ -30,27 +33,63 @@ CELL_METRICS = (
 )
 
 
+MAX_CELLS: int = 400  # grid cells (amplitudes x omegas)
+MAX_WORKERS: int = 64  # parallel processes; more than the cells or the cores only costs memory
+
+
 @dataclasses.dataclass(frozen=True)
 class LegSweepParams(leg.LegParams):
     """Parameters of the leg-sweep scenario: a grid of leg-step runs over amplitude x omega."""
 
     amplitudes: tuple = param(
         (0.01, 0.02, 0.03, 0.04, 0.05, 0.06, 0.07, 0.08, 0.09, 0.10),
-        "m/s", "grid of amplitudes A (report: 10, 50, 100 mm/s at 1 rad/s, 80 mm/s at 1 and pi/6)", "positive",
+        "m/s", "grid of amplitudes A (report: 10, 50, 100 mm/s at 1 rad/s, 80 mm/s at 1 and pi/6)",
+        gt=0.0, le=leg.MAX_FOOT_SPEED, typo=("mm/s", 1e-3),
     )  # fmt: skip
     omegas: tuple = param(
-        (math.pi / 6, 0.75, 1.0, 1.5, 2.0, 3.0), "rad/s", "grid of omegas (comma-separated)", "positive"
-    )
-    periods: float = param(2.0, "1", "simulated periods of the command per cell", "positive")
-    workers: int = param(0, "1", "parallel processes; 0 = one per core", "nonnegative")
+        (math.pi / 6, 0.75, 1.0, 1.5, 2.0, 3.0), "rad/s", "grid of omegas (comma-separated)",
+        ge=leg.MIN_OMEGA, le=leg.MAX_OMEGA, typo=("deg/s", math.pi / 180),
+    )  # fmt: skip
+    periods: float = param(2.0, "1", "simulated periods of the command per cell", gt=0.0, le=100.0)
+    workers: int = param(0, "1", "parallel processes; 0 = one per core", ge=0, le=MAX_WORKERS)
     mode: str = param(
         "kinematic", "", "kinematic (default here: the reports' setup, fastest) or dynamic",
         choices=("dynamic", "kinematic"),
     )  # fmt: skip
 
     def __post_init__(self) -> None:
-        if len(self.amplitudes) * len(self.omegas) > 400:
-            raise ValueError("the grid must have at most 400 cells (amplitudes x omegas)")
+        super().__post_init__()
+        cells = len(self.amplitudes) * len(self.omegas)
+        if cells > MAX_CELLS:
+            raise ValueError(
+                f"the grid must have at most {MAX_CELLS} cells (amplitudes x omegas); "
+                f"got {len(self.amplitudes)} x {len(self.omegas)} = {cells}"
+            )
+        fastest = max(self.omegas)
+        leg.check_command(fastest, self.timestep)
+        if self.periods * 2 * math.pi / fastest < self.timestep:
+            raise ValueError(
+                f"parameter 'periods' must give every cell at least one 'timestep' ({self.timestep:g} s); "
+                f"{self.periods:g} periods at omega = {fastest:g} rad/s last {self.periods * 2 * math.pi / fastest:g} s"
+            )
+        # The whole grid's cost: cells run `parallel` at a time, each holding its own recorded rows.
+        n = [step_count(self.periods * 2 * math.pi / w, self.timestep) for w in self.omegas]
+        per_period = self.substeps if self.mode == "dynamic" else 1
+        step_s, row_s, row_bytes = leg.RUN_COST
+        parallel = min(self.workers or os.cpu_count() or 1, cells)
+        check_budget(
+            len(self.amplitudes) * sum(k * per_period for k in n),
+            parallel * (max(n) + 1) * row_bytes,
+            cells * (len(CELL_METRICS) + 5) * CSV_BYTES_PER_VALUE,
+            len(self.amplitudes) * sum(k * per_period * step_s + (k + 1) * row_s for k in n) / parallel,
+            "use fewer cells, fewer 'periods' or a larger 'timestep'",
+        )
+        for a in self.amplitudes:  # every cell is a valid leg-step run
+            for w in self.omegas:
+                try:
+                    self.cell(a, w)
+                except ValueError as e:
+                    raise ValueError(f"grid cell amplitude = {a:g} m/s, omega = {w:g} rad/s: {e}") from None
 
     def cell(self, amplitude: float, omega: float) -> leg.LegStepParams:
         """The leg-step parameters of one grid cell."""
@@ -60,17 +99,33 @@ class LegSweepParams(leg.LegParams):
         )
 
 
-def _run_cell(cell: leg.LegStepParams) -> dict[str, Any]:
-    """One leg-step run; only its metrics travel back to the parent process."""
+def _run_indexed_cell(job: tuple[int, leg.LegStepParams]) -> tuple[int, dict[str, Any]]:
+    """One leg-step run; only its index and metrics travel back to the parent process."""
+    index, cell = job
     result = leg.run("leg-step", cell)
-    return {name: metric.value for name, metric in result.metrics.items()}
+    return index, {name: metric.value for name, metric in result.metrics.items()}
 
 
-def _pool(workers: int) -> concurrent.futures.ProcessPoolExecutor:
+def _worker_init() -> None:
+    """Worker processes leave Ctrl-C to the parent (which stops them) and die with it (Linux)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            pr_set_pdeathsig = 1
+            ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL)
+        except (OSError, AttributeError):
+            pass
+
+
+def _pool(workers: int) -> multiprocessing.pool.Pool:
     # fork is cheap and safe here (no GL, no threads yet); spawn elsewhere.
     methods = multiprocessing.get_all_start_methods()
     context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-    return concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=context)
+    return context.Pool(processes=workers, initializer=_worker_init)
 
 
 def run(name: str, p: LegSweepParams, progress: Progress | None = None) -> ScenarioResult:
@@ -78,12 +133,18 @@ def run(name: str, p: LegSweepParams, progress: Progress | None = None) -> Scena
     cells = [(a, w) for a in p.amplitudes for w in p.omegas]
     workers = p.workers or os.cpu_count() or 1
     results: dict[int, dict[str, Any]] = {}
-    with _pool(min(workers, len(cells))) as pool:
-        futures = {pool.submit(_run_cell, p.cell(a, w)): i for i, (a, w) in enumerate(cells)}
-        for done, future in enumerate(concurrent.futures.as_completed(futures), start=1):
-            results[futures[future]] = future.result()
+    pool = _pool(min(workers, len(cells)))
+    try:
+        # Cells come back as they finish; Ctrl-C or SIGTERM in the parent lands here and stops all workers.
+        jobs = pool.imap_unordered(_run_indexed_cell, [(i, p.cell(a, w)) for i, (a, w) in enumerate(cells)])
+        for done, (i, metrics) in enumerate(jobs, start=1):
+            results[i] = metrics
             if progress is not None:
                 progress(done, len(cells))
+        pool.close()
+    finally:
+        pool.terminate()
+        pool.join()
 
     amplitude = np.array([a for a, _ in cells])
     omega = np.array([w for _, w in cells])
