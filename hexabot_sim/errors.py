@@ -19,6 +19,20 @@ class SimulationError(HexabotError):
     exit_code = 1
 
 
+class OutputError(HexabotError):
+    """The run folder could not be written (disk full, permissions changed, taken by another run)."""
+
+    exit_code = 1
+
+
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C, SIGTERM or SIGHUP: the run stops, cleans up and exits with 128 + the signal number."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
 def lookup(table: dict, name: str, what: str):
     """table[name], or a UsageError "unknown <what> '<name>'; known: ..." listing the allowed names."""
     try:

@@ -10,6 +10,7 @@ import functools
 import os
 import subprocess
 import sys
+import tempfile
 
 BACKENDS: tuple[str, ...] = ("egl", "osmesa")
 PROBE_TIMEOUT: float = 60.0  # [s] software GL can be slow to start on a loaded machine
@@ -29,9 +30,11 @@ def probe(backend: str) -> str | None:
     env = dict(os.environ, MUJOCO_GL=backend)
     env.pop("PYOPENGL_PLATFORM", None)
     try:
-        proc = subprocess.run(
-            [sys.executable, "-c", _PROBE], env=env, capture_output=True, text=True, timeout=PROBE_TIMEOUT
-        )
+        # Run in a fresh temporary folder: a failing GL may make MuJoCo drop MUJOCO_LOG.TXT in its cwd.
+        with tempfile.TemporaryDirectory(prefix="hexabot-sim-gl-") as cwd:
+            proc = subprocess.run(
+                [sys.executable, "-c", _PROBE], env=env, capture_output=True, text=True, timeout=PROBE_TIMEOUT, cwd=cwd
+            )
     except subprocess.TimeoutExpired:
         return f"{backend}: no answer within {PROBE_TIMEOUT:.0f} s"
     if proc.returncode == 0:
@@ -47,23 +50,56 @@ def loaded_backend() -> str | None:
     return os.environ.get("MUJOCO_GL", "").lower() or "glfw"
 
 
-def choose() -> tuple[str | None, str]:
+def choose() -> tuple[str | None, str, str]:
     """Picks a working backend and exports MUJOCO_GL before MuJoCo is imported.
 
     Returns:
-        (backend, "") when one works, else (None, reason) with one line saying why there is no video.
+        (backend, "", notice) when one works, else (None, reason, notice) with one line saying why
+        there is no video; `notice` is non-empty when the MUJOCO_GL the user set did not work and
+        another backend was chosen instead.
     """
     loaded = loaded_backend()
     if loaded is not None:  # too late to switch: the one already bound must work
         reason = probe(loaded)
-        return (loaded, "") if reason is None else (None, f"no working OpenGL: {reason}")
-    wanted = os.environ.get("MUJOCO_GL", "").lower()
+        return (loaded, "", "") if reason is None else (None, f"no working OpenGL: {reason}", "")
+    wanted = os.environ.get("MUJOCO_GL", "").strip().lower()
     candidates = [wanted] + [b for b in BACKENDS if b != wanted] if wanted else list(BACKENDS)
     reasons = []
     for backend in candidates:
         reason = probe(backend)
         if reason is None:
             os.environ["MUJOCO_GL"] = backend
-            return backend, ""
+            notice = (
+                f"MUJOCO_GL={wanted!r} does not work here ({reasons[0]}); rendering with {backend}" if reasons else ""
+            )
+            return backend, "", notice
         reasons.append(reason)
-    return None, "no working OpenGL (" + "; ".join(reasons) + ")"
+    os.environ["MUJOCO_GL"] = "disable"  # so that importing MuJoCo for the simulation still works
+    return None, "no working OpenGL (" + "; ".join(reasons) + ")", ""
+
+
+def disable_if_unused() -> None:
+    """For work that draws nothing: MuJoCo is imported without OpenGL, so a MUJOCO_GL that names a
+    backend that is not installed (or is not a backend at all) cannot stop it."""
+    if "mujoco" not in sys.modules:
+        os.environ["MUJOCO_GL"] = "disable"
+
+
+FFMPEG_TIMEOUT: float = 30.0  # [s]
+
+
+def ffmpeg_problem() -> str | None:
+    """None if the ffmpeg that imageio will use runs here, else one line saying why there is no video."""
+    try:
+        import imageio_ffmpeg
+
+        exe = imageio_ffmpeg.get_ffmpeg_exe()
+    except Exception as e:  # ImportError, or RuntimeError "No ffmpeg exe could be found"
+        return f"ffmpeg not found ({' '.join(str(e).split())})"
+    try:
+        proc = subprocess.run([exe, "-version"], capture_output=True, timeout=FFMPEG_TIMEOUT)
+    except (OSError, subprocess.TimeoutExpired) as e:
+        return f"ffmpeg {exe!r} does not run ({getattr(e, 'strerror', None) or e})"
+    if proc.returncode != 0 or not proc.stdout.startswith(b"ffmpeg"):
+        return f"{exe!r} is not a working ffmpeg (exit code {proc.returncode})"
+    return None

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import datetime as _dt
+import errno
 import json
 import math
 import os
 import platform
 import shutil
+import signal
 import tempfile
+import threading
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
@@ -16,51 +19,226 @@ from typing import Any
 
 import numpy as np
 
-from hexabot_sim.errors import SimulationError, UsageError
+from hexabot_sim.errors import OutputError, SimulationError, UsageError
 
 JSON_NAME = "run.json"
 MODEL_NAME = "model.xml"
 VIDEO_NAME = "video.mp4"
+TRAJECTORY_NAME = "trajectory.npz"
+
+
+# Every run is written into a hidden staging folder next to its destination and renamed into
+# place only when complete. A run killed with SIGKILL leaves one behind: later runs ignore them,
+# and `hexabot-sim clean` (or `rm -rf runs/.hexabot-sim-staging-*`) removes them.
+STAGING_PREFIX = ".hexabot-sim-staging-"
+STAGING_SUFFIX = ".partial"
+_OLD_PREFIX = ".hexabot-sim-replaced-"
+# Signals that must not cut a publish or a clean-up in half (they are held until it is done).
+_HELD_SIGNALS = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP}
 
 
 def default_out(scenario: str, root: Path = Path("runs")) -> Path:
-    """A new timestamped folder name under `root`: runs/<scenario>-YYYYmmdd-HHMMSS[-N]."""
-    stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
-    path = root / f"{scenario}-{stamp}"
-    n = 2
-    while path.exists():
-        path = root / f"{scenario}-{stamp}-{n}"
-        n += 1
-    return path
+    """The default run folder name, runs/<scenario>-YYYYmmdd-HHMMSS (a -N suffix is added at publish if taken)."""
+    return root / f"{scenario}-{_dt.datetime.now().strftime('%Y%m%d-%H%M%S')}"
 
 
 @contextmanager
-def run_folder(out: Path, force: bool = False) -> Iterator[Path]:
-    """Yields a private staging folder that becomes `out` only if the block completes.
+def _signals_held() -> Iterator[None]:
+    """Delays Ctrl-C, SIGTERM and SIGHUP until the block is done (main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
-    On any error the staging folder is removed: no half-written run is ever left behind.
+
+def check_out(out: str | os.PathLike[str], force: bool = False) -> None:
+    """Refuses, before anything runs, an --out that could destroy or hide something.
 
     Raises:
-        UsageError: if `out` exists and is not an empty folder (unless force), or cannot be written.
+        UsageError: for a symbolic link, '.', '..' or a path ending in them, the working folder or one
+            of its parents, a file, a non-empty folder without `force`, or a parent that cannot be written.
     """
+    text = os.fspath(out)
     out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"output path {str(out)!r} exists and is not a folder")
-    if out.is_dir() and any(out.iterdir()) and not force:
-        raise UsageError(f"output folder {str(out)!r} is not empty; choose another --out or add --force to replace it")
+    last = text.rstrip("/").rsplit("/", 1)[-1]
+    if out.name in ("", ".", "..") or last in ("", ".", ".."):
+        raise UsageError(f"output folder {text!r} must end in a folder name (not '.' or '..')")
+    if len(out.name.encode()) > 255:
+        raise UsageError(f"output folder name is {len(out.name.encode())} bytes long; the limit is 255")
     try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent))
+        _check_existing(out, text, force)
     except OSError as e:
-        raise UsageError(f"output folder {str(out)!r} cannot be written: {e.strerror or e}") from None
+        raise UsageError(f"output folder {text!r} cannot be used: {e.strerror or e}") from None
+
+
+def _check_existing(out: Path, text: str, force: bool) -> None:
+    if out.is_symlink():
+        raise UsageError(f"output folder {text!r} is a symbolic link; give the real folder instead")
     try:
-        yield staging
-        if out.exists():
-            shutil.rmtree(out)
-        staging.rename(out)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
+        resolved = out.resolve()
+        cwd = Path.cwd().resolve()
+    except (OSError, RuntimeError) as e:
+        raise UsageError(f"output folder {text!r} cannot be used: {e}") from None
+    if cwd.is_relative_to(resolved):
+        raise UsageError(f"output folder {text!r} is the working folder or one of its parents; choose a new folder")
+    if resolved == Path.home().resolve():
+        raise UsageError(f"output folder {text!r} is the home folder; choose a new folder")
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"output path {text!r} exists and is not a folder")
+    try:
+        nonempty = out.is_dir() and any(out.iterdir())
+    except OSError as e:
+        raise UsageError(f"output folder {text!r} cannot be read: {e.strerror or e}") from None
+    if nonempty and not force:
+        raise UsageError(f"output folder {text!r} is not empty; choose another --out or add --force to replace it")
+    ancestor = out.parent
+    while not ancestor.exists():
+        if ancestor.is_symlink():  # a dangling link in the parents
+            raise UsageError(f"output folder {text!r}: {str(ancestor)!r} is a broken symbolic link")
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise UsageError(f"output folder {text!r}: {str(ancestor)!r} is not a folder")
+    if not os.access(ancestor, os.W_OK | os.X_OK):
+        raise UsageError(f"output folder {text!r} cannot be written: no write permission in {str(ancestor)!r}")
+
+
+def _make_parents(folder: Path) -> list[Path]:
+    """Creates the missing folders down to `folder`; returns those it created, deepest first."""
+    missing = []
+    while not folder.exists():
+        missing.append(folder)
+        folder = folder.parent
+    created = []
+    for path in reversed(missing):
+        try:
+            path.mkdir()
+        except FileExistsError:  # created meanwhile by someone else: not ours to remove
+            continue
+        created.append(path)
+    return created[::-1]
+
+
+def _remove_created(created: list[Path]) -> None:
+    """Removes folders this run created, deepest first, as long as they are still empty."""
+    for path in created:
+        try:
+            path.rmdir()
+        except OSError:
+            break
+
+
+class RunFolder:
+    """Where one run is written: `.path` while it runs (staging), `.final` once published."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.final: Path | None = None
+
+
+def _publish(staging: Path, out: Path, auto_name: bool, force: bool) -> Path:
+    """Renames the finished staging folder to `out` (or the next free `out-N`); returns where it went."""
+    if auto_name:
+        for n in range(1, 10_000):
+            target = out if n == 1 else out.with_name(f"{out.name}-{n}")
+            try:
+                # rename() only ever replaces an empty folder: a taken name raises and we try the next.
+                os.rename(staging, target)
+                return target
+            except OSError as e:
+                if e.errno not in (errno.EEXIST, errno.ENOTEMPTY, errno.ENOTDIR, errno.EISDIR):
+                    raise
+        raise OutputError(f"no free run folder name next to {str(out)!r}")
+    if out.is_symlink():
+        raise OutputError(f"{str(out)!r} became a symbolic link during the run; result not written")
+    old = None
+    if force and out.is_dir() and any(out.iterdir()):
+        old = Path(tempfile.mkdtemp(prefix=f"{_OLD_PREFIX}{os.getpid()}-", dir=out.parent))
+        os.rename(out, old / "previous")  # moved aside first, deleted only once the new run is in place
+    try:
+        os.rename(staging, out)
+    except OSError as e:
+        if old is not None:
+            os.rename(old / "previous", out)
+            old.rmdir()
+        if e.errno in (errno.EEXIST, errno.ENOTEMPTY, errno.ENOTDIR, errno.EISDIR):
+            raise OutputError(
+                f"output folder {str(out)!r} was filled by someone else during the run; nothing replaced "
+                "(run again with another --out, or --force to replace it)"
+            ) from None
         raise
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+    return out
+
+
+@contextmanager
+def run_folder(out: str | os.PathLike[str] | None, scenario: str = "run", force: bool = False) -> Iterator[RunFolder]:
+    """Yields a private staging folder that becomes `out` only if the block completes.
+
+    With `out` None the run goes to a new runs/<scenario>-<timestamp>[-N] folder that no other run
+    can take. On any error, Ctrl-C or termination the staging folder and the parent folders this
+    run created are removed: no half-written run is ever left behind, and nothing is replaced that
+    was not there (empty) when the run was published, unless `force`.
+
+    Raises:
+        UsageError: if `out` is refused by check_out.
+        OutputError: if the folder cannot be written or `out` was filled during the run.
+    """
+    auto_name = out is None
+    target = default_out(scenario) if out is None else Path(out)
+    # A default name that is taken is not an error: the publish moves on to the next free -N.
+    check_out(target if out is None else out, force=force or auto_name)
+    created: list[Path] = []
+    folder = None
+    try:
+        with _signals_held():
+            created = _make_parents(target.parent)
+            staging = tempfile.mkdtemp(
+                prefix=f"{STAGING_PREFIX}{os.getpid()}-", suffix=STAGING_SUFFIX, dir=target.parent
+            )
+            folder = RunFolder(Path(staging))
+        yield folder
+        with _signals_held():
+            folder.final = _publish(folder.path, target, auto_name, force and not auto_name)
+    except BaseException as e:
+        # Ctrl-C, a signal, a failed simulation or write: remove everything this run made, then say why.
+        with _signals_held():
+            if folder is not None:
+                shutil.rmtree(folder.path, ignore_errors=True)
+            _remove_created(created)
+        if isinstance(e, OSError) and folder is None:
+            raise UsageError(f"output folder {str(target)!r} cannot be written: {e.strerror or e}") from None
+        if isinstance(e, OSError):
+            raise OutputError(f"writing the run folder failed: {e.strerror or e}; nothing written") from None
+        raise
+
+
+def stale_staging(root: Path) -> list[Path]:
+    """Staging folders in `root` and its sub-folders left by runs whose process no longer exists."""
+    found = []
+    for prefix in (STAGING_PREFIX, _OLD_PREFIX):
+        for pattern in (f"{prefix}*", f"*/{prefix}*"):
+            for path in sorted(root.glob(pattern)):
+                pid_text = path.name.removeprefix(prefix).split("-", 1)[0]
+                if pid_text.isdigit() and _alive(int(pid_text)):
+                    continue
+                if path.is_dir() and not path.is_symlink():
+                    found.append(path)
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
 
 
 def write_csv(path: Path, columns: Mapping[str, np.ndarray]) -> None:
@@ -116,16 +294,25 @@ def write_json(path: Path, record: Mapping[str, Any]) -> None:
 
 
 def write_figures(figures: Mapping[str, Any], folder: Path, dpi: int = 120) -> list[str]:
-    """Saves each matplotlib figure as <stem>.png in `folder`, closes it, and returns the file names."""
-    import matplotlib.pyplot as plt
-
+    """Saves each matplotlib figure as <stem>.png in `folder` and returns the file names."""
     names = []
     for stem, fig in figures.items():
         name = f"{stem}.png"
         fig.savefig(folder / name, dpi=dpi)
-        plt.close(fig)
         names.append(name)
     return names
+
+
+def write_arrays(path: Path, arrays: Mapping[str, np.ndarray]) -> None:
+    """Writes arrays as an .npz (np.load reads it) with fixed zip timestamps: the same run gives the same bytes."""
+    import zipfile
+
+    with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_DEFLATED) as archive:
+        for name, array in arrays.items():
+            info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
+            info.compress_type = zipfile.ZIP_DEFLATED
+            with archive.open(info, "w", force_zip64=True) as stream:
+                np.lib.format.write_array(stream, np.ascontiguousarray(array), allow_pickle=False)
 
 
 def write_text(path: Path, text: str) -> None:

@@ -12,7 +12,7 @@ from hexabot_sim import gl
 @pytest.fixture(scope="session")
 def gl_backend() -> str:
     """The working OpenGL backend; skips the test, with the reason, where none works."""
-    backend, reason = gl.choose()
+    backend, reason, _notice = gl.choose()
     if backend is None:
         pytest.skip(f"rendering unavailable here: {reason}")
     return backend

@@ -25,7 +25,15 @@ def test_run_folder_contents(tmp_path, capsys):
     out_dir = tmp_path / "run"
     out, _ = run_ok(capsys, "run", "pendulum", "--out", str(out_dir))
     names = {p.name for p in out_dir.iterdir()}
-    assert names == {"timeseries.csv", "run.json", "model.xml", "angle_velocity.png", "phase.png", "energy.png"}
+    assert names == {
+        "timeseries.csv",
+        "run.json",
+        "model.xml",
+        "trajectory.npz",
+        "angle_velocity.png",
+        "phase.png",
+        "energy.png",
+    }
     record = json.loads((out_dir / "run.json").read_text())
     assert {"scenario", "params", "metrics", "versions"} <= set(record)
     assert record["scenario"] == "pendulum"
@@ -39,6 +47,11 @@ def test_run_folder_contents(tmp_path, capsys):
     assert record["units"]["columns"]["t"] == "s"
     # The summary names the folder and the key metrics.
     assert "rest_angle_predicted_deg" in out and str(out_dir.name) in out
+    # The full recorded state, reloadable with numpy alone.
+    traj = np.load(out_dir / "trajectory.npz")
+    assert set(traj.files) == {"t", "qpos", "qvel", "ctrl"} and traj["qpos"].shape == (len(traj["t"]), 1)
+    table = np.loadtxt(out_dir / "timeseries.csv", delimiter=",", skiprows=1)
+    assert np.array_equal(traj["qpos"][:, 0], table[:, 1]) and np.array_equal(traj["t"], table[:, 0])
     for png in ("angle_velocity.png", "phase.png", "energy.png"):
         assert (out_dir / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
@@ -98,17 +111,23 @@ def _bad_inputs(tmp_path):
         (["run", "pendulum-typo"], "unknown scenario 'pendulum-typo'; known: pendulum-undamped"),
         (["run", "pendulum", "--set", "dampin=0.1"], "unknown parameter 'dampin'; known:"),
         (["run", "pendulum", "--set", "damping"], "malformed --set 'damping': expected name=value"),
-        (["run", "pendulum", "--set", "mass=heavy"], "'mass' must be a finite number > 0; got 'heavy'"),
-        (["run", "pendulum", "--set", "mass=nan"], "'mass' must be a finite number > 0; got 'nan'"),
-        (["run", "pendulum", "--set", "length=inf"], "'length' must be a finite number > 0; got 'inf'"),
-        (["run", "pendulum", "--set", "damping=-0.01"], "'damping' must be a finite number >= 0"),
-        (["run", "pendulum", "--set", "duration=0"], "'duration' must be a finite number > 0"),
-        (["run", "pendulum", "--set", "timestep=0"], "'timestep' must be a finite number > 0"),
-        (["run", "pendulum", "--set", "mass=-1"], "'mass' must be a finite number > 0"),
+        (
+            ["run", "pendulum", "--set", "mass=heavy"],
+            "'mass' must be a number with 0.001 <= mass <= 1000 kg; got 'heavy'",
+        ),
+        (["run", "pendulum", "--set", "mass=nan"], "'mass' must be a number with 0.001 <= mass <= 1000 kg; got 'nan'"),
+        (
+            ["run", "pendulum", "--set", "length=inf"],
+            "'length' must be a number with 0.01 <= length <= 100 m; got 'inf'",
+        ),
+        (["run", "pendulum", "--set", "damping=-0.01"], "'damping' must be a number with 0 <= damping"),
+        (["run", "pendulum", "--set", "duration=0"], "'duration' must be a number with 0 < duration"),
+        (["run", "pendulum", "--set", "timestep=0"], "'timestep' must be a number with 1e-06 <= timestep"),
+        (["run", "pendulum", "--set", "mass=-1"], "'mass' must be a number with 0.001 <= mass"),
         (["run", "pendulum", "--set", "integrator=RK45"], "'integrator' must be one of RK4, Euler"),
         (["run", "pendulum", "--config", str(tmp_path / "missing.toml")], "missing.toml' not found"),
         (["run", "pendulum", "--config", str(bad_toml)], "is not valid TOML"),
-        (["run", "pendulum", "--out", str(not_a_dir / "sub")], "cannot be written"),
+        (["run", "pendulum", "--out", str(not_a_dir / "sub")], "is not a folder"),
         (["run", "pendulum", "--out", str(not_a_dir)], "exists and is not a folder"),
         (["run", "pendulum", "--quality", "ultra"], "invalid choice: 'ultra'"),
         (["run", "pendulum", "--size", "big"], "expected WIDTHxHEIGHT"),
@@ -152,7 +171,7 @@ def test_divergence_exit_1_names_time_and_cause_writes_nothing(tmp_path, capsys)
 
 
 def test_without_gl_csv_and_plots_are_still_written(tmp_path, capsys, monkeypatch):
-    monkeypatch.setattr(gl, "choose", lambda: (None, "no working OpenGL (egl: test says no)"))
+    monkeypatch.setattr(gl, "choose", lambda: (None, "no working OpenGL (egl: test says no)", ""))
     out_dir = tmp_path / "r"
     code = main(["run", "pendulum-undamped", "--video", "--out", str(out_dir), *SHORT])
     _, err = capsys.readouterr()
@@ -168,7 +187,7 @@ def test_list_shows_scenarios_parameters_units(capsys):
     out, _ = run_ok(capsys, "list")
     for name in ("pendulum-undamped", "pendulum-damped", "pendulum"):
         assert f"\n{name}\n" in f"\n{out}"
-    assert "mass" in out and "[kg]" in out and "[N*m*s/rad]" in out and "one of: RK4" in out
+    assert "mass" in out and "[kg]" in out and "[N*m*s/rad]" in out and "one of RK4" in out
 
 
 def test_check_reports_versions(capsys):
@@ -184,5 +203,8 @@ def test_real_process_bad_input_has_no_traceback(tmp_path):
         cwd=tmp_path,
     )
     assert proc.returncode == 2
-    assert proc.stderr == "hexabot-sim: error: parameter 'timestep' must be a finite number > 0; got 'nan'\n"
+    assert (
+        proc.stderr
+        == "hexabot-sim: error: parameter 'timestep' must be a number with 1e-06 <= timestep <= 0.1 s; got 'nan'\n"
+    )
     assert list(tmp_path.iterdir()) == []

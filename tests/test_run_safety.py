@@ -1,0 +1,392 @@
+"""Run folders never destroy or lose anything: --out checks, concurrency, signals, full disk, stdout."""
+
+import errno
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from hexabot_sim import output, scenarios
+from hexabot_sim.__main__ import main
+from hexabot_sim.errors import OutputError, UsageError
+
+FAST = ["--set", "duration=0.05", "--no-plots"]
+
+
+def cli(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def one_line_error(err: str) -> str:
+    """The single error line of stderr, progress lines ('pendulum: 50% (5/10)') aside."""
+    lines = [line for line in err.strip().splitlines() if not re.match(r"^[\w-]+: \d+% \(\d+/\d+\)$", line)]
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+def staging_left(folder: Path) -> list[Path]:
+    return [p for p in folder.rglob(".hexabot-sim-*")]
+
+
+# --- --out targets that must be refused --------------------------------------------------------
+
+
+@pytest.mark.parametrize("target", [".", "..", "a/b/..", "a/.", "./", "sub/../.."])
+def test_out_that_normalises_elsewhere_is_refused_even_with_force(tmp_path, monkeypatch, capsys, target):
+    (tmp_path / "a" / "b").mkdir(parents=True)
+    (tmp_path / "a" / "keep.txt").write_text("mine")
+    (tmp_path / "thesis.tex").write_text("mine")
+    monkeypatch.chdir(tmp_path)
+    code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", target, "--force")
+    assert code == 2
+    assert "--out" in one_line_error(err) or "folder" in err
+    assert (tmp_path / "a" / "keep.txt").read_text() == "mine"
+    assert (tmp_path / "thesis.tex").read_text() == "mine"
+
+
+def test_out_that_is_the_working_folder_or_its_parent_is_refused(tmp_path, monkeypatch, capsys):
+    work = tmp_path / "project" / "here"
+    work.mkdir(parents=True)
+    (work / "notes.txt").write_text("mine")
+    monkeypatch.chdir(work)
+    for target in (str(work), str(tmp_path / "project"), "../here", "../../project"):
+        code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", target, "--force")
+        assert code == 2, target
+        assert "working folder" in one_line_error(err)
+    assert (work / "notes.txt").read_text() == "mine"
+
+
+def test_symlinked_out_is_refused(tmp_path, capsys):
+    real = tmp_path / "real"
+    real.mkdir()
+    (real / "data.txt").write_text("mine")
+    (tmp_path / "link").symlink_to(real)
+    (tmp_path / "dangling").symlink_to(tmp_path / "nowhere")
+    for name in ("link", "dangling"):
+        code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", str(tmp_path / name), "--force")
+        assert code == 2
+        assert "symbolic link" in one_line_error(err)
+    assert (real / "data.txt").read_text() == "mine"
+    assert not (tmp_path / "nowhere").exists()
+
+
+def test_non_empty_out_needs_force_and_force_replaces_it(tmp_path, capsys):
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "old.txt").write_text("old")
+    code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", str(out))
+    assert code == 2 and "not empty" in one_line_error(err)
+    assert (out / "old.txt").exists()
+    code, _, _ = cli(capsys, "run", "pendulum", *FAST, "--out", str(out), "--force")
+    assert code == 0
+    assert not (out / "old.txt").exists() and (out / "run.json").exists()
+    assert staging_left(tmp_path) == []
+
+
+def test_file_created_in_out_during_the_run_is_never_deleted(tmp_path, monkeypatch, capsys):
+    """`run ... --out out &` then the user writes out/thesis.tex: the run must not delete it."""
+    out = tmp_path / "out"
+    scenario = scenarios.get("pendulum")
+    real_runner = scenario.runner
+
+    def runner_meanwhile_user_writes(*args, **kwargs):
+        out.mkdir()
+        (out / "thesis.tex").write_text("three years of work")
+        return real_runner(*args, **kwargs)
+
+    monkeypatch.setattr(type(scenario), "runner", property(lambda self: runner_meanwhile_user_writes))
+    code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", str(out))
+    assert code == 1
+    assert "filled by someone else" in one_line_error(err)
+    assert (out / "thesis.tex").read_text() == "three years of work"
+    assert sorted(p.name for p in out.iterdir()) == ["thesis.tex"]
+    assert staging_left(tmp_path) == []
+
+
+def test_two_runs_publishing_to_the_same_out_never_replace_each_other(tmp_path):
+    out = tmp_path / "same"
+    with pytest.raises(OutputError, match="filled by someone else"):
+        with output.run_folder(out) as first:
+            (first.path / "run.json").write_text("first")
+            with output.run_folder(out) as second:
+                (second.path / "run.json").write_text("second")
+    assert (out / "run.json").read_text() == "second"  # the one that finished first keeps its folder
+    assert staging_left(tmp_path) == []
+
+
+def test_runs_in_the_same_second_get_their_own_folders(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(output, "default_out", lambda scenario, root=Path("runs"): root / f"{scenario}-STAMP")
+    for _ in range(3):
+        code, out, _ = cli(capsys, "run", "pendulum", *FAST)
+        assert code == 0
+    assert sorted(p.name for p in (tmp_path / "runs").iterdir()) == [
+        "pendulum-STAMP",
+        "pendulum-STAMP-2",
+        "pendulum-STAMP-3",
+    ]
+    assert "pendulum-STAMP-3" in out  # the summary names the folder the run really went to
+
+
+def test_concurrent_default_runs_all_survive(tmp_path):
+    """Four processes started together, no --out: four complete, distinct run folders."""
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-m", "hexabot_sim", "run", "pendulum", *FAST],
+            cwd=tmp_path,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+        )
+        for _ in range(4)
+    ]
+    for proc in procs:
+        _, err = proc.communicate(timeout=120)
+        assert proc.returncode == 0, err
+    folders = list((tmp_path / "runs").iterdir())
+    assert len(folders) == 4
+    assert all((folder / "run.json").exists() for folder in folders)
+    assert staging_left(tmp_path) == []
+
+
+def test_over_long_names(tmp_path, capsys):
+    ok = tmp_path / ("r" * 255)  # the longest valid name: the staging name must not push it over
+    code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", str(ok))
+    assert code == 0, err
+    code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", str(tmp_path / ("r" * 256)))
+    assert code == 2 and "255" in one_line_error(err)
+
+
+def test_unwritable_parent(capsys):
+    code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", "/proc/hexabot-sim-test/run")
+    assert code == 2
+    assert "cannot be written" in one_line_error(err)
+
+
+def test_full_disk_leaves_nothing_and_removes_created_parents(tmp_path, monkeypatch, capsys):
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(output, "write_csv", full)
+    code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", str(tmp_path / "deep" / "nested" / "run"))
+    assert code == 1
+    assert "No space left on device" in one_line_error(err)
+    assert list(tmp_path.iterdir()) == []  # deep/ and deep/nested/ were ours: gone again
+
+
+def test_default_runs_folder_removed_when_the_run_fails(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    code, _, err = cli(capsys, "run", "pendulum", "--set", "stiffness=1e4", "--set", "timestep=0.05", "--no-plots")
+    assert code == 1, err
+    assert "diverged" in one_line_error(err)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_existing_parents_are_kept_on_failure(tmp_path, monkeypatch, capsys):
+    (tmp_path / "runs").mkdir()
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(output, "write_csv", lambda *a: (_ for _ in ()).throw(OSError(errno.EIO, "I/O error")))
+    code, _, _ = cli(capsys, "run", "pendulum", *FAST)
+    assert code == 1
+    assert (tmp_path / "runs").is_dir() and list((tmp_path / "runs").iterdir()) == []
+
+
+def test_check_out_names_what_is_wrong(tmp_path):
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(UsageError, match="not a folder"):
+        output.check_out(tmp_path / "file")
+    with pytest.raises(UsageError, match="not a folder"):
+        output.check_out(tmp_path / "file" / "run")
+
+
+# --- signals ------------------------------------------------------------------------------------
+
+
+def _start(tmp_path, *argv):
+    return subprocess.Popen(
+        [sys.executable, "-m", "hexabot_sim", *argv],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
+def _wait_for_staging(tmp_path, proc, timeout=60.0):
+    deadline = time.monotonic() + timeout
+    while not staging_left(tmp_path):
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT])
+def test_signals_stop_the_run_and_clean_up(tmp_path, sig):
+    proc = _start(tmp_path, "run", "pendulum", "--set", "duration=3000", "--set", "timestep=0.001", "--out", "out")
+    _wait_for_staging(tmp_path, proc)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 128 + sig
+    assert "Traceback" not in err and "nothing written" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_leg_sweep_stops_promptly_and_leaves_no_worker(tmp_path):
+    proc = _start(tmp_path, "run", "leg-sweep", "--set", "workers=2", "--out", "sweep")
+    _wait_for_staging(tmp_path, proc)
+    time.sleep(1.0)  # the workers are busy now
+    children = subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True).stdout.split()
+    assert children, "the sweep should run in worker processes"
+    started = time.monotonic()
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=30)
+    assert time.monotonic() - started < 5.0
+    assert proc.returncode == 128 + signal.SIGTERM, err
+    time.sleep(0.2)
+    for pid in children:
+        assert not Path(f"/proc/{pid}").exists() or "zombie" in Path(f"/proc/{pid}/status").read_text()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_staging_left_by_a_killed_run_is_ignored_and_cleaned(tmp_path, capsys):
+    proc = _start(tmp_path, "run", "pendulum", "--set", "duration=3000", "--out", "out")
+    _wait_for_staging(tmp_path, proc)
+    proc.kill()
+    proc.communicate()
+    assert len(staging_left(tmp_path)) == 1
+    code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", str(tmp_path / "out"))
+    assert code == 0, err
+    code, out, _ = cli(capsys, "clean", str(tmp_path))
+    assert code == 0 and "removed" in out
+    assert staging_left(tmp_path) == [] and (tmp_path / "out" / "run.json").exists()
+
+
+# --- never a traceback ---------------------------------------------------------------------------
+
+
+def test_unexpected_exception_is_one_line_and_debug_shows_it(tmp_path, monkeypatch, capsys):
+    scenario = scenarios.get("pendulum")
+
+    def broken(*args, **kwargs):
+        raise ZeroDivisionError("float division by zero")
+
+    monkeypatch.setattr(type(scenario), "runner", property(lambda self: broken))
+    code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", str(tmp_path / "r"))
+    assert code == 1
+    line = one_line_error(err)
+    assert "internal error" in line and "ZeroDivisionError" in line and "--debug" in line
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(ZeroDivisionError):
+        main(["run", "pendulum", *FAST, "--out", str(tmp_path / "r"), "--debug"])
+    monkeypatch.setenv("HEXABOT_SIM_DEBUG", "1")
+    with pytest.raises(ZeroDivisionError):
+        main(["run", "pendulum", *FAST, "--out", str(tmp_path / "r")])
+
+
+def _run_cli(tmp_path, *argv, env=None, **kwargs):
+    streams = {} if "stdout" in kwargs else {"stdout": subprocess.PIPE}
+    return subprocess.run(
+        [sys.executable, "-m", "hexabot_sim", *argv],
+        cwd=tmp_path,
+        stderr=subprocess.PIPE,
+        text=True,
+        **streams,
+        env=dict(os.environ, **(env or {})),
+        timeout=300,
+        **kwargs,
+    )
+
+
+def test_stdout_full_or_closed(tmp_path):
+    with open("/dev/full", "w") as full:
+        proc = _run_cli(tmp_path, "run", "pendulum", *FAST, "--out", "r", stdout=full)
+    assert proc.returncode == 1
+    assert "standard output" in one_line_error(proc.stderr) and "complete" in proc.stderr
+    assert (tmp_path / "r" / "run.json").exists()
+    with open("/dev/full", "w") as full:
+        proc = _run_cli(tmp_path, "list", stdout=full)
+    assert proc.returncode == 1 and "No space left" in one_line_error(proc.stderr)
+    proc = subprocess.run(
+        f"{sys.executable} -m hexabot_sim list >&-", shell=True, cwd=tmp_path, capture_output=True, text=True
+    )
+    assert proc.returncode == 1 and "closed" in one_line_error(proc.stderr)
+    proc = subprocess.run(
+        f"{sys.executable} -m hexabot_sim list | head -1", shell=True, cwd=tmp_path, capture_output=True, text=True
+    )
+    assert proc.returncode == 0 and proc.stderr == ""
+
+
+def test_broken_mujoco_gl_does_not_break_commands_without_video(tmp_path):
+    for value in ("nonsense", "osmesa"):
+        env = {"MUJOCO_GL": value}
+        for argv in (["list"], ["check"], ["run", "pendulum", *FAST, "--out", f"r-{value}"], ["kin", "leg"]):
+            proc = _run_cli(tmp_path, *argv, env=env)
+            assert proc.returncode == 0, (argv, proc.stderr)
+            assert "Traceback" not in proc.stderr
+    assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
+
+
+def test_broken_mujoco_gl_falls_back_for_video_and_says_so(tmp_path):
+    from hexabot_sim import gl
+
+    if gl.probe("egl") is not None:
+        pytest.skip("no EGL here to fall back to")
+    proc = _run_cli(tmp_path, "run", "pendulum", *FAST, "--video", "--out", "r", env={"MUJOCO_GL": "nonsense"})
+    assert proc.returncode == 0, proc.stderr
+    assert "MUJOCO_GL='nonsense' does not work" in proc.stderr and "rendering with egl" in proc.stderr
+    assert json.loads((tmp_path / "r" / "run.json").read_text())["video"]["gl_backend"] == "egl"
+    assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
+
+
+def test_missing_ffmpeg_still_gives_csv_and_plots(tmp_path):
+    proc = _run_cli(
+        tmp_path, "run", "pendulum", "--set", "duration=0.2", "--video", "--out", "r",
+        env={"IMAGEIO_FFMPEG_EXE": str(tmp_path / "no-ffmpeg")},
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    lines = [line for line in proc.stderr.splitlines() if "no video" in line]
+    assert len(lines) == 1 and "ffmpeg" in lines[0]
+    record = json.loads((tmp_path / "r" / "run.json").read_text())
+    assert record["video"]["written"] is False and "ffmpeg" in record["video"]["reason"]
+    assert {"timeseries.csv", "angle_velocity.png"} <= {p.name for p in (tmp_path / "r").iterdir()}
+    assert not (tmp_path / "r" / "video.mp4").exists()
+
+
+def test_no_mujoco_log_dropped_on_divergence(tmp_path):
+    proc = _run_cli(tmp_path, "run", "pendulum", "--set", "stiffness=1e4", "--set", "timestep=0.05", "--out", "r")
+    assert proc.returncode == 1 and "diverged" in one_line_error(proc.stderr)
+    assert list(tmp_path.iterdir()) == []
+
+
+# --- small things ---------------------------------------------------------------------------------
+
+
+def test_version(capsys):
+    import hexabot_sim
+
+    code, out, _ = cli(capsys, "--version")
+    assert code == 0 and out.strip() == f"hexabot-sim {hexabot_sim.__version__}"
+
+
+@pytest.mark.parametrize("size", ["641x481", "640x48", "48x640", "10x10", "4000x2000", "640x", "axb"])
+def test_video_size_refused(tmp_path, capsys, size):
+    code, _, err = cli(capsys, "run", "pendulum", *FAST, "--video", "--size", size, "--out", str(tmp_path / "r"))
+    assert code == 2
+    assert "--size" in one_line_error(err) or "WIDTHxHEIGHT" in err or "even" in err or "aspect" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_progress_lines_when_stderr_is_not_a_terminal(tmp_path):
+    proc = _run_cli(tmp_path, "run", "leg-step", "--set", "mode=kinematic", "--no-plots", "--out", "r")
+    assert proc.returncode == 0, proc.stderr
+    progress = [line for line in proc.stderr.splitlines() if line.startswith("leg-step:")]
+    assert 2 <= len(progress) <= 6 and progress[-1].startswith("leg-step: 100%")
+    assert "\r" not in proc.stderr
