@@ -3,18 +3,34 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+import re
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
-from hexabot_sim.errors import UsageError
+from hexabot_sim.errors import HexabotError, UsageError
 from hexabot_sim.kinematics import inverse, robots
+from hexabot_sim.kinematics.chain import SerialChain
+
+# Input ranges of `kin` beyond the link lengths (robots.LENGTH_MIN..LENGTH_MAX): wide enough for anything a
+# course exercise types, narrow enough that every product and sum in FK, J, det and IK stays finite and exact.
+ANGLE_MAX: float = 1000.0  # |revolute joint value| and |target angle| in [rad] (159 turns)
+PRISMATIC_MAX: float = 100.0  # |prismatic joint value| in [m]: ten times the longest link
+TARGET_MAX: float = 1000.0  # |x|, |y|, |z| of an IK target in [m]: far beyond every reach, still exact
+# Values like `-1,0.5,0.2` or `-inf,0,0` that follow --q/--target are values, not options: the kin sub-parser's
+# `_negative_number_matcher` (argparse's own accepts only a lone -1 or -.5; the attribute exists in Python 3.8
+# to 3.14) is this pattern, safe while no kin option itself looks like a negative number.
+NUMBER_LIST = re.compile(r"^-(?:\d|\.\d|inf|nan)", re.IGNORECASE)
+SYMBOLIC_HINT = (
+    "--symbolic needs sympy (the extra 'symbolic'): in the hexabot-sim folder run pip install \".[symbolic]\", "
+    "or just pip install sympy"
+)
 
 
 def parse_numbers(text: str, what: str) -> list[float]:
     """'0.1,0.2,-1' -> [0.1, 0.2, -1.0]; a one-line UsageError naming `what` otherwise."""
-    parts = [p.strip() for p in text.split(",")]
+    parts = [p.strip().replace("\u2212", "-") for p in text.split(",")]  # accept the typographic minus
     try:
         values = [float(p) for p in parts]
     except ValueError:
@@ -24,20 +40,96 @@ def parse_numbers(text: str, what: str) -> list[float]:
     return values
 
 
-def describe(robot: str, lengths: Mapping[str, float]) -> dict[str, Any]:
-    """The robot's DH table, lengths and singular sets."""
+def parse_lengths(robot: str, assignments: Mapping[str, str]) -> dict[str, float]:
+    """--set name=value strings -> lengths in [m], each checked against the robot's allowed range."""
+    spec = robots.get(robot)
+    lengths = {}
+    for name, raw in assignments.items():
+        if name not in spec.lengths:
+            raise UsageError(f"unknown length '{name}' for {robot}; known: {', '.join(spec.lengths)}")
+        values = parse_numbers(raw, f"length '{name}'")
+        if len(values) != 1:
+            raise UsageError(f"length '{name}' takes one number in [m]; got {raw!r}")
+        lengths[name] = values[0]
+    spec.chain(lengths)  # validates every length against its range
+    return lengths
+
+
+def _units(robot: str, degrees: bool) -> list[str]:
+    """Joint units as the user reads and types them: 'deg' or 'rad' for revolute joints, 'm' for prismatic ones."""
+    return ["deg" if degrees and u == "rad" else u for u in robots.get(robot).joint_units]
+
+
+def _show(values: Iterable[float], units: Iterable[str]) -> list[float]:
+    """Joint values from [rad] or [m] to the user's units."""
+    return [math.degrees(v) if u == "deg" else float(v) for v, u in zip(values, units, strict=True)]
+
+
+def _angle_limit(unit: str) -> str:
+    return f"±{ANGLE_MAX:g} rad" if unit == "rad" else f"±{math.degrees(ANGLE_MAX):.6g} deg (±{ANGLE_MAX:g} rad)"
+
+
+def _joint_values(robot: str, values: Sequence[float], degrees: bool) -> np.ndarray:
+    """Typed joint values (user units) -> q in [rad] or [m]; a UsageError for a wrong count or a value out of range."""
+    chain = robots.get(robot).chain()
+    units = _units(robot, degrees)
+    if len(values) != chain.n:
+        names = ", ".join(f"{j.name} [{u}]" for j, u in zip(chain.joints, units, strict=True))
+        raise UsageError(f"{robot} has {chain.n} joints ({names}); got {len(values)} values")
+    q = []
+    for joint, unit, value in zip(chain.joints, units, values, strict=True):
+        if unit == "m":
+            if abs(value) > PRISMATIC_MAX:
+                raise UsageError(f"--q: {joint.name} = {value:g} m is outside the allowed ±{PRISMATIC_MAX:g} m")
+            q.append(value)
+        else:
+            rad = math.radians(value) if unit == "deg" else value
+            if abs(rad) > ANGLE_MAX:
+                raise UsageError(f"--q: {joint.name} = {value:g} {unit} is outside the allowed {_angle_limit(unit)}")
+            q.append(rad)
+    return np.array(q)  # (n,)
+
+
+def _range_warnings(robot: str, chain: SerialChain, q: np.ndarray, degrees: bool) -> list[str]:
+    """One line per joint value outside its range (or, without a range and without --deg, beyond a full turn)."""
+    units = _units(robot, degrees)
+    out = []
+    for joint, unit, value in zip(chain.joints, units, q, strict=True):
+        shown = _show([value], [unit])[0]
+        hint = (
+            "; revolute values are in rad (add --deg to type degrees)"
+            if unit == "rad" and abs(value) > 2 * math.pi
+            else ""
+        )
+        if joint.lower is not None and joint.upper is not None and not joint.lower <= value <= joint.upper:
+            lo, hi = _show([joint.lower, joint.upper], [unit, unit])
+            out.append(
+                f"{joint.name} = {shown:.6g} {unit} is outside its joint range [{lo:.6g}, {hi:.6g}] {unit}{hint}"
+            )
+        elif hint:
+            out.append(f"{joint.name} = {shown:.6g} rad is more than a full turn{hint}")
+    return out
+
+
+def describe(robot: str, lengths: Mapping[str, float], degrees: bool = False) -> dict[str, Any]:
+    """The robot's DH table, lengths and singular sets; with `degrees`, angles and revolute ranges in [deg]."""
     spec = robots.get(robot)
     chain = spec.chain(lengths)
+    angle = math.degrees if degrees else float
     rows = []
-    for joint, unit in zip(chain.joints, spec.joint_units, strict=True):
+    for joint, unit in zip(chain.joints, _units(robot, degrees), strict=True):
+        limit = float if joint.prismatic else angle
         rows.append(
-            {"joint": joint.name, "kind": joint.kind, "unit": unit, "theta": joint.theta, "d": joint.d,
-             "a": joint.a, "alpha": joint.alpha, "lower": joint.lower, "upper": joint.upper}
+            {"joint": joint.name, "kind": joint.kind, "unit": unit, "theta": angle(joint.theta), "d": joint.d,
+             "a": joint.a, "alpha": angle(joint.alpha),
+             "lower": None if joint.lower is None else limit(joint.lower),
+             "upper": None if joint.upper is None else limit(joint.upper)}
         )  # fmt: skip
     return {
         "robot": robot,
         "summary": spec.summary,
         "convention": chain.convention,
+        "angle_unit": "deg" if degrees else "rad",
         "lengths": _lengths(spec, lengths),
         "dh": rows,
         "tool": chain.tool.tolist(),
@@ -49,48 +141,132 @@ def _lengths(spec: robots.RobotSpec, overrides: Mapping[str, float]) -> dict[str
     return {name: float(overrides.get(name, length.default)) for name, length in spec.lengths.items()}
 
 
-def at_configuration(robot: str, q: Sequence[float], lengths: Mapping[str, float]) -> dict[str, Any]:
-    """T0n, the 6xn Jacobian, det or manipulability, and which singular conditions hold at q."""
-    spec = robots.get(robot)
-    chain = spec.chain(lengths)
-    if len(q) != chain.n:
-        names = ", ".join(f"{j.name} [{u}]" for j, u in zip(chain.joints, spec.joint_units, strict=True))
-        raise UsageError(f"{robot} has {chain.n} joints ({names}); got {len(q)} values")
-    qa = np.array(q, dtype=float)
+def at_configuration(
+    robot: str, q: Sequence[float], lengths: Mapping[str, float], degrees: bool = False
+) -> dict[str, Any]:
+    """T0n, the 6xn Jacobian, det or manipulability, and which singular conditions hold at q.
+
+    Args:
+        robot: Robot name.
+        q: Joint values as typed: [rad] (or [deg] with `degrees`) for revolute joints, [m] for prismatic ones.
+        lengths: Link lengths in [m] by name.
+        degrees: Revolute values in and out in [deg]; T0n is in [m], J per [rad] or [m] either way.
+
+    Returns:
+        q (as typed), T0n, J, det (or manipulability), singular flags, is_singular and the range warnings.
+    """
+    chain = robots.get(robot).chain(lengths)
+    qa = _joint_values(robot, q, degrees)  # (n,) in [rad] or [m]
     kind, value = inverse.det_or_manipulability(robot, qa, lengths)
     flags = inverse.singularities(robot, qa, lengths)
     return {
-        "q": qa.tolist(),
+        "q": [float(v) for v in q],  # as typed, so 30 deg stays 30 and not 29.999999999999996
         "T0n": chain.fk(qa).tolist(),
         "J": chain.jacobian(qa).tolist(),
         kind: value,
         "singular": flags,
         "is_singular": any(flags.values()),
+        "warnings": _range_warnings(robot, chain, qa, degrees),
     }
 
 
-def solve(robot: str, target: Sequence[float], lengths: Mapping[str, float]) -> dict[str, Any]:
-    """Every closed-form IK branch for `target`, each with its FK residual."""
-    spec = robots.get(robot)
-    chain = spec.chain(lengths)
-    goal: np.ndarray
+def _target(robot: str, target: Sequence[float], degrees: bool) -> np.ndarray:
+    """Typed target (positions [m], angles [rad] or [deg]) -> inverse.ik's goal: a position or a 4x4 pose."""
     if robot == "stanford":
         if len(target) != 6:
-            raise UsageError(f"stanford needs --target x,y,z,roll,pitch,yaw (m, rad: R = Rz Ry Rx); got {len(target)}")
-        goal = _pose(target)
+            unit = "deg" if degrees else "rad"
+            raise UsageError(
+                f"stanford needs --target x,y,z,roll,pitch,yaw (m, {unit}: R = Rz Ry Rx); got {len(target)} values"
+            )
     else:
         allowed = (3, 4) if robot == "scara" else (3,)
         if len(target) not in allowed:
             form = "x,y,z[,yaw]" if robot == "scara" else "x,y,z"
-            raise UsageError(f"{robot} needs --target {form} (m, rad); got {len(target)} values")
-        goal = np.array(target, dtype=float)
-    branches = inverse.ik(robot, goal, lengths)
+            unit = "m, deg" if degrees and robot == "scara" else "m, rad" if robot == "scara" else "m"
+            raise UsageError(f"{robot} needs --target {form} ({unit}); got {len(target)} values")
+    unit = "deg" if degrees else "rad"
+    values = []
+    for i, value in enumerate(target):
+        if i < 3:
+            if abs(value) > TARGET_MAX:
+                raise UsageError(f"--target: {'xyz'[i]} = {value:g} m is outside the allowed ±{TARGET_MAX:g} m")
+            values.append(value)
+        else:
+            rad = math.radians(value) if degrees else value
+            if abs(rad) > ANGLE_MAX:
+                raise UsageError(f"--target: angle {value:g} {unit} is outside the allowed {_angle_limit(unit)}")
+            values.append(rad)
+    return _pose(values) if robot == "stanford" else np.array(values)
+
+
+def solve(robot: str, target: Sequence[float], lengths: Mapping[str, float], degrees: bool = False) -> dict[str, Any]:
+    """Every closed-form IK branch for `target`, each with its FK residual, and the branches the ranges dropped.
+
+    Args:
+        robot: Robot name.
+        target: As typed: x, y, z in [m] (stanford: then roll, pitch, yaw; scara: optionally yaw) with angles in
+            [rad] (or [deg] with `degrees`).
+        lengths: Link lengths in [m] by name.
+        degrees: Angles of the target and of the solutions in [deg].
+
+    Returns:
+        target (as typed), solutions (q, position_residual [m]), dropped (q, outside) and warnings.
+
+    Raises:
+        UsageError: Malformed target; IKError (a UsageError) when unreachable, not isolated, or when every branch
+            is outside the joint ranges.
+    """
+    chain = robots.get(robot).chain(lengths)
+    goal = _target(robot, target, degrees)
+    branches, dropped = inverse.ik_branches(robot, goal, lengths)
+    units = _units(robot, degrees)
+    position = goal[:3, 3] if goal.ndim == 2 else goal[:3]
+    dropped_text = [
+        f"q = ({_tuple(_show(q, units))}) {_unit_list(units)}: {_violation(robot, chain, q, degrees)}"
+        for q, _ in dropped
+    ]
+    total = len(branches) + len(dropped)
+    if not branches:
+        raise inverse.IKError(
+            f"{robot} target ({_tuple(position)}) m: all {total} IK branch(es) are outside the joint ranges: "
+            + "; ".join(dropped_text)
+        )
     out = []
     for q in branches:
-        position = chain.fk(q)[:3, 3]
-        residual = np.linalg.norm(position - (goal[:3, 3] if goal.ndim == 2 else goal[:3]))
-        out.append({"q": np.asarray(q).tolist(), "position_residual": float(residual)})
-    return {"target": list(target), "solutions": out}
+        residual = np.linalg.norm(chain.fk(q)[:3, 3] - position)
+        out.append({"q": _show(q, units), "position_residual": float(residual)})
+    warnings = []
+    if dropped:
+        warnings.append(
+            f"IK: {len(dropped)} of {total} branches dropped by the joint ranges: " + "; ".join(dropped_text)
+        )
+    return {
+        "target": [float(v) for v in target],
+        "solutions": out,
+        "dropped": [{"q": _show(q, units), "outside": _violation(robot, chain, q, degrees)} for q, _ in dropped],
+        "warnings": warnings,
+    }
+
+
+def _violation(robot: str, chain: SerialChain, q: np.ndarray, degrees: bool) -> str:
+    """The joints of q outside their ranges, as text in the user's units."""
+    units = _units(robot, degrees)
+    parts = []
+    for joint, unit, value in zip(chain.joints, units, q, strict=True):
+        if joint.lower is not None and joint.upper is not None:
+            lo_tol, hi_tol = joint.lower - inverse.IK_RANGE_TOL, joint.upper + inverse.IK_RANGE_TOL
+            if not lo_tol <= value <= hi_tol:
+                shown, lo, hi = _show([value, joint.lower, joint.upper], [unit] * 3)
+                parts.append(f"{joint.name} = {shown:.6g} outside [{lo:.6g}, {hi:.6g}] {unit}")
+    return ", ".join(parts)
+
+
+def _tuple(values: Iterable[float]) -> str:
+    return ", ".join(f"{v:.6g}" for v in values)
+
+
+def _unit_list(units: Sequence[str]) -> str:
+    return f"[{', '.join(units)}]"
 
 
 def _pose(values: Sequence[float]) -> np.ndarray:
@@ -107,16 +283,76 @@ def _pose(values: Sequence[float]) -> np.ndarray:
     return pose
 
 
+def symbolic_forms(robot: str) -> dict[str, str]:
+    """T0n and J derived with sympy, as text with c1/s23 abbreviations and as LaTeX; a UsageError without sympy."""
+    try:
+        from hexabot_sim.kinematics import symbolic
+    except ImportError:
+        raise UsageError(SYMBOLIC_HINT) from None
+    chain = symbolic.symbolic_chain(robot)
+    pose, jac = symbolic.transforms(chain)[-1], symbolic.jacobian(chain)
+    return {"T0n": symbolic.pretty(pose), "J": symbolic.pretty(jac), "T0n_latex": symbolic.latex(pose),
+            "J_latex": symbolic.latex(jac)}  # fmt: skip
+
+
+def report(
+    robot: str,
+    assignments: Mapping[str, str],
+    q: str | None = None,
+    target: str | None = None,
+    degrees: bool = False,
+    symbolic: bool = False,
+) -> dict[str, Any]:
+    """Everything `hexabot-sim kin` prints, from the command line's strings; `warnings` lists what looked wrong.
+
+    Raises:
+        UsageError: Any bad input, as one line naming what is allowed.
+        HexabotError: A non-finite number in the result (a bug: inputs in range never produce one).
+    """
+    lengths = parse_lengths(robot, assignments)
+    out = describe(robot, lengths, degrees)
+    warnings: list[str] = []
+    if q is not None:
+        out |= at_configuration(robot, parse_numbers(q, "--q"), lengths, degrees)
+        warnings += out.pop("warnings")
+    if target is not None:
+        out |= solve(robot, parse_numbers(target, "--target"), lengths, degrees)
+        warnings += out.pop("warnings")
+    if symbolic:
+        out["symbolic"] = symbolic_forms(robot)
+    out["warnings"] = warnings
+    for where, value in _numbers(out):
+        if not math.isfinite(value):
+            raise HexabotError(f"internal error: kin computed {value} for {where}; please report this as a bug")
+    return out
+
+
+def _numbers(node: Any, where: str = "report") -> Iterator[tuple[str, float]]:
+    """Every float in a nested dict/list, with its path."""
+    if isinstance(node, float):
+        yield where, node
+    elif isinstance(node, Mapping):
+        for key, value in node.items():
+            yield from _numbers(value, f"{where}.{key}")
+    elif isinstance(node, list):
+        for i, value in enumerate(node):
+            yield from _numbers(value, f"{where}[{i}]")
+
+
 def format_matrix(m: Sequence[Sequence[float]], indent: str = "  ") -> str:
     """Rows of fixed-width numbers, exact zeros printed as 0."""
     return "\n".join(indent + " ".join(f"{v:11.6f}" if abs(v) > 5e-16 else f"{0:11d}" for v in row) for row in m)
 
 
 def text(report: dict[str, Any]) -> str:
-    """Human-readable form of describe/at_configuration/solve output merged into one dict."""
+    """Human-readable form of `report` (or of describe/at_configuration/solve output merged into one dict)."""
+    unit = report.get("angle_unit", "rad")
     lines = [f"{report['robot']}: {report['summary']}", f"  {report['convention']} DH, lengths [m]: "
              + ", ".join(f"{k} = {v:g}" for k, v in report["lengths"].items())]  # fmt: skip
-    lines.append("  joint      kind       theta        d            a            alpha")
+    if unit == "deg":
+        lines.append("  joint      kind       theta [deg]  d [m]        a [m]        alpha [deg]")
+    else:
+        lines.append("  joint      kind       theta        d            a            alpha")
     for row in report["dh"]:
         var = "+q" if row["kind"] == "revolute" else "  "
         dvar = "+q" if row["kind"] == "prismatic" else "  "
@@ -126,8 +362,10 @@ def text(report: dict[str, Any]) -> str:
         )
     lines.append("  singular sets:")
     lines += [f"    - {s}" for s in report["singular_sets"]]
+    units = [row["unit"] for row in report["dh"]]
+    in_units = f" {_unit_list(units)}" if unit == "deg" else ""
     if "T0n" in report:
-        lines.append(f"q = {report['q']}")
+        lines.append(f"q = {report['q']}{in_units}")
         lines.append("T0n (tool pose in the base frame):")
         lines.append(format_matrix(report["T0n"]))
         lines.append("J (6 x n, rows vx vy vz wx wy wz, base frame):")
@@ -138,8 +376,12 @@ def text(report: dict[str, Any]) -> str:
         flagged = [name for name, on in report["singular"].items() if on]
         lines.append(f"singular: {', '.join(flagged) if flagged else 'no'}")
     if "solutions" in report:
-        lines.append(f"IK for target {report['target']}: {len(report['solutions'])} solution(s)")
+        lines.append(f"IK for target {report['target']}: {len(report['solutions'])} solution(s){in_units}")
         for i, sol in enumerate(report["solutions"], start=1):
             qs = ", ".join(f"{v:.9g}" for v in sol["q"])
             lines.append(f"  {i}: q = ({qs})   |FK(q) - target| = {sol['position_residual']:.1e} m")
+    if "symbolic" in report:
+        sym = report["symbolic"]
+        lines += ["symbolic T0n:", sym["T0n"], "symbolic J:", sym["J"]]
+        lines += ["T0n (LaTeX):", sym["T0n_latex"], "J (LaTeX):", sym["J_latex"]]
     return "\n".join(lines)

@@ -61,7 +61,8 @@ def test_text_output(capsys):
         (["kin", "rrp", "--q", "nan,0,0"], "--q must be finite numbers"),
         (["kin", "elbow", "--target", "5,5,5"], "out of reach"),
         (["kin", "rrp", "--set", "d9=1"], "unknown length 'd9' for rrp"),
-        (["kin", "rrp", "--set", "d1=-1"], "length 'd1' of rrp must be a finite number > 0"),
+        (["kin", "rrp", "--set", "d1=-1"], "length 'd1' of rrp must be 0.001 to 10 m; got -1.0"),
+        (["kin", "elbow", "--set", "d=1e-300"], "length 'd' of elbow must be 0 or 0.001 to 10 m; got 1e-300"),
         (["kin", "stanford", "--target", "0.1,0.2,0.3"], "stanford needs --target x,y,z,roll,pitch,yaw"),
     ],
 )
@@ -76,3 +77,10 @@ def test_symbolic_output(capsys):
     report = run_json(capsys, "leg", "--symbolic")
     assert "c23" in report["symbolic"]["T0n"] and "c_{23}" in report["symbolic"]["T0n_latex"]
     assert "s1" in report["symbolic"]["J"]
+
+
+def test_symbolic_text_output_has_latex_too(capsys):
+    pytest.importorskip("sympy")
+    assert main(["kin", "leg", "--symbolic"]) == 0
+    out = capsys.readouterr().out
+    assert "symbolic T0n:" in out and "c23" in out and "T0n (LaTeX):" in out and "c_{23}" in out

@@ -24,6 +24,7 @@ __all__ = [
     "IKError",
     "det_or_manipulability",
     "ik",
+    "ik_branches",
     "singularities",
 ]
 
@@ -305,6 +306,41 @@ def _in_range(spec: robots.RobotSpec, chain: SerialChain, q: np.ndarray) -> str 
     return None
 
 
+def ik_branches(
+    robot: str, target: ArrayLike, lengths: Mapping[str, float] | None = None
+) -> tuple[list[np.ndarray], list[tuple[np.ndarray, str]]]:
+    """Like `ik`, but also returns the branches the joint ranges dropped, and never raises for that alone.
+
+    Returns:
+        (solutions, dropped): the solutions `ik` returns (possibly empty here), and each distinct branch outside
+        a joint range with its first violation as text, e.g. "coxa = 2.67795 rad outside [-1.5708, 1.5708] rad".
+
+    Raises:
+        IKError, UsageError: As `ik`, except when every branch is outside the joint ranges.
+    """
+    spec, chain, p = _setup(robot, lengths)
+    size = _size(chain)
+    if robot == "stanford":
+        candidates = _ik_stanford(target, p, size, chain)
+    else:
+        candidates = _SOLVERS[robot](target, p, size)
+    revolute = np.array([not j.prismatic for j in chain.joints])
+    solutions: list[np.ndarray] = []
+    dropped: list[tuple[np.ndarray, str]] = []
+    for candidate in candidates:
+        q = np.array([_wrap(v) if rev else v for v, rev in zip(candidate, revolute, strict=True)])  # (n,)
+        if any(_same(q, s, revolute) for s in solutions):
+            continue
+        violation = _in_range(spec, chain, q)
+        if violation is None:
+            solutions.append(q)
+        elif not any(_same(q, d, revolute) for d, _ in dropped):
+            dropped.append((q, violation))
+    # A dropped branch that coincides with a kept one (a fold at the edge of a range) was not really dropped.
+    dropped = [(q, why) for q, why in dropped if not any(_same(q, s, revolute) for s in solutions)]
+    return solutions, dropped
+
+
 def ik(robot: str, target: ArrayLike, lengths: Mapping[str, float] | None = None) -> list[np.ndarray]:
     """Every closed-form joint solution that puts the robot's tool at `target`.
 
@@ -332,27 +368,13 @@ def ik(robot: str, target: ArrayLike, lengths: Mapping[str, float] | None = None
             solutions are not isolated (e.g. on the z0 axis, where q1 is arbitrary). One line, no NaN.
         UsageError: Unknown robot or length, or a malformed target.
     """
-    spec, chain, p = _setup(robot, lengths)
-    size = _size(chain)
-    if robot == "stanford":
-        candidates = _ik_stanford(target, p, size, chain)
-        where = f"stanford target pose at {_point(np.asarray(target, dtype=float)[:3, 3])}"
-    else:
-        candidates = _SOLVERS[robot](target, p, size)
-        where = _where(robot, np.asarray(target, dtype=float))
-    revolute = np.array([not j.prismatic for j in chain.joints])
-    solutions: list[np.ndarray] = []
-    rejected: list[str] = []
-    for candidate in candidates:
-        q = np.array([_wrap(v) if rev else v for v, rev in zip(candidate, revolute, strict=True)])  # (n,)
-        if any(_same(q, s, revolute) for s in solutions):
-            continue
-        violation = _in_range(spec, chain, q)
-        if violation is None:
-            solutions.append(q)
-        elif violation not in rejected:
-            rejected.append(violation)
+    solutions, dropped = ik_branches(robot, target, lengths)
     if not solutions:
+        if robot == "stanford":
+            where = f"stanford target pose at {_point(np.asarray(target, dtype=float)[:3, 3])}"
+        else:
+            where = _where(robot, np.asarray(target, dtype=float))
+        rejected = list(dict.fromkeys(why for _, why in dropped))
         raise IKError(f"{where}: every solution is outside the joint ranges ({'; '.join(rejected)})")
     return solutions
 

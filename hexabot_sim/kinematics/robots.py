@@ -12,6 +12,11 @@ from hexabot_sim.errors import UsageError, lookup
 from hexabot_sim.kinematics.chain import Joint, SerialChain
 
 HALF_PI = math.pi / 2
+# Every link length and offset lies in [LENGTH_MIN, LENGTH_MAX] in [m] (offsets with allow_zero may also be 0):
+# from a millimetre (below it an arm is a point and relative tolerances lose meaning) to ten metres (no course
+# robot is larger; products of lengths stay far from overflow and underflow).
+LENGTH_MIN: float = 1e-3
+LENGTH_MAX: float = 10.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -21,6 +26,16 @@ class Length:
     default: float
     doc: str
     allow_zero: bool = False  # offsets may be 0; link lengths must be > 0
+
+    def allowed(self) -> str:
+        """The allowed values as text, e.g. '0 or 0.001 to 10 m'."""
+        return f"{'0 or ' if self.allow_zero else ''}{LENGTH_MIN:g} to {LENGTH_MAX:g} m"
+
+    def accepts(self, value: object) -> bool:
+        """Whether `value` is an allowed length in [m]."""
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            return False
+        return (self.allow_zero and value == 0) or LENGTH_MIN <= value <= LENGTH_MAX
 
 
 @dataclasses.dataclass(frozen=True)
@@ -39,11 +54,9 @@ class RobotSpec:
         for name, value in (overrides or {}).items():
             if name not in self.lengths:
                 raise UsageError(f"unknown length '{name}' for {self.name}; known: {', '.join(self.lengths)}")
-            ok = isinstance(value, (int, float)) and math.isfinite(value)
-            ok = ok and (value >= 0 if self.lengths[name].allow_zero else value > 0)
-            if not ok:
-                allowed = "a finite number >= 0" if self.lengths[name].allow_zero else "a finite number > 0"
-                raise UsageError(f"length '{name}' of {self.name} must be {allowed} [m]; got {value!r}")
+            length = self.lengths[name]
+            if not length.accepts(value):
+                raise UsageError(f"length '{name}' of {self.name} must be {length.allowed()}; got {value!r}")
             values[name] = float(value)
         return self.build(values)
 
