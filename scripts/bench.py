@@ -90,7 +90,7 @@ def bench_leg_loop(repeat: int) -> dict[str, float]:
 
 
 def bench_video(repeat: int) -> dict[str, float] | str:
-    backend, reason = gl.choose()
+    backend, reason, _notice = gl.choose()
     if backend is None:
         return reason
     scenario = scenarios.get("pendulum")

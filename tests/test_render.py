@@ -37,12 +37,21 @@ def test_video_is_written_real_time_and_shows_the_link(tmp_path, capsys, gl_back
     first, count, fps = _read(out_dir / "video.mp4")
     assert count == 31 and fps == 30  # 1 s of simulation -> 1 s of video
     assert first.shape == (480, 640, 3)
-    # At t = 0 the link is horizontal toward +x: its blue pixels lie right of the pivot (image centre).
+    # At t = 0 the link is horizontal toward +x: its blue pixels lie right of the pivot, at its height,
+    # and the camera frames the swept disc, so the link (length L) spans a good part of the frame.
+    import mujoco
+
+    model = mujoco.MjModel.from_xml_path(str(out_dir / "model.xml"))
+    camera = model.camera("side").id
+    pivot = model.body("link").pos - model.cam_pos[camera]  # the side camera looks along +y, x right, z up
+    focal = 240 / np.tan(np.radians(model.cam_fovy[camera]) / 2)  # [px]
+    u, v = 320 + focal * pivot[0] / pivot[1], 240 - focal * pivot[2] / pivot[1]
     r, g, b = (first[..., i].astype(int) for i in range(3))
     blue = (b > 150) & (b > r + 60) & (b > g + 30)
     ys, xs = np.nonzero(blue)
     assert xs.size > 200
-    assert xs.mean() > 340 and abs(ys.mean() - 240) < 40
+    assert xs.min() >= u - 10 and abs(ys.mean() - v) < 15
+    assert xs.max() - xs.min() > 0.3 * 640
     record = json.loads((out_dir / "run.json").read_text())
     assert (
         record["video"]["written"] and record["video"]["frames"] == 31 and record["video"]["gl_backend"] == gl_backend
@@ -58,7 +67,7 @@ def test_high_quality_preset_and_custom_size(tmp_path, capsys, gl_backend):
     assert first.shape == (240, 320, 3) and count == 6
 
 
-def test_progress_bar_only_on_a_terminal():
+def test_progress_bar_redraws_on_a_terminal_and_prints_plain_lines_elsewhere():
     class Tty(io.StringIO):
         def isatty(self):
             return True
@@ -68,4 +77,7 @@ def test_progress_bar_only_on_a_terminal():
         bar = ProgressBar("video", stream)
         for i in range(1, 11):
             bar(i, 10)
-    assert "100% (10/10)" in tty.getvalue() and pipe.getvalue() == ""
+    assert "100% (10/10)" in tty.getvalue() and "\r" in tty.getvalue()
+    # In a log: a plain line on the first call and each time a quarter is crossed, never a carriage return.
+    assert pipe.getvalue().splitlines() == [f"video: {p}% ({p // 10}/10)" for p in (10, 30, 50, 80, 100)]
+    assert pipe.getvalue().splitlines()[-1] == "video: 100% (10/10)"

@@ -51,4 +51,6 @@ class ScenarioResult:
     csv_name: str = "timeseries.csv"
     markers: list[Marker] = dataclasses.field(default_factory=list)  # drawn into the video
     trail: np.ndarray | None = None  # (n, 3) world points whose path the video draws (e.g. the foot)
+    # Text lines the video shows under the time: each maps a recording row to text (render.OverlayLine).
+    overlay: list[Callable[[int], str]] = dataclasses.field(default_factory=list)
     extras: dict[str, Any] = dataclasses.field(default_factory=dict)  # scenario data for plots

@@ -13,7 +13,7 @@ from hexabot_sim.control.resolved_rate import ResolvedRateController, ResolvedRa
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.kinematics import robots
-from hexabot_sim.params import check_duration, param
+from hexabot_sim.params import check_duration, check_run_cost, param
 from hexabot_sim.scenarios.base import Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import Controller, simulate, site_trajectory, step_count
 
@@ -23,6 +23,19 @@ JOINTS = ("coxa", "femur", "tibia")
 # defaults driven out of the workspace): the command keeps this margin below max_joint_speed.
 SERVO_SPEED_MARGIN: float = 0.95
 INTEGRATORS = ("RK4", "implicitfast", "Euler", "implicit")
+# Parameter ranges. The leg is L1 + L2 + L3 = 250 mm long (a start point farther than that cannot
+# be reached), and at 5 rad/s its foot moves at most ~1.2 m/s: a commanded foot speed above
+# 1 m/s is no step of this leg (100 typed for the report's 100 mm/s would be 100 m/s).
+REACH: float = GEOMETRY.l1 + GEOMETRY.l2 + GEOMETRY.l3  # [m]
+MM: tuple[str, float] = ("mm", 1e-3)  # the unit users type by mistake for a length in m
+MAX_FOOT_SPEED: float = 1.0  # [m/s]
+MIN_OMEGA, MAX_OMEGA = 0.01, 20.0  # [rad/s] periods from 0.3 s to 10.5 min
+MAX_PHASE_STEP: float = 0.5  # [rad] largest omega * timestep: >= 12.6 control periods per command cycle
+CSV_COLUMNS: int = 25  # columns of timeseries.csv
+# Cost of a run for params.check_run_cost, measured on the 2-core development machine: seconds per
+# physics step (controller + mj_step), seconds per recorded row (site replay, derived columns; the
+# CSV is counted apart), peak bytes per recorded row.
+RUN_COST: tuple[float, float, float] = (15e-6, 100e-6, 600.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -37,32 +50,82 @@ class LegParams:
         "dynamic", "", "dynamic: servos + MuJoCo dynamics; kinematic: q imposed (report's Simulink)",
         choices=("dynamic", "kinematic"),
     )  # fmt: skip
-    max_joint_speed: float = param(5.0, "rad/s", "limit on every joint speed", "positive")
-    max_joint_acceleration: float = param(50.0, "rad/s^2", "limit on every commanded joint acceleration", "positive")
-    task_gain: float = param(50.0, "1/s", "K: feedback on the foot position error", "nonnegative")
-    sigma_threshold: float = param(0.01, "m/rad", "smallest singular value of J below which DLS damps", "positive")
-    max_damping: float = param(0.01, "m/rad", "DLS damping lambda reached at a singularity", "nonnegative")
-    start_x: float = param(0.05, "m", "start foot position in the hip frame (under the femur axis)")
-    start_y: float = param(0.0, "m", "start foot position in the hip frame")
-    start_z: float = param(-0.08, "m", "start foot position in the hip frame (80 mm below the hip)")
+    max_joint_speed: float = param(
+        5.0, "rad/s", "limit on every joint speed", ge=1e-3, le=100.0, typo=("deg/s", math.pi / 180)
+    )
+    max_joint_acceleration: float = param(
+        50.0, "rad/s^2", "limit on every commanded joint acceleration", ge=1e-2, le=1e5
+    )
+    task_gain: float = param(50.0, "1/s", "K: feedback on the foot position error; K * timestep <= 1", ge=0.0, le=1e4)
+    sigma_threshold: float = param(
+        0.01, "m/rad", "smallest singular value of J below which DLS damps", ge=1e-6, le=0.1, typo=("mm/rad", 1e-3)
+    )
+    max_damping: float = param(
+        0.01, "m/rad", "DLS damping lambda reached at a singularity", ge=0.0, le=0.1, typo=("mm/rad", 1e-3)
+    )
+    start_x: float = param(
+        0.05, "m", "start foot position in the hip frame (under the femur axis)", ge=-REACH, le=REACH, typo=MM
+    )
+    start_y: float = param(0.0, "m", "start foot position in the hip frame", ge=-REACH, le=REACH, typo=MM)
+    start_z: float = param(
+        -0.08, "m", "start foot position in the hip frame (80 mm below the hip)", ge=-REACH, le=REACH, typo=MM
+    )
     gravity_compensation: str = param("on", "", "servo feedforward of the exact gravity torque", choices=("on", "off"))
-    timestep: float = param(0.001, "s", "control period (the controller runs once per timestep)", "positive")
-    substeps: int = param(1, "1", "MuJoCo steps per control period (physics dt = timestep / substeps)", "positive")
+    timestep: float = param(0.001, "s", "control period (the controller runs once per timestep)", ge=1e-6, le=0.1)
+    substeps: int = param(1, "1", "MuJoCo steps per control period (physics dt = timestep / substeps)", ge=1, le=1000)
     integrator: str = param("RK4", "", "MuJoCo integrator (dynamic mode)", choices=INTEGRATORS)
+
+    def __post_init__(self) -> None:
+        if self.task_gain * self.timestep > 1:
+            raise ValueError(
+                f"parameters 'task_gain' * 'timestep' must be <= 1 (the foot error would overshoot every control "
+                f"period); got {self.task_gain:g} 1/s * {self.timestep:g} s = {self.task_gain * self.timestep:g}"
+            )
+        start = (self.start_x, self.start_y, self.start_z)
+        if not reachable(np.array(start)):
+            raise ValueError(
+                f"parameters 'start_x', 'start_y', 'start_z': the start point {start} m is outside the leg's "
+                f"workspace or reachable only outside the joint ranges (coxa, femur within +-90 deg, tibia 0..160 deg)"
+            )
 
 
 @dataclasses.dataclass(frozen=True)
 class LegStepParams(LegParams):
     """Parameters of the leg-step scenario."""
 
-    amplitude: float = param(0.05, "m/s", "A in v_x = A sin(omega t) (report: 10, 50, 100, 80 mm/s)")
-    omega: float = param(1.0, "rad/s", "omega of the velocity command (report: 1 and pi/6)", "positive")
-    duration: float = param(0.0, "s", "simulated time; 0 = two periods of the command, 4 pi / omega", "nonnegative")
+    amplitude: float = param(
+        0.05, "m/s", "A in v_x = A sin(omega t) (report: 10, 50, 100, 80 mm/s)", ge=-MAX_FOOT_SPEED, le=MAX_FOOT_SPEED,
+        typo=("mm/s", 1e-3),
+    )  # fmt: skip
+    omega: float = param(
+        1.0, "rad/s", "omega of the velocity command (report: 1 and pi/6)", ge=MIN_OMEGA, le=MAX_OMEGA,
+        typo=("deg/s", math.pi / 180),
+    )  # fmt: skip
+    duration: float = param(
+        0.0, "s", "simulated time; 0 = two periods of the command, 4 pi / omega", ge=0.0, le=86400.0
+    )
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         if self.duration == 0:
             object.__setattr__(self, "duration", 4 * math.pi / self.omega)
-        check_duration(self.duration, self.timestep, 2_000_000)
+        check_command(self.omega, self.timestep)
+        check_duration(self.duration, self.timestep)
+        n = step_count(self.duration, self.timestep)
+        check_run_cost(
+            n * (self.substeps if self.mode == "dynamic" else 1), n + 1, CSV_COLUMNS, *RUN_COST,
+            "raise 'timestep', lower 'duration' or 'substeps'",
+        )  # fmt: skip
+
+
+def check_command(omega: float, timestep: float) -> None:
+    """The control period must sample the command finely enough (raises ValueError)."""
+    if omega * timestep > MAX_PHASE_STEP:
+        raise ValueError(
+            f"parameters 'omega' * 'timestep' must be <= {MAX_PHASE_STEP:g} rad (at least "
+            f"{2 * math.pi / MAX_PHASE_STEP:.0f} control periods per cycle of the command); "
+            f"got {omega:g} rad/s * {timestep:g} s = {omega * timestep:g} rad"
+        )
 
 
 def reference(p: LegStepParams, start: np.ndarray):
@@ -168,7 +231,15 @@ class LegLoop:
 def run(name: str, p: LegStepParams, progress: Progress | None = None) -> ScenarioResult:
     """Drives the foot along the hip-frame X axis with the resolved-rate controller."""
     loop = prepare(p)
-    traj = simulate(loop.model, loop.data, loop.n_steps, controller=loop.control, step=loop.step)
+    traj = simulate(
+        loop.model,
+        loop.data,
+        loop.n_steps,
+        controller=loop.control,
+        step=loop.step,
+        progress=progress,
+        record_ctrl=True,
+    )
     return _result(name, p, loop.model, loop.xml, traj, loop.start, loop.qadr, loop.dadr)
 
 
@@ -248,7 +319,8 @@ def _result(name, p, model, xml, traj, start, qadr, dadr) -> ScenarioResult:
     vdes = vdes @ hip_rot.T
     det_j = leg_kin.det_jacobian(q, GEOMETRY)
     sig_min, _ = leg_kin.singular_values(q, GEOMETRY)
-    roll, pitch, yaw = leg_kin.rpy(np.einsum("ij,njk->nik", hip_rot.T, foot.xmat))
+    foot_rot = np.einsum("ij,njk->nik", hip_rot.T, foot.xmat)  # (n, 3, 3) foot orientation in the hip frame
+    roll, pitch, yaw = leg_kin.rpy(foot_rot)
     near = sig_min < p.sigma_threshold
 
     err = foot.pos - des
@@ -350,8 +422,40 @@ def _result(name, p, model, xml, traj, start, qadr, dadr) -> ScenarioResult:
             )
         ],
         trail=foot.pos,
-        extras={"foot_world": foot.pos, "near_singular": near, "start_world": start_world, "hip": hip_pos},
+        overlay=[
+            lambda i: f"foot x = {foot.pos[i, 0] * 1000:6.1f} mm  target {des[i, 0] * 1000:6.1f} mm",
+            lambda i: f"σ_min = {sig_min[i] * 1000:8.3g} mm/rad" + ("  NEAR-SINGULAR" if near[i] else ""),
+        ],
+        extras={
+            "foot_world": foot.pos,
+            "near_singular": near,
+            "start_world": start_world,
+            "hip": hip_pos,
+            "orientation_continuous": continuous_zyx(foot_rot),
+        },
     )
+
+
+def continuous_zyx(rot: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """ZYX angles (roll, pitch, yaw) [rad] of the foot, on the branch that is continuous in time.
+
+    The foot frame is R = Rz(q1) Rx(-pi/2) Rz(q2 + q3) = Rz(q1) Ry(q2 + q3) Rx(-pi/2): its z axis (the
+    knee axis) stays horizontal, so yaw = its heading (= q1) and pitch = the tibia's angle below the
+    horizontal in the leg's plane (= q2 + q3) are defined at every pose, also where the principal ZYX
+    angles (rpy, pitch within +-pi/2) jump by pi at q2 + q3 = pi/2; roll then follows from R (-pi/2 here).
+
+    Args:
+        rot: (n, 3, 3) foot orientations in the hip frame, in time order.
+    """
+    yaw = np.unwrap(np.arctan2(-rot[:, 0, 2], rot[:, 1, 2]))  # heading of the knee axis
+    cy, sy = np.cos(yaw), np.sin(yaw)
+    pitch = np.unwrap(np.arctan2(-rot[:, 2, 0], rot[:, 0, 0] * cy + rot[:, 1, 0] * sy))
+    # Rx(roll) = Ry(-pitch) Rz(-yaw) R; its second column is (0, cos roll, sin roll).
+    n0 = cy * rot[:, 0, 1] + sy * rot[:, 1, 1]  # second column of Rz(-yaw) R
+    n1 = -sy * rot[:, 0, 1] + cy * rot[:, 1, 1]
+    n2 = rot[:, 2, 1]
+    roll = np.unwrap(np.arctan2(np.sin(pitch) * n0 + np.cos(pitch) * n2, n1))
+    return roll, pitch, yaw
 
 
 def foot_hip(q: np.ndarray) -> np.ndarray:

@@ -4,16 +4,20 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
 
-from hexabot_sim import models
-from hexabot_sim.params import check_duration, param
+from hexabot_sim import models, render
+from hexabot_sim.params import check_duration, check_run_cost, param
 from hexabot_sim.scenarios.base import Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import simulate, step_count
 
 INTEGRATORS = ("RK4", "Euler", "implicit", "implicitfast")
+# Cost of a run for params.check_run_cost, measured on the 2-core development machine: seconds per
+# mj_step, seconds per recorded row (energies, metrics; the CSV is counted apart), peak bytes per row.
+RUN_COST: tuple[float, float, float] = (10e-6, 15e-6, 400.0)
 SETTLING_BAND: float = 0.02  # settled once |theta - rest| stays within 2 % of |theta0 - rest|
 
 
@@ -21,22 +25,30 @@ SETTLING_BAND: float = 0.02  # settled once |theta - rest| stays within 2 % of |
 class PendulumParams:
     """Parameters of the pendulum scenarios (a uniform solid cylinder on a hinge at one end)."""
 
-    mass: float = param(0.1, "kg", "mass of the link", "positive")
-    length: float = param(0.3, "m", "length of the link, pivot to tip", "positive")
-    radius: float = param(0.01, "m", "radius of the link (solid cylinder)", "positive")
-    damping: float = param(0.01, "N*m*s/rad", "joint viscous damping b (report: 0.01)", "nonnegative")
-    stiffness: float = param(0.5, "N*m/rad", "joint spring stiffness k", "nonnegative")
-    target_deg: float = param(30.0, "deg", "spring equilibrium position (Simscape 'equilibrium position')")
-    theta0_deg: float = param(90.0, "deg", "initial angle, 0 = hanging down; released from rest")
-    gravity: float = param(9.81, "m/s^2", "gravitational acceleration (0 switches gravity off)", "nonnegative")
-    duration: float = param(10.0, "s", "simulated time", "positive")
-    timestep: float = param(0.001, "s", "integration timestep", "positive")
+    mass: float = param(0.1, "kg", "mass of the link", ge=1e-3, le=1000.0)
+    length: float = param(0.3, "m", "length of the link, pivot to tip", ge=0.01, le=100.0, typo=("mm", 1e-3))
+    radius: float = param(
+        0.01, "m", "radius of the link (solid cylinder), < length", ge=1e-4, le=10.0, typo=("mm", 1e-3)
+    )
+    damping: float = param(0.01, "N*m*s/rad", "joint viscous damping b (report: 0.01)", ge=0.0, le=1e6)
+    stiffness: float = param(0.5, "N*m/rad", "joint spring stiffness k", ge=0.0, le=1e6)
+    target_deg: float = param(
+        30.0, "deg", "spring equilibrium position (Simscape 'equilibrium position')", ge=-720.0, le=720.0
+    )
+    theta0_deg: float = param(90.0, "deg", "initial angle, 0 = hanging down; released from rest", ge=-720.0, le=720.0)
+    gravity: float = param(9.81, "m/s^2", "gravitational acceleration (0 switches gravity off)", ge=0.0, le=100.0)
+    duration: float = param(10.0, "s", "simulated time", gt=0.0, le=86400.0)
+    timestep: float = param(0.001, "s", "integration timestep", ge=1e-6, le=0.1)
     integrator: str = param("RK4", "", "MuJoCo integrator", choices=INTEGRATORS)
 
     def __post_init__(self) -> None:
         if self.radius >= self.length:
-            raise ValueError(f"parameter 'radius' must be smaller than 'length' ({self.length} m); got {self.radius}")
-        check_duration(self.duration, self.timestep, 10_000_000)
+            raise ValueError(
+                f"parameter 'radius' must be smaller than 'length' ({self.length:g} m); got {self.radius:g}"
+            )
+        check_duration(self.duration, self.timestep)
+        n = step_count(self.duration, self.timestep)
+        check_run_cost(n, n + 1, 8, *RUN_COST, "raise 'timestep' or lower 'duration'")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -48,22 +60,37 @@ def pivot_inertia(mass: float, length: float, radius: float) -> float:
     return mass * (length**2 / 3 + radius**2 / 4)
 
 
-def equilibria(stiffness: float, mgc: float, target: float) -> list[float]:
-    """Stable rest angles [rad] of  k (theta - target) + m g c sin(theta) = 0, in increasing order.
+EQUILIBRIA_SPAN: float = 64 * math.pi  # [rad] widest window searched for rest angles (32 turns)
 
-    With k > 0 every root lies within |theta - target| <= m g c / k; with k = 0 they are 2 pi n.
+
+def equilibria(stiffness: float, mgc: float, target: float, lo: float = -math.inf, hi: float = math.inf) -> list[float]:
+    """Stable rest angles [rad] of  k (theta - target) + m g c sin(theta) = 0 within lo..hi, in increasing order.
+
+    With k > 0 every root lies within |theta - target| <= m g c / k. The search covers that interval
+    clipped to lo..hi and to at most EQUILIBRIA_SPAN next to the target, on a grid of 32 points per pi:
+    bounded work for any k, even a spring so weak that there are millions of roots. With k = 0 the
+    stable ones are 2 pi n (only 0 is returned when lo..hi is not given).
     """
-    if stiffness == 0:
-        return [0.0] if mgc > 0 else []
     if mgc == 0:
-        return [target]
+        return [target] if stiffness > 0 and lo <= target <= hi else []
+    if stiffness == 0:
+        if math.isinf(lo) and math.isinf(hi):
+            return [0.0]
+        first, last = math.ceil(lo / (2 * math.pi)), math.floor(hi / (2 * math.pi))
+        return [2 * math.pi * n for n in range(first, min(last, first + 64) + 1)]
     from scipy.optimize import brentq
 
     def f(theta: float) -> float:
         return stiffness * (theta - target) + mgc * math.sin(theta)
 
-    half = mgc / stiffness
-    grid = np.linspace(target - half, target + half, 64 * (int(half / math.pi) + 1) + 1)
+    half = mgc / stiffness  # may be inf for a vanishing spring
+    start, stop = max(target - half, lo), min(target + half, hi)
+    if not start <= stop:
+        return []
+    if stop - start > EQUILIBRIA_SPAN:  # the window of that width closest to the target
+        centre = min(max(target, start + EQUILIBRIA_SPAN / 2), stop - EQUILIBRIA_SPAN / 2)
+        start, stop = centre - EQUILIBRIA_SPAN / 2, centre + EQUILIBRIA_SPAN / 2
+    grid = np.linspace(start, stop, 32 * (int((stop - start) / math.pi) + 1) + 1)  # at most 2081 points
     values = np.array([f(x) for x in grid])
     roots = [float(x) for x, v in zip(grid, values, strict=True) if v == 0]
     for i in np.flatnonzero(values[:-1] * values[1:] < 0):
@@ -73,9 +100,11 @@ def equilibria(stiffness: float, mgc: float, target: float) -> list[float]:
 
 def rest_angle(stiffness: float, mgc: float, target: float, near: float) -> float | None:
     """The stable equilibrium [rad] closest to `near` (unique whenever k > m g c); None if there is none."""
-    stable = equilibria(stiffness, mgc, target)
     if stiffness == 0 and mgc > 0:  # stable equilibria are every 2 pi n
         return 2 * math.pi * round(near / (2 * math.pi))
+    stable = equilibria(stiffness, mgc, target, near - 2 * math.pi, near + 2 * math.pi) or equilibria(
+        stiffness, mgc, target
+    )
     return min(stable, key=lambda r: abs(r - near)) if stable else None
 
 
@@ -104,6 +133,22 @@ def upward_crossings(t: np.ndarray, x: np.ndarray, dx: np.ndarray, level: float 
     return t[idx] + s * h
 
 
+def settled_for_good(energy_left: float, potential: Callable[[float], float], rest: float, band: float) -> bool:
+    """True if the motion can never again leave |theta - rest| <= band.
+
+    Damping only removes energy, so from now on U(theta) - U(rest) <= energy_left; theta moves
+    continuously, so it cannot cross a band edge where U - U(rest) exceeds energy_left.
+
+    Args:
+        energy_left: Kinetic + potential energy now, minus U(rest), in [J].
+        potential: U(theta) in [J] (gravity + spring) for theta in [rad].
+        rest: The stable rest angle [rad] the motion is settling to.
+        band: Half-width of the band around `rest` [rad].
+    """
+    barrier = min(potential(rest - band), potential(rest + band)) - potential(rest)
+    return band > 0 and energy_left < barrier
+
+
 def settling_time(t: np.ndarray, theta: np.ndarray, rest: float, band: float) -> float | None:
     """First time [s] after which |theta - rest| stays <= band to the end; None if it never does."""
     outside = np.flatnonzero(np.abs(theta - rest) > band)
@@ -117,8 +162,14 @@ def settling_time(t: np.ndarray, theta: np.ndarray, rest: float, band: float) ->
 # ---------------------------------------------------------------------------------------------
 
 
-def build_xml(p: PendulumParams) -> str:
-    """The pendulum scene with every parameter written in at full precision."""
+def build_xml(p: PendulumParams, camera_pos: tuple[float, float, float] | None = None) -> str:
+    """The pendulum scene with every parameter written in at full precision.
+
+    Args:
+        p: The parameters.
+        camera_pos: Where the side camera stands [m] (run() frames the swept disc with it); None: far
+            enough back that any swing fits.
+    """
     root = models.load_tree("pendulum_scene")
     L, r, c = p.length, p.radius, p.length / 2
     height = 1.1 * L  # pivot height above the floor
@@ -156,8 +207,14 @@ def build_xml(p: PendulumParams) -> str:
     else:
         models.remove(root, "geom", "target_marker")
     reach = 1.15 * (L + r)
-    models.find(root, "camera", "side").set("pos", models.fmt((0, -reach / math.tan(math.radians(22.5)), height)))
-    models.find(root, "geom", "floor").set("size", models.fmt((2 * reach, 2 * reach, 0.05)))
+    if camera_pos is None:
+        camera_pos = (0, -reach / math.tan(math.radians(22.5)), height)
+    models.find(root, "camera", "side").set("pos", models.fmt(camera_pos))
+    models.find(root, "geom", "floor").set("size", models.fmt((3 * reach, 3 * reach, 0.05)))
+    # A backdrop where the floor ends, so the sky behind the swing is not a black half of the frame.
+    models.find(root, "geom", "backdrop").attrib.update(
+        pos=models.fmt((0, 3 * reach, 3 * reach)), size=models.fmt((3 * reach, 3 * reach, 0.01 * reach))
+    )
     models.find(root, "statistic").attrib.update(center=models.fmt((0, 0, height)), extent=models.fmt(2 * reach))
     return models.to_xml(root)
 
@@ -171,7 +228,7 @@ def run(name: str, p: PendulumParams, progress: Progress | None = None) -> Scena
     data = mujoco.MjData(model)
     mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
     mujoco.mj_forward(model, data)
-    traj = simulate(model, data, step_count(p.duration, p.timestep))
+    traj = simulate(model, data, step_count(p.duration, p.timestep), progress=progress)
 
     # Constants read back from the compiled model: I about the hinge (mass matrix) and m g c.
     hinge = model.joint("hinge")
@@ -233,10 +290,23 @@ def run(name: str, p: PendulumParams, progress: Progress | None = None) -> Scena
             abs(float(theta[-1]) - rest), "rad", "|final angle - predicted rest angle|"
         )
         band = SETTLING_BAND * abs(theta0 - rest)
+
+        def potential(angle: float) -> float:
+            return mgc * (1 - math.cos(angle)) + 0.5 * k * (angle - target) ** 2
+
+        energy_left = float(e_kin[-1] + e_grav[-1] + e_spring[-1]) - potential(rest)
+        settled = settled_for_good(energy_left, potential, rest, band)
+        metrics["settled"] = Metric(
+            settled,
+            "",
+            "true if at the end of the run the energy left is below the potential at the edges of the 2 % band "
+            "around the rest angle, so theta can never leave the band again",
+        )
         metrics["settling_time"] = Metric(
-            settling_time(t, theta, rest, band),
+            settling_time(t, theta, rest, band) if settled else None,
             "s",
-            "time after which |theta - rest| stays within 2 % of |theta0 - rest|",
+            "time after which |theta - rest| stays within 2 % of |theta0 - rest| for good; null if the motion "
+            "has not settled by the end of the run (settled = false)",
         )
     if k > 0:
         metrics["target_deg"] = Metric(math.degrees(target), "deg", "spring equilibrium position")
@@ -257,10 +327,40 @@ def run(name: str, p: PendulumParams, progress: Progress | None = None) -> Scena
                 rgba=(0.1, 0.75, 0.2, 0.6),
             )
         )
+
+    # Frame the side camera on the disc the link swept (and the markers), then recompile: the
+    # camera is visual only, so the recompiled model steps exactly like the one just run.
+    pivot, reach = model.body("link").pos.copy(), float(np.linalg.norm(model.site("tip").pos)) + p.radius
+    shown = np.r_[theta[:: max(1, len(theta) // 2000)], theta[-1:]]
+    shown = np.r_[shown, [a for a in (rest if b > 0 else None, target if k > 0 else None) if a is not None]]
+    envelope = np.r_[pivot[None], pivot + reach * np.c_[np.sin(shown), np.zeros_like(shown), -np.cos(shown)]]
+    camera = model.camera("side")
+    axes = model.cam_mat0[camera.id].reshape(3, 3)  # columns: the camera's x (right), y (up), z axes
+
+    # Video text under the time: the angle, and what the coloured markers are.
+    theta_deg, marks = np.degrees(theta), []
+    if rest is not None and b > 0:
+        marks.append(f"green: rest {math.degrees(rest):.2f}°")
+    if k > 0:
+        marks.append(f"red: target {math.degrees(target):.1f}°")
+    overlay = [lambda i: f"θ = {theta_deg[i]:7.2f}°  ω = {omega[i]:6.2f} rad/s"]
+    overlay += [lambda i, text=text: text for text in marks]
+    camera_pos = render.fit_camera(
+        envelope, [*axes[:, 0], *axes[:, 1]], float(model.cam_fovy[camera.id]), text_lines=1 + len(overlay)
+    )
+    xml = build_xml(p, camera_pos=tuple(camera_pos.tolist()))
+    model = mujoco.MjModel.from_xml_string(xml)
     summary = {
         "pendulum-undamped": ["period_measured", "period_exact", "period_rel_error", "energy_drift_rel"],
-        "pendulum-damped": ["settling_time", "final_theta_deg", "energy_drift_rel"],
-        "pendulum": ["target_deg", "rest_angle_predicted_deg", "final_theta_deg", "rest_angle_error", "settling_time"],
+        "pendulum-damped": ["settling_time", "settled", "final_theta_deg", "energy_drift_rel"],
+        "pendulum": [
+            "target_deg",
+            "rest_angle_predicted_deg",
+            "final_theta_deg",
+            "rest_angle_error",
+            "settling_time",
+            "settled",
+        ],
     }.get(name, ["final_theta_deg", "energy_drift_rel"])
     return ScenarioResult(
         scenario=name,
@@ -293,9 +393,10 @@ def run(name: str, p: PendulumParams, progress: Progress | None = None) -> Scena
         camera="side",
         figures="pendulum",
         markers=markers,
+        overlay=overlay,
         extras={
             "rest_angle": rest,
             "target": target if k > 0 else None,
-            "stable_equilibria": equilibria(k, mgc, target),
+            "stable_equilibria": equilibria(k, mgc, target, float(theta.min()) - 7.0, float(theta.max()) + 7.0),
         },
     )

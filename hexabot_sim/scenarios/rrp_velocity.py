@@ -7,27 +7,35 @@ import dataclasses
 import mujoco
 import numpy as np
 
-from hexabot_sim import models
+from hexabot_sim import models, render
 from hexabot_sim.kinematics import robots
 from hexabot_sim.kinematics.mjcf import to_mjcf
-from hexabot_sim.params import check_duration, param
+from hexabot_sim.params import check_duration, check_run_cost, param
 from hexabot_sim.scenarios.base import Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import Trajectory, step_count
 
+# Cost of a run for params.check_run_cost, measured on the 2-core development machine: no physics
+# steps; per sample the Jacobian in Python and mj_forward (~1.1 ms; the CSV is counted apart); peak bytes.
+RUN_COST: tuple[float, float, float] = (0.0, 1.1e-3, 600.0)
+LENGTH_MIN, LENGTH_MAX = robots.LENGTH_MIN, robots.LENGTH_MAX  # [m] the lengths `kin` accepts too
+MM: tuple[str, float] = ("mm", 1e-3)  # the unit users type by mistake for a length in m
 SINGULAR_TOL: float = 1e-9  # |a2 + d3| or |cos q2| below this counts as singular
+VIDEO_LINK_RADIUS: float = 0.04  # [m] link capsules of the generated arm (to_mjcf default: 0.02)
 
 
 @dataclasses.dataclass(frozen=True)
 class RrpVelocityParams:
     """Parameters of the rrp-velocity scenario (joint trajectory fixed by the report)."""
 
-    d1: float = param(1.0, "m", "height of the q2 axis (report: 1 m)", "positive")
-    a2: float = param(1.0, "m", "offset of the prismatic stage (report: 1 m)", "positive")
-    duration: float = param(20.0, "s", "t from 0 to duration (report: 20 s)", "positive")
-    timestep: float = param(0.001, "s", "sample period", "positive")
+    d1: float = param(1.0, "m", "height of the q2 axis (report: 1 m)", ge=LENGTH_MIN, le=LENGTH_MAX, typo=MM)
+    a2: float = param(1.0, "m", "offset of the prismatic stage (report: 1 m)", ge=LENGTH_MIN, le=LENGTH_MAX, typo=MM)
+    duration: float = param(20.0, "s", "t from 0 to duration (report: 20 s)", gt=0.0, le=86400.0)
+    timestep: float = param(0.001, "s", "sample period", ge=1e-6, le=0.1)
 
     def __post_init__(self) -> None:
-        check_duration(self.duration, self.timestep, 2_000_000)
+        check_duration(self.duration, self.timestep)
+        n = step_count(self.duration, self.timestep)
+        check_run_cost(n, n + 1, 20, *RUN_COST, "raise 'timestep' or lower 'duration'")
 
 
 def joint_trajectory(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -41,8 +49,11 @@ def run(name: str, p: RrpVelocityParams, progress: Progress | None = None) -> Sc
     """Tool twist from the analytic Jacobian, and MuJoCo's site velocity while it plays q(t)."""
     chain = robots.get("rrp").chain({"d1": p.d1, "a2": p.a2})
     # The robot regenerated from its DH table with this run's lengths, inside the committed scene.
-    robot = to_mjcf(chain, comment="rrp-velocity: report 001 part 5")
-    xml = models.to_xml(models.load_tree("rrp_scene", replace={"rrp.xml": robot}))
+    # Links twice the default radius: visible in a video of a 4 m wide motion (masses do not enter a
+    # kinematic replay: the twist depends on q and dq only).
+    robot = to_mjcf(chain, comment="rrp-velocity: report 001 part 5", link_radius=VIDEO_LINK_RADIUS)
+    tree = models.load_tree("rrp_scene", replace={"rrp.xml": robot})
+    xml = models.to_xml(tree)
     model = mujoco.MjModel.from_xml_string(xml)
     data = mujoco.MjData(model)
     n = step_count(p.duration, p.timestep)
@@ -56,8 +67,10 @@ def run(name: str, p: RrpVelocityParams, progress: Progress | None = None) -> Sc
     addr = [int(model.joint(j.name).qposadr[0]) for j in chain.joints]
     dadr = [int(model.joint(j.name).dofadr[0]) for j in chain.joints]
     site = model.site("tool").id
+    frame_sites = [model.site(name).id for name in ("base", "frame1", "frame2", "tool")]
     res = np.zeros(6)  # (6,) [angular, linear]
     mj_twist = np.empty((len(t), 6))  # (n, 6) [linear, angular]
+    sites = np.empty((len(t), len(frame_sites), 3))  # (n, 4, 3) the arm's frame origins, for the camera
     for i in range(len(t)):
         data.qpos[addr] = q[i]
         data.qvel[dadr] = dq[i]
@@ -65,6 +78,7 @@ def run(name: str, p: RrpVelocityParams, progress: Progress | None = None) -> Sc
         mujoco.mj_forward(model, data)
         mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_SITE, site, res, 0)
         mj_twist[i, :3], mj_twist[i, 3:] = res[3:], res[:3]
+        sites[i] = data.site_xpos[frame_sites]
         if progress is not None and i % 2000 == 0:
             progress(i, len(t) - 1)
 
@@ -94,6 +108,18 @@ def run(name: str, p: RrpVelocityParams, progress: Progress | None = None) -> Sc
     units = {"t": "s", "q1": "rad", "q2": "rad", "d3": "m", "dq1": "rad/s", "dq2": "rad/s", "dd3": "m/s"}
     units |= {k: ("m/s" if k.startswith("v") else "rad/s") for k in columns if k[0] in "vw"}
     units["det_jv"] = "m^2"
+    # Video: the camera framed on the volume the arm's frames and tool swept (visual only, so the
+    # recompiled model is the same arm), the tool's path as a trail, q and the speeds as text.
+    camera = models.find(tree, "camera", "three_quarter")
+    overlay = [
+        lambda i: f"q1 = {q[i, 0]:6.3f} rad  q2 = {q[i, 1]:6.3f} rad  d3 = {q[i, 2]:6.3f} m",
+        lambda i: f"|v| = {np.linalg.norm(twist[i, :3]):5.2f} m/s  |ω| = {np.linalg.norm(twist[i, 3:]):5.2f} rad/s",
+    ]
+    xyaxes = [float(v) for v in camera.get("xyaxes", "").split()]
+    eye = render.fit_camera(sites.reshape(-1, 3), xyaxes, float(camera.get("fovy", 45)), text_lines=1 + len(overlay))
+    camera.set("pos", models.fmt(tuple(eye.tolist())))
+    xml = models.to_xml(tree)
+    model = mujoco.MjModel.from_xml_string(xml)
     qpos = np.zeros((len(t), model.nq))
     qpos[:, addr] = q
     qvel = np.zeros((len(t), model.nv))
@@ -110,5 +136,7 @@ def run(name: str, p: RrpVelocityParams, progress: Progress | None = None) -> Sc
         summary=["max_linear_speed", "max_angular_speed", "max_linear_diff_mujoco", "max_angular_diff_mujoco"],
         camera="three_quarter",
         figures="rrp_velocity",
-        extras={"singular": singular},
+        trail=sites[:, -1].copy(),
+        overlay=overlay,
+        extras={"singular": singular, "zero_reach_times": metrics["zero_reach_times"].value},
     )
