@@ -3,16 +3,22 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import errno
 import os
+import shutil
+import signal
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
+import numpy as np
+
 from hexabot_sim import params as params_mod
 from hexabot_sim import scenarios
-from hexabot_sim.errors import HexabotError, UsageError
+from hexabot_sim.errors import HexabotError, Interrupted, UsageError
 
 PROG = "hexabot-sim"
 
@@ -24,14 +30,25 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(message)
 
 
+# Video frames: H.264 in yuv420p needs even sides; beyond 4:1 a frame shows a sliver of the scene.
+VIDEO_MIN_SIDE, VIDEO_MAX_SIZE, VIDEO_MAX_ASPECT = 64, (3840, 2160), 4.0
+
+
 def _size(text: str) -> tuple[int, int]:
     width, sep, height = text.lower().partition("x")
     try:
         w, h = int(width), int(height)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, e.g. 640x480; got {text!r}") from None
-    if not sep or not (16 <= w <= 3840 and 16 <= h <= 2160):
-        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT between 16x16 and 3840x2160; got {text!r}")
+    lo, (w_max, h_max) = VIDEO_MIN_SIDE, VIDEO_MAX_SIZE
+    if not sep or not (lo <= w <= w_max and lo <= h <= h_max):
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT between {lo}x{lo} and {w_max}x{h_max}; got {text!r}")
+    if w % 2 or h % 2:
+        raise argparse.ArgumentTypeError(
+            f"width and height must be even (H.264 video), e.g. {w + w % 2}x{h + h % 2}; got {text!r}"
+        )
+    if max(w / h, h / w) > VIDEO_MAX_ASPECT:
+        raise argparse.ArgumentTypeError(f"aspect ratio must be at most 4:1 either way; got {text!r}")
     return w, h
 
 
@@ -46,8 +63,16 @@ def _fps(text: str) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from hexabot_sim import __version__
+
     parser = _Parser(prog=PROG, description="Robotics-course simulations on MuJoCo: run named scenarios.")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser, metavar="{list,run,check,kin}")
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    parser.add_argument(
+        "--debug", action="store_true", help="show the Python traceback of an internal error (or HEXABOT_SIM_DEBUG=1)"
+    )
+    sub = parser.add_subparsers(
+        dest="command", required=True, parser_class=_Parser, metavar="{list,run,check,kin,clean}"
+    )
     sub.add_parser("list", help="scenarios and their parameters with defaults and units")
     run = sub.add_parser("run", help="run a scenario and write a run folder")
     run.add_argument("scenario", help="scenario name (see 'hexabot-sim list')")
@@ -70,55 +95,106 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--fps", type=_fps, default=30, help="video frame rate (default: 30)")
     run.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     sub.add_parser("check", help="MuJoCo version, working OpenGL backend, ffmpeg")
-    kin = sub.add_parser("kin", help="kinematics of a robot: T0n, J, singularities, IK branches")
+    clean = sub.add_parser("clean", help="remove staging folders left by runs that were killed (SIGKILL, power loss)")
+    clean.add_argument("folder", nargs="?", default="runs", help="folder holding run folders (default: runs)")
+    clean.add_argument("--dry-run", action="store_true", help="only list what would be removed")
+    kin = sub.add_parser(
+        "kin",
+        help="kinematics of a robot: T0n, J, singularities, IK branches",
+        description="DH table and singular sets; with --q also T0n, J, det and the singular conditions that hold; "
+        "with --target every IK branch and its FK residual. Units: m; revolute joints and target angles in rad "
+        "(or deg with --deg). Negative values are typed as they are: --q -1,0.5,0.2. Allowed: link lengths "
+        "0.001 to 10 m (the offsets elbow d, stanford d2 and d6, scara d4 may be 0); |revolute q| and |angle| "
+        "<= 1000 rad; |prismatic q| <= 100 m; |x|, |y|, |z| of a target <= 1000 m. Warnings (stderr, and "
+        "'warnings' in --json): q outside a joint range, IK branches dropped by the joint ranges.",
+    )
+    import re  # kin only: `--q -1,0.5,0.2` is a value, not an option (argparse accepts only a lone -1 or -.5)
+
+    kin._negative_number_matcher = re.compile(r"^-(?:\d|\.\d|inf|nan)", re.IGNORECASE)  # kinreport.NUMBER_LIST
     kin.add_argument("robot", help="rrp, elbow, stanford, scara or leg")
-    kin.add_argument("--q", metavar="Q1,Q2,...", help="joint values (rad for revolute, m for prismatic)")
-    kin.add_argument("--target", metavar="X,Y,Z", help="tool position for IK (stanford: x,y,z,roll,pitch,yaw)")
+    kin.add_argument(
+        "--q", metavar="Q1,Q2,...", help="joint values: rad (deg with --deg) for revolute joints, m for prismatic"
+    )
+    kin.add_argument(
+        "--target",
+        metavar="X,Y,Z",
+        help="tool position [m] for IK (scara: x,y,z[,yaw]; stanford: x,y,z,roll,pitch,yaw with R = Rz Ry Rx)",
+    )
     kin.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE", help="link length [m]")
-    kin.add_argument("--json", action="store_true", help="machine-readable output")
-    kin.add_argument("--symbolic", action="store_true", help="also derive T0n and J symbolically (needs sympy)")
+    kin.add_argument(
+        "--deg",
+        action="store_true",
+        help="revolute joint values and target angles in degrees, in --q/--target and in the output (DH angles, "
+        "joint ranges, IK solutions); T0n stays in m and J per rad",
+    )
+    kin.add_argument("--json", action="store_true", help="machine-readable output (with a 'warnings' list)")
+    kin.add_argument(
+        "--symbolic",
+        action="store_true",
+        help="also derive T0n and J with sympy, printed with c1/s23 abbreviations and as LaTeX "
+        "(needs sympy, the extra 'symbolic': pip install \".[symbolic]\" in the hexabot-sim folder)",
+    )
     return parser
 
 
 class ProgressBar:
-    """A one-line progress bar on stderr when it is a terminal; silent otherwise."""
+    """Progress on stderr: a redrawn bar on a terminal, else a plain line every PLAIN_EVERY percent (logs)."""
+
+    PLAIN_EVERY: int = 25  # [%]
 
     def __init__(self, label: str, stream: Any = None) -> None:
         self.label = label
         self.stream = stream if stream is not None else sys.stderr
-        self.enabled = hasattr(self.stream, "isatty") and self.stream.isatty()
+        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
         self._last = -1
 
     def __call__(self, done: int, total: int) -> None:
-        if not self.enabled:
-            return
         percent = 100 * done // max(total, 1)
+        if not self.tty:
+            step = percent // self.PLAIN_EVERY * self.PLAIN_EVERY
+            if step > self._last:
+                self._last = step
+                self._write(f"{self.label}: {percent}% ({done}/{total})\n")
+            return
         if percent == self._last and done != total:
             return
         self._last = percent
         filled = percent * 30 // 100
-        self.stream.write(f"\r{self.label} [{'#' * filled}{'.' * (30 - filled)}] {percent:3d}% ({done}/{total})")
+        self._write(f"\r{self.label} [{'#' * filled}{'.' * (30 - filled)}] {percent:3d}% ({done}/{total})")
         if done >= total:
-            self.stream.write("\n")
-        self.stream.flush()
+            self._write("\n")
+
+    def _write(self, text: str) -> None:
+        try:
+            self.stream.write(text)
+            self.stream.flush()
+        except (OSError, ValueError):  # progress is a courtesy: a broken stderr must not stop the run
+            pass
 
 
 def cmd_list() -> int:
     for scenario in scenarios.SCENARIOS.values():
-        cls = scenario.params_type
         print(f"{scenario.name}\n  {scenario.summary}")
-        for name, (info, default) in params_mod.infos(cls).items():
+        rows = []
+        for name, (info, default) in params_mod.infos(scenario.params_type).items():
             value = scenario.defaults.get(name, default)
-            if isinstance(value, tuple):
-                value = ",".join(f"{v:.6g}" for v in value)
-            unit = f" [{info.unit}]" if info.unit else ""
-            allowed = f" (one of: {', '.join(info.choices)})" if info.choices else ""
-            print(f"    {name:<12} = {value!s:<8}{unit:<12} {info.doc}{allowed}")
+            text = ",".join(f"{v:.6g}" for v in value) if isinstance(value, tuple) else str(value)
+            unit = f"[{info.unit}]" if info.unit else ""
+            allowed = (
+                params_mod.describe_range(info)
+                if hasattr(params_mod, "describe_range")
+                else (f"one of: {', '.join(info.choices)}" if info.choices else "")
+            )
+            rows.append((name, text, unit, f"{info.doc}{'; ' + allowed if allowed else ''}"))
+        widths = [min(max(len(row[k]) for row in rows), cap) for k, cap in ((0, 30), (1, 24), (2, 14))]
+        for name, text, unit, doc in rows:
+            print(f"    {name:<{widths[0]}} = {text:<{widths[1]}} {unit:<{widths[2]}} {doc}")
         print()
     return 0
 
 
 def cmd_check() -> int:
+    import hexabot_sim
     from hexabot_sim import gl
 
     print(f"python        {sys.version.split()[0]}")
@@ -133,16 +209,16 @@ def cmd_check() -> int:
         reason = gl.probe(backend)
         working += [backend] if reason is None else []
         print(f"gl {backend:<10} {'works' if reason is None else 'fails: ' + reason.split(': ', 1)[-1]}")
-    try:
+    ffmpeg_problem = gl.ffmpeg_problem()
+    if ffmpeg_problem is None:
         import imageio_ffmpeg
 
         print(f"ffmpeg        {imageio_ffmpeg.get_ffmpeg_exe()}")
-        ffmpeg_ok = True
-    except Exception as e:
-        print(f"ffmpeg        NOT found: {e}")
-        ffmpeg_ok = False
-    video = "available" if working and ffmpeg_ok else "unavailable (CSV and plots still work)"
-    print(f"video         {video}; MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r}")
+    else:
+        print(f"ffmpeg        NOT working: {ffmpeg_problem}")
+    video = "available" if working and ffmpeg_problem is None else "unavailable (CSV and plots still work)"
+    user_gl = hexabot_sim.USER_MUJOCO_GL
+    print(f"video         {video}; MUJOCO_GL {'not set' if user_gl is None else '= ' + repr(user_gl)}")
     return 0
 
 
@@ -151,32 +227,11 @@ def cmd_kin(args: argparse.Namespace) -> int:
 
     from hexabot_sim import kinreport
 
-    lengths = {}
-    for name, raw in params_mod.parse_assignments(args.sets).items():
-        lengths[name] = kinreport.parse_numbers(raw, f"length '{name}'")[0]
-    report = kinreport.describe(args.robot, lengths)
-    if args.q is not None:
-        report |= kinreport.at_configuration(args.robot, kinreport.parse_numbers(args.q, "--q"), lengths)
-    if args.target is not None:
-        report |= kinreport.solve(args.robot, kinreport.parse_numbers(args.target, "--target"), lengths)
-    if args.symbolic:
-        try:
-            from hexabot_sim.kinematics import symbolic
-        except ImportError:
-            raise UsageError("--symbolic needs sympy: pip install 'hexabot-sim[symbolic]'") from None
-        chain = symbolic.symbolic_chain(args.robot)
-        report["symbolic"] = {
-            "T0n": symbolic.pretty(symbolic.transforms(chain)[-1]),
-            "J": symbolic.pretty(symbolic.jacobian(chain)),
-            "T0n_latex": symbolic.latex(symbolic.transforms(chain)[-1]),
-            "J_latex": symbolic.latex(symbolic.jacobian(chain)),
-        }
-    if args.json:
-        print(json.dumps(report, indent=2, allow_nan=False))
-    else:
-        print(kinreport.text(report))
-        if args.symbolic:
-            print(f"symbolic T0n:\n{report['symbolic']['T0n']}\nsymbolic J:\n{report['symbolic']['J']}")
+    sets = params_mod.parse_assignments(args.sets)
+    report = kinreport.report(args.robot, sets, args.q, args.target, degrees=args.deg, symbolic=args.symbolic)
+    for warning in report["warnings"]:
+        print(f"{PROG}: warning: {warning}", file=sys.stderr)
+    print(json.dumps(report, indent=2, allow_nan=False) if args.json else kinreport.text(report))
     return 0
 
 
@@ -188,68 +243,125 @@ def _format(value: Any, unit: str) -> str:
     return f"{value}{' ' + unit if unit and unit != '1' else ''}"
 
 
+def _render(args: argparse.Namespace, result: Any, folder: Path, backend: str) -> tuple[dict[str, Any], float]:
+    """Renders video.mp4 into the staging folder; a failure of the GL or ffmpeg is no reason to lose the run."""
+    from hexabot_sim import output, render
+
+    width, height = args.size
+    started = time.perf_counter()
+    try:
+        frames = render.render_video(
+            result.model,
+            result.trajectory.t,
+            result.trajectory.qpos,
+            folder / output.VIDEO_NAME,
+            camera=result.camera,
+            width=width,
+            height=height,
+            fps=args.fps,
+            quality=args.quality,
+            markers=result.markers,
+            trail=result.trail,
+            overlay=result.overlay,
+            progress=ProgressBar("video"),
+        )
+    except (KeyboardInterrupt, MemoryError):
+        raise
+    except Exception as e:  # OpenGL context or encoder failure: keep CSV and plots, say why
+        (folder / output.VIDEO_NAME).unlink(missing_ok=True)
+        if isinstance(e, OSError) and e.errno in (errno.ENOSPC, errno.EDQUOT):
+            raise
+        reason = f"rendering failed: {type(e).__name__}: {str(e).strip().splitlines()[-1] if str(e).strip() else ''}"
+        return {"written": False, "reason": reason.rstrip(": ")}, time.perf_counter() - started
+    video = {
+        "written": True,
+        "file": output.VIDEO_NAME,
+        "frames": frames,
+        "fps": args.fps,
+        "size": [width, height],
+        "quality": args.quality,
+        "gl_backend": backend,
+    }
+    return video, time.perf_counter() - started
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     scenario = scenarios.get(args.scenario)
     sets = params_mod.parse_assignments(args.sets)
     config = params_mod.read_config(args.config) if args.config else {}
 
+    from hexabot_sim import gl, output
+
     # The OpenGL backend must be chosen before MuJoCo is imported (scenario modules import it).
     backend, no_video_reason = None, "not requested (add --video)"
     if args.video:
-        from hexabot_sim import gl
-
-        backend, no_video_reason = gl.choose()
+        backend, no_video_reason, notice = gl.choose()
+        if notice:
+            print(f"{PROG}: {notice}", file=sys.stderr)
+        if backend is not None:
+            ffmpeg_problem = gl.ffmpeg_problem()
+            if ffmpeg_problem is not None:
+                backend, no_video_reason = None, ffmpeg_problem
 
     p: Any = params_mod.resolve(scenario.params_type, scenario.defaults, config, sets)
-    out = Path(args.out) if args.out else None
+    if args.out is not None:
+        output.check_out(args.out, force=args.force)  # before the simulation, not after it
+    with _mujoco_warnings_to_stderr():
+        return _execute(args, scenario, p, backend, no_video_reason)
 
+
+@contextlib.contextmanager
+def _mujoco_warnings_to_stderr() -> Iterator[None]:
+    """MuJoCo's default handler appends warnings to MUJOCO_LOG.TXT in the working folder: show them instead."""
+    import mujoco
+
+    seen: list[str] = []
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(seen.append)
+    try:
+        yield
+    finally:
+        mujoco.set_mju_user_warning(previous)
+        for message in dict.fromkeys(seen):
+            print(f"{PROG}: MuJoCo warning: {' '.join(message.split())}", file=sys.stderr)
+
+
+def _execute(args: argparse.Namespace, scenario: Any, p: Any, backend: str | None, no_video_reason: str) -> int:
+    """Runs the scenario into its run folder, then prints the summary."""
     from hexabot_sim import output
 
-    out = out if out is not None else output.default_out(scenario.name)
-    with output.run_folder(out, force=args.force) as folder:
-        started = time.perf_counter()
+    out = args.out
+    started = time.perf_counter()
+    with output.run_folder(out, scenario.name, force=args.force) as run:
+        folder = run.path
         result = scenario.runner(scenario.name, p, progress=ProgressBar(scenario.name))
         sim_seconds = time.perf_counter() - started
 
         output.write_csv(folder / result.csv_name, result.columns)
         output.write_text(folder / output.MODEL_NAME, result.model_xml)
         files = [result.csv_name, output.JSON_NAME, output.MODEL_NAME]
+        if result.trajectory is not None:  # the full recorded state: recompute anything from model.xml
+            traj = result.trajectory
+            arrays = {"t": traj.t, "qpos": traj.qpos, "qvel": traj.qvel}
+            arrays["ctrl"] = traj.ctrl if traj.ctrl is not None else np.zeros((len(traj.t), result.model.nu))
+            output.write_arrays(folder / output.TRAJECTORY_NAME, arrays)
+            files.append(output.TRAJECTORY_NAME)
         if not args.no_plots:
             from hexabot_sim import plots
 
-            files += output.write_figures(plots.figures(result), folder)
+            plots.use_agg()  # the CLI draws off-screen; importing the package never picks a backend
+            files += output.write_figures(scenario.figures(result), folder)
 
         if args.video and (result.camera is None or result.trajectory is None):
             backend, no_video_reason = None, f"{scenario.name} produces no trajectory to film"
         video: dict[str, Any] = {"written": False, "reason": no_video_reason}
-        if args.video and backend is not None and result.trajectory is not None and result.camera is not None:
-            from hexabot_sim import render
-
-            width, height = args.size
-            frames = render.render_video(
-                result.model,
-                result.trajectory.t,
-                result.trajectory.qpos,
-                folder / output.VIDEO_NAME,
-                camera=result.camera,
-                width=width,
-                height=height,
-                fps=args.fps,
-                quality=args.quality,
-                markers=result.markers,
-                trail=result.trail,
-                progress=ProgressBar("video"),
-            )
-            files.append(output.VIDEO_NAME)
-            video = {
-                "written": True,
-                "file": output.VIDEO_NAME,
-                "frames": frames,
-                "fps": args.fps,
-                "size": [width, height],
-                "quality": args.quality,
-                "gl_backend": backend,
-            }
+        video_seconds = 0.0
+        if args.video and backend is not None:
+            video, video_seconds = _render(args, result, folder, backend)
+            if video["written"]:
+                files.append(output.VIDEO_NAME)
+            else:
+                no_video_reason = video["reason"]
 
         output.write_json(
             folder / output.JSON_NAME,
@@ -274,49 +386,191 @@ def cmd_run(args: argparse.Namespace) -> int:
                 "versions": output.versions(),
             },
         )
+    assert run.final is not None
+    total_seconds = time.perf_counter() - started
 
-    simulated = (
-        f"{result.trajectory.t[-1]:.6g} s simulated in {sim_seconds:.2f} s"
-        if result.trajectory is not None
-        else f"finished in {sim_seconds:.2f} s"
-    )
-    print(f"{scenario.name}: {simulated} -> {output.display_path(out)}")
+    timing = f"simulated in {sim_seconds:.2f} s" if result.trajectory is not None else f"ran in {sim_seconds:.2f} s"
+    if result.trajectory is not None:
+        timing = f"{result.trajectory.t[-1]:.6g} s {timing}"
+    if video_seconds:
+        timing += f", video in {video_seconds:.2f} s"
+    timing += f", {total_seconds:.2f} s in all"
+    if args.video and not video["written"]:
+        print(f"{PROG}: no video: {no_video_reason}", file=sys.stderr)
+    _COMPLETED[:] = [f"the run folder {output.display_path(run.final)} is complete"]
+    print(f"{scenario.name}: {timing} -> {output.display_path(run.final)}")
     for name in result.summary:
         metric = result.metrics[name]
         print(f"  {name:<26} {_format(metric.value, metric.unit)}")
     print(f"  files: {', '.join(files)}")
-    if args.video and backend is None:
-        print(f"no video: {no_video_reason}", file=sys.stderr)
     return 0
 
 
+def cmd_clean(args: argparse.Namespace) -> int:
+    from hexabot_sim import output
+
+    root = Path(args.folder)
+    if not root.is_dir():
+        raise UsageError(f"{args.folder!r} is not a folder")
+    stale = output.stale_staging(root)
+    for path in stale:
+        if args.dry_run:
+            print(f"would remove {path}")
+        else:
+            shutil.rmtree(path)
+            print(f"removed {path}")
+    if not stale:
+        print(f"no staging folders left by interrupted runs in {args.folder}")
+    return 0
+
+
+# What was completed before standard output failed, for the error message (e.g. the run folder).
+_COMPLETED: list[str] = []
+
+
+class _StdoutError(Exception):
+    """Standard output could not be written (closed, full, I/O error)."""
+
+    def __init__(self, error: OSError) -> None:
+        super().__init__(error)
+        self.error = error
+
+
+class _GuardedStdout:
+    """Wraps sys.stdout so a failing write is told apart from every other OSError (a closed pipe stays quiet)."""
+
+    def __init__(self, stream: Any) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            raise
+        except OSError as e:
+            raise _StdoutError(e) from None
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            raise
+        except OSError as e:
+            raise _StdoutError(e) from None
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+
+class _ClosedStdout:
+    """Standard output when the process was started with it closed: every write fails with EBADF."""
+
+    def write(self, text: str) -> int:
+        raise OSError(errno.EBADF, "standard output is closed")
+
+    def flush(self) -> None:
+        pass
+
+    def isatty(self) -> bool:
+        return False
+
+
+def _debug_requested(argv: Sequence[str]) -> bool:
+    return "--debug" in argv or os.environ.get("HEXABOT_SIM_DEBUG", "") not in ("", "0")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Runs the CLI; returns the exit code (0 ok, 1 simulation failed, 2 bad input)."""
+    """Runs the CLI; returns the exit code (0 ok, 1 simulation or output failed, 2 bad input, 128+N signal N)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    stdout, sys.stdout = sys.stdout, _GuardedStdout(sys.stdout)
+    _COMPLETED.clear()
     try:
-        args = build_parser().parse_args(argv)
+        code = _main(argv)
+        sys.stdout.flush()
+        return code
+    except _StdoutError as e:
+        done = f" ({_COMPLETED[0]})" if _COMPLETED else ""
+        print(f"{PROG}: error: cannot write to standard output: {e.error.strerror or e.error}{done}", file=sys.stderr)
+        return 1
+    finally:
+        sys.stdout = stdout
+
+
+def _main(argv: list[str]) -> int:
+    try:
+        # --debug is honoured wherever it is typed (before or after the sub-command).
+        args = build_parser().parse_args([a for a in argv if a != "--debug"])
+        if not (args.command == "run" and args.video):
+            from hexabot_sim import gl
+
+            gl.disable_if_unused()  # nothing is drawn: a broken MUJOCO_GL must not matter
         if args.command == "list":
             return cmd_list()
         if args.command == "check":
             return cmd_check()
         if args.command == "kin":
             return cmd_kin(args)
+        if args.command == "clean":
+            return cmd_clean(args)
         return cmd_run(args)
     except HexabotError as e:
         print(f"{PROG}: error: {e}", file=sys.stderr)
         return e.exit_code
+    except (_StdoutError, BrokenPipeError):
+        raise
+    except Interrupted as e:
+        name = signal.Signals(e.signum).name
+        print(f"{PROG}: stopped by {name}; nothing written", file=sys.stderr)
+        return 128 + e.signum
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted; nothing written", file=sys.stderr)
         return 130
+    except SystemExit as e:  # argparse's --help / --version
+        return e.code if isinstance(e.code, int) else 0
+    except (Exception, RecursionError) as e:
+        if _debug_requested(argv):
+            raise
+        text = " ".join(str(e).split())[:300]
+        print(
+            f"{PROG}: internal error: {type(e).__name__}{': ' + text if text else ''} -- this is a bug in "
+            f"{PROG}, please report it with the output of the same command plus --debug",
+            file=sys.stderr,
+        )
+        return 1
+
+
+def _raise_interrupted(signum: int, frame: Any) -> None:
+    raise Interrupted(signum)
+
+
+def _ensure_std_streams() -> None:
+    """Opens /dev/null on a closed stdin/stdout/stderr, so no file we create takes their numbers."""
+    for fd in (0, 1, 2):
+        try:
+            os.fstat(fd)
+        except OSError:
+            os.open(os.devnull, os.O_RDWR)  # takes the lowest free number: this one
+    if sys.stdout is None:  # started with stdout closed: say so at the first write
+        sys.stdout = _ClosedStdout()
+    if sys.stderr is None:
+        sys.stderr = open(os.devnull, "w")
 
 
 def console() -> NoReturn:
     """Entry point of the `hexabot-sim` console script."""
+    _ensure_std_streams()
+    # SIGTERM and SIGHUP stop a run exactly like Ctrl-C: clean up, exit 128 + N.
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, _raise_interrupted)
     try:
         code = main()
         sys.stdout.flush()
     except BrokenPipeError:  # e.g. `hexabot-sim list | head`: the reader left; not an error of ours
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         code = 0
+    except OSError as e:  # stdout full at the final flush
+        print(f"{PROG}: error: cannot write to standard output: {e.strerror or e}", file=sys.stderr)
+        code = 1
     sys.exit(code)
 
 

@@ -39,6 +39,16 @@ class Scenario:
     def runner(self) -> Callable[..., Any]:
         return self._module().run
 
+    @property
+    def figures(self) -> Callable[..., dict[str, Any]]:
+        """The scenario's figure set: result -> {file stem: matplotlib Figure}."""
+        module = self._module()
+        if hasattr(module, "figures"):
+            return module.figures
+        from hexabot_sim import plots
+
+        return plots.figures
+
 
 SCENARIOS: dict[str, Scenario] = {
     s.name: s
@@ -77,6 +87,27 @@ SCENARIOS: dict[str, Scenario] = {
             "leg_sweep",
             "LegSweepParams",
             {},
+        ),
+        Scenario(
+            "hexabot-walk",
+            "the six-legged hexabot walks on flat ground: tripod/ripple/wave gait, any direction (report 000)",
+            "hexabot",
+            "HexabotParams",
+            {},
+        ),
+        Scenario(
+            "hexabot-turn",
+            "the hexabot turns on the spot at 0.3 rad/s (tripod gait)",
+            "hexabot",
+            "HexabotParams",
+            {"vx": 0.0, "yaw_rate": 0.3},
+        ),
+        Scenario(
+            "hexabot-crab",
+            "the hexabot walks sideways (crab walk) at 0.1 m/s to its left",
+            "hexabot",
+            "HexabotParams",
+            {"vx": 0.0, "vy": 0.1},
         ),
         Scenario(
             "rrp-velocity",

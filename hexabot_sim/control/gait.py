@@ -1,0 +1,252 @@
+"""Gait generator: per-leg phase clocks and the body-frame foot targets for a body-velocity command.
+
+A foot in stance stays fixed on the ground, so in the body frame it moves as  dp/dt = -v - w x p  for
+the body twist (v_x, v_y, w_z): a straight line opposite to the motion, or an arc about the
+instantaneous centre of rotation when turning. A foot in swing follows the report's elliptic-like
+arc: a cubic Hermite in the ground plane whose end velocities equal the stance velocity at lift-off
+and touchdown (no stubbing, no scuffing), lifted by h sin^2(pi s) (zero vertical speed at both ends).
+
+Targets are planned in chunks (numpy over all six legs and every step of the chunk); between chunks
+the command may change (heading hold), and every leg continues from where its target is, so the
+targets stay continuous in position and velocity.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from hexabot_sim.errors import UsageError
+from hexabot_sim.kinematics.hexabot import LEGS
+
+
+@dataclasses.dataclass(frozen=True)
+class Gait:
+    """Phase offsets of the legs (LEGS order, in cycles) and the stance fraction of a cycle."""
+
+    name: str
+    offsets: tuple[float, ...]
+    duty: float
+    doc: str
+
+
+GAITS: dict[str, Gait] = {
+    g.name: g
+    for g in (
+        # lf, lm, lr, rf, rm, rr
+        Gait("tripod", (0.0, 0.5, 0.0, 0.5, 0.0, 0.5), 0.5, "two alternating tripods (lf, rm, lr) and (rf, lm, rr)"),
+        Gait(
+            "ripple",
+            (2 / 3, 1 / 3, 0.0, 1 / 6, 5 / 6, 0.5),
+            2 / 3,
+            "a wave back to front on each side, the sides half a cycle apart: four feet down",
+        ),
+        Gait(
+            "wave",
+            (2 / 6, 1 / 6, 0.0, 5 / 6, 4 / 6, 3 / 6),
+            5 / 6,
+            "one leg at a time, rear to front, left then right: five feet down",
+        ),
+    )
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class Command:
+    """Body twist in the body frame: forward and sideways speed [m/s], yaw rate [rad/s]."""
+
+    vx: float = 0.0
+    vy: float = 0.0
+    yaw_rate: float = 0.0
+
+    def scaled(self, factor: float) -> Command:
+        return Command(self.vx * factor, self.vy * factor, self.yaw_rate * factor)
+
+
+def stance_velocity(cmd: Command, p: np.ndarray) -> np.ndarray:
+    """Body-frame velocity (..., 2) of ground-fixed points p (..., >=2): -v - w x p."""
+    return np.stack([-cmd.vx + cmd.yaw_rate * p[..., 1], -cmd.vy - cmd.yaw_rate * p[..., 0]], axis=-1)
+
+
+def stance_path(cmd: Command, start: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """Body-frame positions (..., n, 2) of ground-fixed points that are at `start` (..., 2), tau [s] (n,) later."""
+    start = np.asarray(start, dtype=float)[..., None, :]  # (..., 1, 2)
+    if cmd.yaw_rate == 0.0:
+        return start - np.stack([cmd.vx * tau, cmd.vy * tau], axis=-1)
+    w = cmd.yaw_rate
+    centre = np.array([-cmd.vy / w, cmd.vx / w])  # instantaneous centre of rotation, body frame
+    c, s = np.cos(-w * tau)[:, None], np.sin(-w * tau)[:, None]  # (n, 1)
+    rel = start - centre
+    return centre + np.concatenate([c * rel[..., :1] - s * rel[..., 1:], s * rel[..., :1] + c * rel[..., 1:]], -1)
+
+
+def touchdown_point(cmd: Command, neutral: np.ndarray, stance_time: float) -> np.ndarray:
+    """Where a foot must land (..., 2) so that its stance is centred on `neutral` (..., 2)."""
+    return stance_path(cmd, neutral, np.array([-stance_time / 2]))[..., 0, :]
+
+
+def hermite(p0, v0, p1, v1, duration: float, s: np.ndarray) -> np.ndarray:
+    """Cubic Hermite (n, 2) from (p0, v0) to (p1, v1) over `duration` [s] at fractions s (n,)."""
+    s = s[:, None]
+    h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
+    h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
+    return h00 * p0 + h10 * duration * v0 + h01 * p1 + h11 * duration * v1
+
+
+def hermite_velocity(p0, v0, p1, v1, duration: float, s: np.ndarray) -> np.ndarray:
+    """Time derivative (n, 2) [m/s] of `hermite` at fractions s (n,)."""
+    s = s[:, None]
+    d00, d10 = 6 * s**2 - 6 * s, 3 * s**2 - 4 * s + 1
+    d01, d11 = -6 * s**2 + 6 * s, 3 * s**2 - 2 * s
+    return (d00 * p0 + d01 * p1) / duration + d10 * v0 + d11 * v1
+
+
+@dataclasses.dataclass
+class GaitPlanner:
+    """Plans body-frame foot targets, chunk by chunk, for a gait, period and step height.
+
+    Attributes:
+        gait: Which legs swing when.
+        period: Gait cycle [s].
+        step_height: Swing lift [m].
+        neutral: Neutral foot centres (6, 3) in the body frame [m]; z is the stance height.
+        dt: Control period [s]; targets are produced for every multiple of dt.
+        start_time: Gait clock starts here [s] (before it, every foot holds its neutral point).
+    """
+
+    gait: Gait
+    period: float
+    step_height: float
+    neutral: np.ndarray
+    dt: float
+    start_time: float = 0.0
+
+    def __post_init__(self) -> None:
+        self.neutral = np.asarray(self.neutral, dtype=float).copy()
+        self.offsets = np.array(self.gait.offsets)
+        self.stance_time = self.gait.duty * self.period
+        self.swing_time = (1 - self.gait.duty) * self.period
+        # State of every foot target at the planner's time: position (6, 3), planar velocity (6, 2).
+        self.time = 0.0
+        self.pos = self.neutral.copy()
+        self.vel = np.zeros((6, 2))
+        # At most one phase event per leg inside a chunk.
+        self.max_chunk = max(1, int(min(self.stance_time, self.swing_time) / 2 / self.dt))
+
+    def phase(self, t: np.ndarray | float) -> np.ndarray:
+        """Gait phase in [0, 1) of each leg (..., 6); stance while phase < duty. Before start_time: stance."""
+        cycles = (np.asarray(t, dtype=float) - self.start_time) / self.period
+        return np.mod(np.asarray(cycles)[..., None] + self.offsets, 1.0)
+
+    def in_stance(self, t: np.ndarray | float) -> np.ndarray:
+        """True where the plan has the foot on the ground (..., 6)."""
+        t = np.asarray(t, dtype=float)
+        return (self.phase(t) < self.gait.duty) | (t < self.start_time)[..., None]
+
+    def plan(self, cmd: Command, n_steps: int) -> np.ndarray:
+        """Targets (n_steps + 1, 6, 3) at time, time + dt, ..., time + n_steps dt; advances the planner by n_steps dt.
+
+        Row 0 equals the last row of the previous chunk (continuity); n_steps <= max_chunk.
+        """
+        if not 1 <= n_steps <= self.max_chunk:
+            raise ValueError(f"a chunk must have 1 to {self.max_chunk} steps; got {n_steps}")
+        before = round((self.start_time - self.time) / self.dt)
+        if 0 < before < n_steps:  # the gait clock starts inside: stand still up to it, then walk
+            standing = self.plan(Command(), before)
+            return np.concatenate([standing, self.plan(cmd, n_steps - before)[1:]])
+        times = self.time + self.dt * np.arange(n_steps + 1)  # (n+1,)
+        out = np.repeat(self.pos[None], n_steps + 1, axis=0)  # (n+1, 6, 3)
+        if times[-1] <= self.start_time:  # standing still before the gait starts
+            self.time = float(times[-1])
+            return out
+        duty, period = self.gait.duty, self.period
+        cycles = (times - self.start_time) / period  # (n+1,)
+        new_vel = np.zeros((6, 2))
+        for leg in range(6):
+            phase = cycles + self.offsets[leg]
+            started = times >= self.start_time
+            frac = np.mod(phase, 1.0)
+            stance = (frac < duty) | ~started
+            p0, v0 = self.pos[leg, :2], self.vel[leg]
+            xy = np.empty((n_steps + 1, 2))
+            z = np.full(n_steps + 1, self.neutral[leg, 2])
+            z[0] = self.pos[leg, 2]
+            # Row 0 is the current state; rows after a mode change restart from the state at the event.
+            k = 1
+            xy[0] = p0
+            t_state, p_state, v_state = times[0], p0, v0
+            mode = bool(stance[0])
+            while k <= n_steps:
+                end = k
+                while end <= n_steps and bool(stance[end]) == mode:
+                    end += 1
+                rows = slice(k, end)
+                if mode:  # stance: ground-fixed point, from the state at t_state
+                    xy[rows] = stance_path(cmd, p_state, times[rows] - t_state)
+                else:  # swing: Hermite from the current state to the touchdown point
+                    touchdown_t = self._next_touchdown(leg, t_state)
+                    target = touchdown_point(cmd, self.neutral[leg, :2], self.stance_time)
+                    target_v = stance_velocity(cmd, target)
+                    duration = touchdown_t - t_state
+                    s = (times[rows] - t_state) / duration
+                    xy[rows] = hermite(p_state, v_state, target, target_v, duration, s)
+                    # A swing under way when the gait clock starts is lifted over what is left of it.
+                    lift_t = max(touchdown_t - self.swing_time, self.start_time)
+                    swing_s = (times[rows] - lift_t) / (touchdown_t - lift_t)
+                    z[rows] += self.step_height * np.sin(np.pi * np.clip(swing_s, 0.0, 1.0)) ** 2
+                if end <= n_steps:  # a phase event between end-1 and end: state at the event time
+                    t_event = self._event_time(leg, times[end - 1], times[end])
+                    p_state, v_state = self._state_at(cmd, leg, mode, t_state, p_state, v_state, t_event)
+                    t_state, mode = t_event, not mode
+                k = end
+            # State at the chunk's last time, for the next chunk.
+            p_last, v_last = self._state_at(cmd, leg, mode, t_state, p_state, v_state, times[-1])
+            xy[-1] = p_last
+            new_vel[leg] = v_last
+            out[:, leg, :2] = xy
+            out[:, leg, 2] = z
+        self.pos = out[-1].copy()
+        self.vel = new_vel
+        self.time = float(times[-1])
+        return out
+
+    def _next_touchdown(self, leg: int, t: float) -> float:
+        """First time > t at which the leg's phase wraps to 0 (touchdown)."""
+        cycles = (t - self.start_time) / self.period + self.offsets[leg]
+        return self.start_time + (math.floor(cycles + 1e-12) + 1 - self.offsets[leg]) * self.period
+
+    def _event_time(self, leg: int, t0: float, t1: float) -> float:
+        """Time of the lift-off (phase = duty) or touchdown (phase = 0) between t0 and t1."""
+        base = (t0 - self.start_time) / self.period + self.offsets[leg]
+        for boundary in (self.gait.duty, 1.0):
+            k = math.floor(base - boundary) + 1  # next crossing of phase == boundary (mod 1)
+            t_cross = self.start_time + (k + boundary - self.offsets[leg]) * self.period
+            if t0 < t_cross <= t1 + 1e-12:
+                return t_cross
+        return max(t0, self.start_time)  # the gait clock starting inside the step
+
+    def _state_at(self, cmd, leg, stance, t_state, p_state, v_state, t):
+        """(position, velocity) of the leg's target at t, continuing the segment that started at t_state."""
+        if stance:
+            p = stance_path(cmd, p_state, np.array([t - t_state]))[0]
+            return p, stance_velocity(cmd, p)
+        touchdown_t = self._next_touchdown(leg, t_state)
+        duration = touchdown_t - t_state
+        target = touchdown_point(cmd, self.neutral[leg, :2], self.stance_time)
+        target_v = stance_velocity(cmd, target)
+        s = np.array([(t - t_state) / duration])
+        p = hermite(p_state, v_state, target, target_v, duration, s)[0]
+        return p, hermite_velocity(p_state, v_state, target, target_v, duration, s)[0]
+
+
+def check_gait_name(name: str) -> Gait:
+    """The gait called `name`."""
+    try:
+        return GAITS[name]
+    except KeyError:
+        raise UsageError(f"unknown gait '{name}'; known: {', '.join(GAITS)}") from None
+
+
+__all__ = ["GAITS", "LEGS", "Command", "Gait", "GaitPlanner"]

@@ -1,0 +1,588 @@
+"""The walking hexabot (report 000): six DH legs on a free body, tripod/ripple/wave gaits on contact physics."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from hexabot_sim import models
+from hexabot_sim.control.gait import GAITS, Command, Gait, GaitPlanner
+from hexabot_sim.control.hexabot import HexabotController, WalkSettings
+from hexabot_sim.control.resolved_rate import ResolvedRateGains
+from hexabot_sim.kinematics import hexabot as hx
+from hexabot_sim.params import param
+from hexabot_sim.scenarios.base import Metric, Progress, ScenarioResult
+from hexabot_sim.simulate import simulate, step_count
+
+INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")
+LAYOUT = hx.DEFAULT_LAYOUT
+SETTLE_TIME: float = 0.5  # [s] standing on the neutral stance before the gait clock starts
+SPEED_MARGIN: float = 0.9  # planned joint speeds must stay below this fraction of max_joint_speed
+LOADED_FRACTION: float = 0.05  # a foot counts as loaded above this fraction of the robot's weight
+TORQUE_LIMIT: float = 1.5  # [N m] the joints' actuatorfrcrange (models/hexabot.xml)
+FALL_TILT_DEG: float = 45.0  # body tilt beyond which the robot has fallen over
+
+
+@dataclasses.dataclass(frozen=True)
+class HexabotParams:
+    """Parameters of the walking-hexabot scenarios (body frame: x forward, y left, z up)."""
+
+    gait: str = param("tripod", "", "which legs swing when", choices=tuple(GAITS))
+    vx: float = param(0.1, "m/s", "commanded forward speed", ge=-1.0, le=1.0, typo=("mm/s", 1e-3))
+    vy: float = param(0.0, "m/s", "commanded sideways speed (left positive)", ge=-1.0, le=1.0, typo=("mm/s", 1e-3))
+    yaw_rate: float = param(0.0, "rad/s", "commanded turning rate (counter-clockwise positive)", ge=-3.0, le=3.0)
+    period: float = param(1.0, "s", "gait cycle: every leg swings once per period", ge=0.2, le=10.0)
+    duty: float = param(0.0, "1", "stance fraction of the cycle; 0 = the gait's own (1/2, 2/3, 5/6)", ge=0.0, lt=1.0)
+    step_height: float = param(0.03, "m", "foot lift at mid-swing", ge=0.002, le=0.1, typo=("mm", 1e-3))
+    stand_height: float = param(
+        0.09, "m", "foot depth below the hips while standing (body height - foot radius)", ge=0.02, le=0.19,
+        typo=("mm", 1e-3),
+    )  # fmt: skip
+    friction: float = param(1.0, "1", "foot-floor friction coefficient", ge=0.05, le=3.0)
+    heading_hold: str = param("off", "", "correct the yaw rate from the IMU's heading", choices=("off", "on"))
+    trim_error_deg: float = param(0.0, "deg", "servo zero errors, uniform in +-this (seeded)", ge=0.0, le=10.0)
+    com_offset: float = param(
+        0.0, "m", "centre-of-mass offset of the body, in a seeded direction", ge=0.0, le=0.05, typo=("mm", 1e-3)
+    )
+    friction_spread: float = param(0.0, "1", "foot friction varies by +-this fraction (seeded)", ge=0.0, le=0.9)
+    seed: int = param(0, "1", "random seed of the perturbations", ge=0, le=2**32 - 1)
+    max_joint_speed: float = param(
+        10.0, "rad/s", "joint speed limit (a standard digital hobby servo: 0.1 s/60 deg)", gt=0.0, le=50.0
+    )
+    task_gain: float = param(50.0, "1/s", "K: feedback on each foot's position error", ge=0.0, le=200.0)
+    duration: float = param(20.0, "s", "simulated time", gt=0.0, le=3600.0)
+    timestep: float = param(
+        0.002, "s", "physics and control step (the feet's contact time constant is 6 ms)", ge=1e-4, le=0.002
+    )
+    integrator: str = param("implicitfast", "", "MuJoCo integrator", choices=INTEGRATORS)
+
+    def __post_init__(self) -> None:
+        if self.duty and not self.gait_duty_range()[0] <= self.duty < 1.0:
+            lo = self.gait_duty_range()[0]
+            raise ValueError(
+                f"parameter 'duty' for the {self.gait} gait must be {lo:.3g} to < 1 (or 0); got {self.duty}"
+            )
+        if self.duration <= SETTLE_TIME + self.period:
+            raise ValueError(
+                "parameter 'duration' must exceed the settling time plus one period "
+                f"({SETTLE_TIME + self.period:g} s); "
+                f"got {self.duration}"
+            )
+        problem = feasibility(self)
+        if problem:
+            raise ValueError(problem)
+
+    def gait_duty_range(self) -> tuple[float, float]:
+        """Smallest duty that keeps the robot statically supported with this gait's phase pattern."""
+        base = GAITS[self.gait].duty
+        return base, 1.0
+
+    def the_gait(self) -> Gait:
+        g = GAITS[self.gait]
+        return g if not self.duty else dataclasses.replace(g, duty=self.duty)
+
+    def command(self) -> Command:
+        return Command(self.vx, self.vy, self.yaw_rate)
+
+
+def neutral(p: HexabotParams) -> np.ndarray:
+    """Neutral foot centres (6, 3) in the body frame for the run's stand height."""
+    layout = dataclasses.replace(LAYOUT, stand_height=p.stand_height)
+    return layout.neutral_feet_body()
+
+
+def _plan_cycle(p: HexabotParams, cmd: Command, samples: int = 240) -> tuple[np.ndarray, float]:
+    """Targets (n, 6, 3) in the hip frames over two steady gait cycles, and their time step."""
+    dt = p.period / samples
+    planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), dt)
+    chunks = [planner.plan(cmd, planner.max_chunk)]
+    while planner.time < 3 * p.period - 1e-9:
+        chunks.append(planner.plan(cmd, planner.max_chunk)[1:])
+    body = np.concatenate(chunks)[int(samples * 1.0) :]  # drop the first cycle (start-up from neutral)
+    hip = np.einsum("lji,klj->kli", LAYOUT.hip_rotations(), body - LAYOUT.hip_positions())
+    return hip, dt
+
+
+def _cycle_problem(p: HexabotParams, cmd: Command) -> str:
+    """'' if every leg can follow the planned cycle, else why not (reach, joint range or joint speed)."""
+    hip, dt = _plan_cycle(p, cmd)
+    q, ok = hx.ik_hip_batch(LAYOUT, hip)
+    if not ok.all():
+        leg = hx.LEGS[int(np.argwhere(~ok)[0][1])]
+        return f"foot {leg} would leave its reachable workspace or joint ranges"
+    speed = np.abs(np.diff(q, axis=0)).max() / dt
+    if speed > SPEED_MARGIN * p.max_joint_speed:
+        return f"joints would turn at {speed:.3g} rad/s, above {SPEED_MARGIN:g} x max_joint_speed"
+    return ""
+
+
+def feasibility(p: HexabotParams) -> str:
+    """'' if the legs can deliver the command, else a one-line reason with the largest feasible command."""
+    if not math.isfinite(p.vx + p.vy + p.yaw_rate):
+        return "vx, vy and yaw_rate must be finite"
+    standing = _cycle_problem(p, Command())
+    if standing:
+        return (
+            f"even stepping in place is infeasible with the {p.gait} gait at period {p.period:g} s "
+            f"(stand_height {p.stand_height:g} m, step_height {p.step_height:g} m): {standing}; "
+            "lengthen 'period' or lower 'step_height'"
+        )
+    cmd = p.command()
+    problem = _cycle_problem(p, cmd)
+    if not problem:
+        return ""
+    lo, hi = 0.0, 1.0  # bisect the largest feasible fraction of the command
+    for _ in range(30):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if not _cycle_problem(p, cmd.scaled(mid)) else (lo, mid)
+    best = cmd.scaled(lo)
+    parts = [
+        f"{name} = {value:.3g}"
+        for name, value in (("vx", best.vx), ("vy", best.vy), ("yaw_rate", best.yaw_rate))
+        if value
+    ]
+    stride = math.hypot(p.vx, p.vy) * p.the_gait().duty * p.period
+    return (
+        f"the legs cannot deliver this command at period {p.period:g} s (stride {stride:.3g} m): {problem}; "
+        f"the largest feasible in this direction is {', '.join(parts) or 'standing still'} (or shorten 'period')"
+    )
+
+
+def _perturbations(p: HexabotParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Seeded servo trims (18,) [rad], body CoM offset (3,) [m] and per-foot friction factors (6,)."""
+    rng = np.random.default_rng(p.seed)
+    trims = rng.uniform(-1.0, 1.0, 18) * math.radians(p.trim_error_deg)
+    angle = rng.uniform(0.0, 2 * math.pi)
+    com = np.array([math.cos(angle), math.sin(angle), 0.0]) * p.com_offset
+    friction = 1.0 + rng.uniform(-1.0, 1.0, 6) * p.friction_spread
+    return trims, com, friction
+
+
+def build_xml(p: HexabotParams) -> str:
+    """The hexabot scene with the run's options, stance, friction and perturbations written in."""
+    root = models.load_tree("hexabot_scene")
+    models.find(root, "option").attrib.update(timestep=models.fmt(p.timestep), integrator=p.integrator)
+    _, com, friction = _perturbations(p)
+    models.find(root, "inertial", None) if False else None
+    torso = models.find(root, "body", "torso")
+    torso.find("inertial").set("pos", models.fmt(com))
+    feet = neutral(p)
+    q0, _ = hx.ik_hip_batch(LAYOUT, hx.body_to_hip(LAYOUT, feet))
+    z0 = p.stand_height + LAYOUT.foot_radius
+    torso.set("pos", models.fmt([0.0, 0.0, z0]))
+    for leg, factor in zip(hx.LEGS, friction, strict=True):
+        foot = models.find(root, "geom", f"{leg}_foot")
+        foot.set("friction", models.fmt([p.friction * factor, 0.005, 0.0001]))
+    key = models.find(root, "key", "home")
+    key.set("qpos", models.fmt([0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0, *q0.ravel()]))
+    key.set("ctrl", models.fmt([*q0.ravel(), *np.zeros(18)]))
+    return models.to_xml(root)
+
+
+def run(name: str, p: HexabotParams, progress: Progress | None = None) -> ScenarioResult:
+    """Stands the robot on its neutral stance, then walks with the command and records everything."""
+    xml = build_xml(p)
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    trims, _, _ = _perturbations(p)
+    planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), p.timestep, start_time=SETTLE_TIME)
+    settings = WalkSettings(
+        p.command(), settle_time=SETTLE_TIME, ramp_time=p.period, heading_hold=p.heading_hold == "on",
+        trims=tuple(trims.tolist()),
+    )  # fmt: skip
+    gains = ResolvedRateGains(p.task_gain, 0.01, 0.01, p.max_joint_speed, 200.0)
+    controller = HexabotController(
+        model, data, LAYOUT, planner, gains, settings, model.key("home").qpos[7:].reshape(6, 3)
+    )
+    n_steps = step_count(p.duration, p.timestep)
+    started = time.perf_counter()
+    traj = simulate(model, data, n_steps, controller=controller, progress=progress, record_ctrl=True)
+    wall = time.perf_counter() - started
+    return analyse(name, p, model, xml, traj, controller, wall)
+
+
+# ---------------------------------------------------------------------------------------------
+# Analysis: everything below recomputes from the recorded state (t, qpos, qvel, ctrl) and model.
+
+
+def rpy_from_quat(quat: np.ndarray) -> np.ndarray:
+    """Roll, pitch, yaw (..., 3) [rad] (z-y-x Euler angles) of unit quaternions (..., 4) (w, x, y, z)."""
+    w, x, y, z = (quat[..., i] for i in range(4))
+    roll = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+    pitch = np.arcsin(np.clip(2 * (w * y - z * x), -1.0, 1.0))
+    yaw = np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return np.stack([roll, pitch, yaw], axis=-1)
+
+
+@dataclasses.dataclass(frozen=True)
+class Contacts:
+    """Per recorded row: foot loads, contact-point slip, joint torques, body-ground contact."""
+
+    load: np.ndarray  # (n, 6) normal force of each foot [N]
+    slip: np.ndarray  # (n, 6) horizontal speed of the foot's material point at its contact [m/s]
+    point: np.ndarray  # (n, 6, 3) contact point [m] (NaN where the foot is off the ground)
+    torque: np.ndarray  # (n, 18) joint actuator torque [N m]
+    body_contact: np.ndarray  # (n,) the plate touches the ground
+
+
+def replay_contacts(
+    model: mujoco.MjModel, t: np.ndarray, qpos: np.ndarray, qvel: np.ndarray, ctrl: np.ndarray
+) -> Contacts:
+    """Recomputes contacts, slip and torques at every recorded row with mj_forward (the recorded state in)."""
+    data = mujoco.MjData(model)
+    n = len(t)
+    foot_geoms = {model.geom(f"{leg}_foot").id: i for i, leg in enumerate(hx.LEGS)}
+    tibia = [model.body(f"{leg}_tibia").id for leg in hx.LEGS]
+    torso_geom = model.geom("torso").id
+    load = np.zeros((n, 6))
+    slip = np.zeros((n, 6))
+    point = np.full((n, 6, 3), np.nan)
+    torque = np.empty((n, 18))
+    body_contact = np.zeros(n, dtype=bool)
+    force = np.zeros(6)
+    jacp = np.zeros((3, model.nv))  # (3, nv)
+    for k in range(n):
+        data.qpos[:], data.qvel[:], data.ctrl[:] = qpos[k], qvel[k], ctrl[min(k + 1, n - 1)]
+        data.time = t[k]
+        mujoco.mj_forward(model, data)
+        torque[k] = data.qfrc_actuator[6:24]
+        for c in range(data.ncon):
+            contact = data.contact[c]
+            leg = foot_geoms.get(contact.geom1, foot_geoms.get(contact.geom2))
+            if contact.geom1 == torso_geom or contact.geom2 == torso_geom:
+                body_contact[k] = True
+            if leg is None:
+                continue
+            mujoco.mj_contactForce(model, data, c, force)
+            load[k, leg] += force[0]
+            # Velocity of the foot's material point at the contact: the tibia body's Jacobian at that point.
+            mujoco.mj_jac(model, data, jacp, None, contact.pos, tibia[leg])
+            v = jacp @ data.qvel
+            slip[k, leg] = math.hypot(v[0], v[1])
+            point[k, leg] = contact.pos
+    return Contacts(load=load, slip=slip, point=point, torque=torque, body_contact=body_contact)
+
+
+def steady_window(p: HexabotParams, t: np.ndarray) -> np.ndarray:
+    """Rows of the steady walk: after settling, the ramp and one more period, whole cycles to the end."""
+    start = SETTLE_TIME + 2 * p.period
+    cycles = math.floor((t[-1] - start) / p.period + 1e-9)
+    if cycles < 1:  # a short run: whatever follows the ramp
+        start, end = SETTLE_TIME + p.period, t[-1]
+    else:
+        end = start + cycles * p.period
+    return (t >= start - 1e-9) & (t <= end + 1e-9)
+
+
+def _relative_error(measured: float, commanded: float) -> float | None:
+    return None if commanded == 0 else (measured - commanded) / abs(commanded)
+
+
+def walking_metrics(
+    p: HexabotParams, t: np.ndarray, qpos: np.ndarray, qvel: np.ndarray, contacts: Contacts, total_mass: float
+) -> dict[str, Metric]:
+    """The walking metrics of a run, from its recorded state and contacts."""
+    window = steady_window(p, t)
+    dt = p.timestep
+    rpy = rpy_from_quat(qpos[:, 3:7])
+    yaw = np.unwrap(rpy[:, 2])
+    w = np.flatnonzero(window)
+    i0, i1 = w[0], w[-1]
+    duration = t[i1] - t[i0]
+    # Body-frame velocity: world displacement over the window, rotated into the mean heading... per step.
+    vel_world = np.diff(qpos[:, :2], axis=0) / np.diff(t)[:, None]  # (n-1, 2)
+    mid_yaw = 0.5 * (yaw[1:] + yaw[:-1])
+    c, s = np.cos(mid_yaw), np.sin(mid_yaw)
+    v_body = np.stack([c * vel_world[:, 0] + s * vel_world[:, 1], -s * vel_world[:, 0] + c * vel_world[:, 1]], -1)
+    steps = slice(i0, i1)
+    mean_vx, mean_vy = (float(v) for v in v_body[steps].mean(axis=0))
+    mean_yaw_rate = float((yaw[i1] - yaw[i0]) / duration)
+    # Drift: along / across the commanded direction in the world, over the window.
+    disp = qpos[i1, :2] - qpos[i0, :2]
+    distance = float(np.hypot(*disp))
+    speed_cmd = math.hypot(p.vx, p.vy)
+    if speed_cmd > 0 and p.yaw_rate == 0:
+        heading0 = yaw[0]
+        along = np.array([p.vx, p.vy]) / speed_cmd
+        along = np.array([math.cos(heading0) * along[0] - math.sin(heading0) * along[1],
+                          math.sin(heading0) * along[0] + math.cos(heading0) * along[1]])  # fmt: skip
+        across = np.array([-along[1], along[0]])
+        path = qpos[i0 : i1 + 1, :2] - qpos[i0, :2]
+        travelled = float(path[-1] @ along)
+        lateral = float(path[-1] @ across)
+        lateral_drift = lateral / travelled if travelled > 0 else None
+        heading_drift = float(np.degrees(yaw[i1] - yaw[i0]) / travelled) if travelled > 0 else None
+    else:
+        lateral_drift = heading_drift = None
+    # Height and attitude.
+    height_cmd = p.stand_height + LAYOUT.foot_radius
+    z = qpos[window, 2]
+    roll, pitch = np.degrees(rpy[window, 0]), np.degrees(rpy[window, 1])
+    # Slip of loaded feet, per stance.
+    loaded = contacts.load > LOADED_FRACTION * total_mass * 9.81 / 6
+    slip_loaded = contacts.slip[window][loaded[window]]
+    slip_distance = float((contacts.slip[window] * loaded[window]).sum() * dt)
+    touchdowns = int((np.diff(loaded[window].astype(int), axis=0) == 1).sum())
+    # Energy: positive and negative joint work both cost (hobby servos do not recover energy).
+    power = np.abs(contacts.torque * qvel[:, 6:24]).sum(axis=1)
+    work = float(power[window].sum() * dt)
+    tilt = np.degrees(np.arccos(np.clip(1 - 2 * (qpos[:, 4] ** 2 + qpos[:, 5] ** 2), -1.0, 1.0)))
+    fell = bool(contacts.body_contact.any() or (tilt > FALL_TILT_DEG).any())
+    peak_torque = float(np.abs(contacts.torque).max())
+    return {
+        "mean_vx": Metric(mean_vx, "m/s", "mean body-frame forward speed over the steady walk"),
+        "mean_vy": Metric(mean_vy, "m/s", "mean body-frame sideways speed over the steady walk"),
+        "mean_yaw_rate": Metric(mean_yaw_rate, "rad/s", "mean turning rate over the steady walk"),
+        "vx_error": Metric(_relative_error(mean_vx, p.vx), "1", "(mean_vx - vx) / |vx| (null when vx = 0)"),
+        "vy_error": Metric(_relative_error(mean_vy, p.vy), "1", "(mean_vy - vy) / |vy| (null when vy = 0)"),
+        "yaw_rate_error": Metric(
+            _relative_error(mean_yaw_rate, p.yaw_rate), "1", "(mean_yaw_rate - yaw_rate) / |yaw_rate| (null when 0)"
+        ),
+        "speed_abs_error": Metric(
+            float(math.hypot(mean_vx - p.vx, mean_vy - p.vy)), "m/s", "|mean planar velocity - command|"
+        ),
+        "distance": Metric(distance, "m", "straight-line distance covered over the steady walk"),
+        "lateral_drift": Metric(
+            None if lateral_drift is None else lateral_drift * 1000,
+            "mm/m",
+            "sideways deviation from the commanded direction per metre travelled (straight walks)",
+        ),
+        "heading_drift": Metric(heading_drift, "deg/m", "heading change per metre travelled (straight walks)"),
+        "body_height_mean": Metric(float(z.mean()), "m", "mean body height over the steady walk"),
+        "body_height_sag": Metric(float(height_cmd - z.mean()), "m", "planned body height minus the mean height"),
+        "body_height_ptp": Metric(float(np.ptp(z)), "m", "peak-to-peak body height over the steady walk"),
+        "roll_ptp": Metric(float(np.ptp(roll)), "deg", "peak-to-peak body roll over the steady walk"),
+        "pitch_ptp": Metric(float(np.ptp(pitch)), "deg", "peak-to-peak body pitch over the steady walk"),
+        "slip_mean": Metric(
+            float(slip_loaded.mean()) if slip_loaded.size else 0.0,
+            "m/s",
+            "mean speed of the loaded feet's contact points (material point of the foot)",
+        ),
+        "slip_p95": Metric(
+            float(np.percentile(slip_loaded, 95)) if slip_loaded.size else 0.0,
+            "m/s",
+            "95th percentile of the loaded feet's contact-point speed",
+        ),
+        "slip_per_stance": Metric(
+            slip_distance / touchdowns * 1000 if touchdowns else 0.0, "mm", "contact-point sliding distance per stance"
+        ),
+        "cost_of_transport": Metric(
+            work / (total_mass * 9.81 * distance) if distance > 1e-6 else None,
+            "1",
+            "joint work |tau dq| / (m g distance) over the steady walk",
+        ),
+        "peak_joint_torque": Metric(peak_torque, "N*m", "largest joint torque of the run"),
+        "torque_limit_fraction": Metric(
+            peak_torque / TORQUE_LIMIT, "1", f"peak_joint_torque / the {TORQUE_LIMIT} N*m limit"
+        ),
+        "fell": Metric(fell, "", f"the plate touched the ground or tilted beyond {FALL_TILT_DEG:g} deg"),
+    }
+
+
+def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
+    """Columns, metrics and figure data of a walk."""
+    t, qpos, qvel, ctrl = traj.t, traj.qpos, traj.qvel, traj.ctrl
+    contacts = replay_contacts(model, t, qpos, qvel, ctrl)
+    total_mass = float(model.body_subtreemass[model.body("torso").id])
+    metrics = walking_metrics(p, t, qpos, qvel, contacts, total_mass)
+    gait = p.the_gait()
+    metrics |= {
+        "stride": Metric(math.hypot(p.vx, p.vy) * gait.duty * p.period, "m", "body travel per stance at the command"),
+        "duty": Metric(gait.duty, "1", "stance fraction of the gait cycle"),
+        "real_time_factor": Metric(t[-1] / wall, "1", "simulated time / wall time of the simulation loop"),
+    }
+    rpy = rpy_from_quat(qpos[:, 3:7])
+    # Command in force at every row (the controller re-plans it every chunk).
+    plan_t = np.array([c[0] for c in controller.commands])
+    plan = np.array([c[1:] for c in controller.commands])
+    idx = np.clip(np.searchsorted(plan_t, t, side="right") - 1, 0, len(plan_t) - 1)
+    c, s = np.cos(rpy[:, 2]), np.sin(rpy[:, 2])
+    vx_b = c * qvel[:, 0] + s * qvel[:, 1]
+    vy_b = -s * qvel[:, 0] + c * qvel[:, 1]
+    columns: dict[str, np.ndarray] = {"t": t, "x": qpos[:, 0], "y": qpos[:, 1], "z": qpos[:, 2]}
+    columns |= {"roll": rpy[:, 0], "pitch": rpy[:, 1], "yaw": np.unwrap(rpy[:, 2])}
+    columns |= {"vx_body": vx_b, "vy_body": vy_b, "yaw_rate": qvel[:, 5]}
+    columns |= {"cmd_vx": plan[idx, 0], "cmd_vy": plan[idx, 1], "cmd_yaw_rate": plan[idx, 2]}
+    loaded = contacts.load > LOADED_FRACTION * total_mass * 9.81 / 6
+    for i, leg in enumerate(hx.LEGS):
+        columns[f"contact_{leg}"] = loaded[:, i].astype(float)
+    for i, leg in enumerate(hx.LEGS):
+        for j, joint in enumerate(hx.JOINTS):
+            columns[f"q_{leg}_{joint}"] = qpos[:, 7 + 3 * i + j]
+    units = {"t": "s", "x": "m", "y": "m", "z": "m", "roll": "rad", "pitch": "rad", "yaw": "rad"}
+    units |= {"vx_body": "m/s", "vy_body": "m/s", "yaw_rate": "rad/s", "cmd_vx": "m/s", "cmd_vy": "m/s"}
+    units |= {"cmd_yaw_rate": "rad/s"}
+    units |= {k: ("1" if k.startswith("contact_") else "rad") for k in columns if k not in units}
+    trail = qpos[:, :3].copy()
+    trail[:, 2] = 0.002  # the body's path drawn on the floor
+    period_rows = max(1, round(p.period / p.timestep))
+    speed = np.hypot(_moving_mean(vx_b, period_rows), _moving_mean(vy_b, period_rows))
+    overlay = [
+        lambda k: (
+            f"{p.gait} gait, speed {speed[k] * 1000:.0f} mm/s (command {math.hypot(*plan[idx[k], :2]) * 1000:.0f})"
+        ),
+        lambda k: "feet down: " + " ".join(leg for i, leg in enumerate(hx.LEGS) if loaded[k, i]),
+    ]
+    return ScenarioResult(
+        scenario=name,
+        params=p,
+        model=model,
+        model_xml=xml,
+        trajectory=traj,
+        columns=columns,
+        column_units=units,
+        metrics=metrics,
+        summary=["mean_vx", "mean_vy", "mean_yaw_rate", "lateral_drift", "heading_drift", "slip_per_stance", "fell"],
+        camera="track",
+        figures="hexabot",
+        trail=trail,
+        overlay=overlay,
+        extras={"contacts": contacts, "planned_stance": controller.planner.in_stance(t), "window": steady_window(p, t)},
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Figures.
+
+LEG_COLOURS = {
+    "lf": "tab:blue",
+    "lm": "tab:orange",
+    "lr": "tab:green",
+    "rf": "tab:red",
+    "rm": "tab:purple",
+    "rr": "tab:brown",
+}
+
+
+def _title(result: ScenarioResult, text: str) -> str:
+    p = result.params
+    return (
+        f"{result.scenario}: {text}\n{p.gait} gait, period {p.period:g} s, command vx {p.vx:g} m/s, "
+        f"vy {p.vy:g} m/s, yaw rate {p.yaw_rate:g} rad/s"
+    )
+
+
+def _moving_mean(values: np.ndarray, n: int) -> np.ndarray:
+    """Centred moving mean over n samples (edges: shorter windows)."""
+    n = max(1, min(n, len(values)))
+    kernel = np.ones(n)
+    return np.convolve(values, kernel, "same") / np.convolve(np.ones_like(values), kernel, "same")
+
+
+def figures(result: ScenarioResult) -> dict[str, Any]:
+    """Path with footprints, gait diagram, commanded vs achieved velocity, body height and attitude, foot slip."""
+    from hexabot_sim import plots
+
+    p, c = result.params, result.columns
+    contacts: Contacts = result.extras["contacts"]
+    t = c["t"]
+    out: dict[str, Any] = {}
+
+    # Path seen from above, with the footprints (where each foot touched down) and the heading.
+    fig, ax = plots._figure(figsize=(8, 7))
+    ax.plot(c["x"], c["y"], color="k", lw=1.5, label="body (plate centre)")
+    loaded = np.stack([c[f"contact_{leg}"] for leg in hx.LEGS], axis=1) > 0.5
+    for i, leg in enumerate(hx.LEGS):
+        down = np.flatnonzero(np.diff(loaded[:, i].astype(int)) == 1) + 1
+        pts = contacts.point[down, i]
+        ax.plot(pts[:, 0], pts[:, 1], "o", ms=3.5, mfc="none", color=LEG_COLOURS[leg], label=f"{leg} touchdowns")
+    every = max(1, round(p.period / p.timestep))
+    heading = c["yaw"][::every]
+    ax.quiver(
+        c["x"][::every], c["y"][::every], np.cos(heading), np.sin(heading),
+        angles="xy", scale_units="xy", scale=12, width=0.004, color="0.4", label="heading (every period)",
+    )  # fmt: skip
+    ax.plot(c["x"][0], c["y"][0], "g^", ms=9, label="start")
+    ax.plot(c["x"][-1], c["y"][-1], "rs", ms=8, label="end")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(True, alpha=0.3)
+    plots._legend_right(ax)
+    fig.suptitle(_title(result, "path seen from above"), fontsize=plots.TITLE_FONTSIZE)
+    out["path"] = fig
+
+    # Gait diagram: measured stance (loaded foot) as bars, the plan as thin lines, over four cycles.
+    planned = result.extras["planned_stance"]
+    start = SETTLE_TIME + 2 * p.period
+    show = (t >= start) & (t <= start + 4 * p.period)
+    if not show.any():
+        show = t >= 0
+    fig, ax = plots._figure(figsize=(9, 4.5))
+    for i, leg in enumerate(hx.LEGS):
+        y = len(hx.LEGS) - 1 - i
+        ts = t[show]
+        ax.fill_between(ts, y - 0.35, y + 0.35, where=loaded[show, i], step="post", color=LEG_COLOURS[leg], alpha=0.8,
+                        label="stance (foot loaded)" if i == 0 else None)  # fmt: skip
+        ax.fill_between(ts, y + 0.38, y + 0.45, where=planned[show, i], step="post", color="k",
+                        label="planned stance" if i == 0 else None)  # fmt: skip
+    ax.set_yticks(range(len(hx.LEGS)), list(reversed(hx.LEGS)))
+    ax.set_xlabel("t [s]")
+    ax.set_xlim(t[show][0], t[show][-1])
+    plots._legend_above(ax, ncol=2)
+    fig.suptitle(_title(result, "gait diagram (bars: measured stance; black: plan)"), fontsize=plots.TITLE_FONTSIZE)
+    out["gait_diagram"] = fig
+
+    # Commanded vs achieved body velocity (body frame), raw and averaged over one gait period.
+    fig, axes = plots._figure(3, 1, figsize=(9, 8), sharex=True)
+    n = max(1, round(p.period / p.timestep))
+    for ax, key, cmd, label, unit in (
+        (axes[0], "vx_body", "cmd_vx", "forward speed", "m/s"),
+        (axes[1], "vy_body", "cmd_vy", "sideways speed", "m/s"),
+        (axes[2], "yaw_rate", "cmd_yaw_rate", "yaw rate", "rad/s"),
+    ):
+        ax.plot(t, c[key], color="0.75", lw=0.6, label="measured")
+        ax.plot(t, _moving_mean(c[key], n), color="tab:blue", lw=1.5, label="measured, mean over one period")
+        ax.plot(t, c[cmd], **plots.TARGET_STYLE, label="command (with ramp and heading hold)")
+        ax.set_ylabel(f"{label} [{unit}]")
+        ax.grid(True, alpha=0.3)
+    plots._legend_above(axes[0])
+    axes[-1].set_xlabel("t [s]")
+    fig.suptitle(_title(result, "commanded vs achieved velocity (body frame)"), fontsize=plots.TITLE_FONTSIZE)
+    out["velocity"] = fig
+
+    # Body height and attitude.
+    fig, axes = plots._figure(2, 1, figsize=(9, 6), sharex=True)
+    planned_h = (p.stand_height + LAYOUT.foot_radius) * 1000
+    axes[0].plot(t, c["z"] * 1000, color="tab:blue", label="body height")
+    axes[0].axhline(planned_h, **plots.TARGET_STYLE, label="planned height")
+    axes[0].set_ylabel("height [mm]")
+    plots._plain(axes[0])
+    plots._min_span(axes[0], 2.0)
+    axes[1].plot(t, np.degrees(c["roll"]), label="roll")
+    axes[1].plot(t, np.degrees(c["pitch"]), label="pitch")
+    axes[1].set_ylabel("attitude [deg]")
+    plots._min_span(axes[1], 0.5)
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+        plots._legend_right(ax)
+    axes[-1].set_xlabel("t [s]")
+    fig.suptitle(_title(result, "body height and attitude"), fontsize=plots.TITLE_FONTSIZE)
+    out["body"] = fig
+
+    # Foot slip: contact-point speed of the loaded feet.
+    fig, ax = plots._figure(figsize=(9, 4.5))
+    for i, leg in enumerate(hx.LEGS):
+        slip = np.where(loaded[:, i], contacts.slip[:, i] * 1000, np.nan)
+        ax.plot(t, slip, lw=0.8, color=LEG_COLOURS[leg], label=leg)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("contact-point speed while loaded [mm/s]")
+    ax.grid(True, alpha=0.3)
+    plots._legend_right(ax)
+    m = result.metrics
+    fig.suptitle(
+        _title(
+            result,
+            f"foot slip: mean {m['slip_mean'].value * 1000:.3g} mm/s, {m['slip_per_stance'].value:.3g} mm per stance",
+        ),
+        fontsize=plots.TITLE_FONTSIZE,
+    )
+    out["slip"] = fig
+    return out

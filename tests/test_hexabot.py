@@ -1,0 +1,344 @@
+"""The walking hexabot: model vs the leg's DH maths, contact, gait timing, tracking, drift, perturbations, CLI."""
+
+import json
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+from hexabot_sim import models, params
+from hexabot_sim.__main__ import main
+from hexabot_sim.control.gait import GAITS
+from hexabot_sim.errors import UsageError
+from hexabot_sim.kinematics import hexabot as hx
+from hexabot_sim.kinematics import hexabot_mjcf
+from hexabot_sim.kinematics import leg as leg_kin
+from hexabot_sim.scenarios import hexabot as scenario
+
+LEGS = hx.LEGS
+
+
+def walk(**overrides):
+    p = params.resolve(scenario.HexabotParams, {}, overrides)
+    return scenario.run("hexabot-walk", p)
+
+
+def quat_to_matrix(q):
+    m = np.zeros(9)
+    mujoco.mju_quat2Mat(m, np.asarray(q, float))
+    return m.reshape(3, 3)
+
+
+# --- the model -------------------------------------------------------------------------------------
+
+
+def test_committed_models_are_the_generator_output():
+    assert models.model_path("hexabot").read_text() == hexabot_mjcf.robot_xml()
+    assert models.model_path("hexabot_scene").read_text() == hexabot_mjcf.scene_xml()
+
+
+def test_names_masses_limits_and_collisions():
+    model = mujoco.MjModel.from_xml_path(str(models.model_path("hexabot_scene")))
+    assert model.joint("root").type == mujoco.mjtJoint.mjJNT_FREE
+    for leg in LEGS:
+        for joint in hx.JOINTS:
+            assert model.joint(f"{leg}_{joint}").type == mujoco.mjtJoint.mjJNT_HINGE
+            assert tuple(model.jnt_actfrcrange[model.joint(f"{leg}_{joint}").id]) == (-1.5, 1.5)
+        model.site(f"{leg}_hip"), model.site(f"{leg}_foot")
+    total = model.body_subtreemass[model.body("torso").id]
+    assert 1.0 <= total <= 2.5
+    assert model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
+    # Only the feet and the plate can touch the floor; no leg link touches anything.
+    floor = model.geom("floor").id
+    touching = {
+        model.geom(g).name
+        for g in range(model.ngeom)
+        if g != floor
+        and (
+            model.geom_contype[g] & model.geom_conaffinity[floor]
+            or model.geom_contype[floor] & model.geom_conaffinity[g]
+        )
+    }
+    assert touching == {"torso", *(f"{leg}_foot" for leg in LEGS)}
+    for g in range(model.ngeom):  # and nothing of the robot touches itself
+        for h in range(model.ngeom):
+            if floor not in (g, h):
+                assert not (model.geom_contype[g] & model.geom_conaffinity[h])
+
+
+def test_every_foot_and_jacobian_equal_the_legs_dh_maths():
+    """Foot sites and mj_jacSite against the leg's analytic FK and Jacobian, rotated onto each hip."""
+    model = mujoco.MjModel.from_xml_path(str(models.model_path("hexabot_scene")))
+    data = mujoco.MjData(model)
+    rng = np.random.default_rng(7)
+    lower, upper = np.array(hx.JOINT_LOWER), np.array(hx.JOINT_UPPER)
+    worst_p = worst_j = 0.0
+    jacp = np.zeros((3, model.nv))
+    for _ in range(100):
+        q = rng.uniform(lower, upper, size=(6, 3))
+        quat = rng.normal(size=4)
+        quat /= np.linalg.norm(quat)
+        pos = rng.uniform(-1, 1, 3)
+        data.qpos[:] = np.r_[pos, quat, q.ravel()]
+        mujoco.mj_kinematics(model, data)
+        mujoco.mj_comPos(model, data)
+        rot = quat_to_matrix(quat)
+        feet = pos + hx.feet_body(hx.DEFAULT_LAYOUT, q) @ rot.T
+        jac_body = hx.jacobians_body(hx.DEFAULT_LAYOUT, q)
+        for i, leg in enumerate(LEGS):
+            worst_p = max(worst_p, np.abs(data.site(f"{leg}_foot").xpos - feet[i]).max())
+            mujoco.mj_jacSite(model, data, jacp, None, model.site(f"{leg}_foot").id)
+            dofs = [model.joint(f"{leg}_{j}").dofadr[0] for j in hx.JOINTS]
+            worst_j = max(worst_j, np.abs(jacp[:, dofs] - rot @ jac_body[i]).max())
+            # The hip site is the leg's DH frame 0: the foot in it is the leg's own FK.
+            hip = data.site(f"{leg}_hip")
+            local = hip.xmat.reshape(3, 3).T @ (data.site(f"{leg}_foot").xpos - hip.xpos)
+            worst_p = max(worst_p, np.abs(local - leg_kin.fk(q[i])).max())
+    assert worst_p < 1e-12 and worst_j < 1e-12
+
+
+def test_servo_gains_use_the_legs_joint_space_inertia():
+    """The leg part of loaded_joint_inertia equals MuJoCo's mass-matrix diagonal (mj_fullM)."""
+    model = mujoco.MjModel.from_xml_path(str(models.model_path("hexabot_scene")))
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    full = np.zeros((model.nv, model.nv))
+    mujoco.mj_fullM(model, data, full)
+    layout = hx.DEFAULT_LAYOUT
+    q0 = model.key("home").qpos[7:10]
+    ours = hexabot_mjcf.loaded_joint_inertia(layout, q0)
+    _, jac = leg_kin.foot_and_jacobian(*q0, layout.geometry.l1, layout.geometry.l2, layout.geometry.l3)
+    body_share = layout.total_mass / hexabot_mjcf.STANCE_LEGS * np.sum(np.array(jac) ** 2, axis=0)
+    np.testing.assert_allclose(ours - body_share, np.diag(full)[6:9], rtol=1e-10)
+    inertia, _kp, _kv = hexabot_mjcf.servo_gains(layout)
+    w = 2 * math.pi * hexabot_mjcf.SERVO_BANDWIDTH_HZ
+    np.testing.assert_allclose(model.actuator_gainprm[:3, 0], np.round(inertia * w**2, 4), rtol=1e-12)
+
+
+def test_standing_contact_sinks_little_and_does_not_slide():
+    model = mujoco.MjModel.from_xml_path(str(models.model_path("hexabot_scene")))
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    warnings = []
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(warnings.append)
+    try:
+        for _ in range(1000):
+            mujoco.mj_step(model, data)
+    finally:
+        mujoco.set_mju_user_warning(previous)
+    assert warnings == [] and all(w.number == 0 for w in data.warning)
+    assert data.ncon == 6
+    depth = -np.array([data.contact[i].dist for i in range(data.ncon)])
+    assert (depth > 0).all() and depth.max() < 0.3e-3  # MuJoCo's defaults would let it sink ~0.5 mm
+    force = np.zeros(6)
+    total = 0.0
+    for i in range(data.ncon):
+        mujoco.mj_contactForce(model, data, i, force)
+        total += force[0]
+    weight = model.body_subtreemass[model.body("torso").id] * 9.81
+    assert total == pytest.approx(weight, rel=1e-3)  # static equilibrium
+    assert np.abs(data.qvel).max() < 1e-4
+
+
+# --- the gait generator and planner ---------------------------------------------------------------
+
+
+def test_gait_tables_keep_the_robot_supported():
+    for gait in GAITS.values():
+        phases = np.mod(np.linspace(0, 1, 601)[:, None] + np.array(gait.offsets), 1.0)
+        down = phases < gait.duty
+        assert down.sum(axis=1).min() >= 3, gait.name  # never fewer than three feet on the ground
+        assert down.mean() == pytest.approx(gait.duty, abs=0.01)
+        # Each side keeps a foot down at all times (no side unsupported).
+        assert down[:, :3].any(axis=1).all() and down[:, 3:].any(axis=1).all()
+
+
+# --- walking --------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def forward_walk():
+    """6 m on flat ground at 0.15 m/s, the symmetric robot (the drift test needs the distance)."""
+    return walk(vx=0.15, duration=45.0)
+
+
+def test_flat_ground_drift_slip_sag_attitude(forward_walk):
+    m = forward_walk.metrics
+    assert m["distance"].value >= 6.0
+    assert abs(m["lateral_drift"].value) <= 2.0  # mm per metre
+    assert abs(m["heading_drift"].value) <= 0.1  # deg per metre
+    assert m["slip_per_stance"].value <= 1.0  # mm
+    assert abs(m["body_height_sag"].value) <= 0.002
+    assert m["roll_ptp"].value <= 1.0 and m["pitch_ptp"].value <= 1.0
+    assert abs(m["vx_error"].value) <= 0.02
+    assert m["fell"].value is False
+    assert m["peak_joint_torque"].value <= 1.5 + 1e-9
+
+
+def test_gait_timing_matches_the_plan(forward_walk):
+    """Which feet carry load when: the measured contacts follow the planned stance phases."""
+    result = forward_walk
+    window = result.extras["window"]
+    measured = np.stack([result.columns[f"contact_{leg}"] for leg in LEGS], axis=1)[window] > 0.5
+    planned = result.extras["planned_stance"][window]
+    assert (measured == planned).mean() > 0.95
+    # A planned swing never carries load in its middle half (no foot drags through its swing).
+    phase = np.mod((result.columns["t"][window, None] - scenario.SETTLE_TIME) + np.array(GAITS["tripod"].offsets), 1.0)
+    mid_swing = (phase > 0.625) & (phase < 0.875)
+    assert not (measured & mid_swing).any()
+
+
+@pytest.mark.parametrize(
+    ("overrides", "tolerance"),
+    [
+        ({"vx": 0.05}, 0.02),
+        ({"vx": 0.15}, 0.02),
+        ({"vx": 0.0, "vy": 0.1}, 0.02),
+        ({"vx": 0.1, "vy": -0.1}, 0.02),
+        ({"vx": -0.1}, 0.02),
+        ({"vx": 0.3, "period": 0.7}, 0.05),
+        ({"vx": 0.1, "gait": "ripple"}, 0.02),
+        ({"vx": 0.05, "gait": "wave"}, 0.02),
+        ({"vx": 0.0, "yaw_rate": 0.3}, 0.02),
+        ({"vx": 0.1, "yaw_rate": -0.2}, 0.02),
+    ],
+)
+def test_speed_and_yaw_rate_tracking(overrides, tolerance):
+    m = walk(duration=8.5, **overrides).metrics
+    for key, error in (("vx", "vx_error"), ("vy", "vy_error"), ("yaw_rate", "yaw_rate_error")):
+        commanded = overrides.get(key, 0.1 if key == "vx" else 0.0)
+        if commanded:
+            assert abs(m[error].value) <= tolerance, (key, m[error].value)
+        else:
+            measured = {"vx": "mean_vx", "vy": "mean_vy", "yaw_rate": "mean_yaw_rate"}[key]
+            assert abs(m[measured].value) <= 0.003, (key, m[measured].value)
+    assert m["fell"].value is False
+
+
+@pytest.mark.parametrize(
+    "overrides",
+    [
+        {"gait": "tripod", "vx": 0.25, "friction": 0.3, "timestep": 0.002},
+        {"gait": "tripod", "vx": 0.05, "friction": 0.3, "timestep": 0.001},
+        {"gait": "ripple", "vx": 0.2, "friction": 0.3, "timestep": 0.002},
+        {"gait": "wave", "vx": 0.05, "friction": 0.3, "timestep": 0.002},
+        {"gait": "wave", "vx": 0.1, "friction": 0.3, "timestep": 0.001, "period": 1.5},
+    ],
+)
+def test_no_fall_low_friction_and_timesteps(overrides):
+    m = walk(duration=6.0, **overrides).metrics
+    assert m["fell"].value is False
+    assert abs(m["vx_error"].value) <= 0.05
+
+
+def test_heading_hold_removes_the_drift_of_an_imperfect_robot():
+    """+-1 deg servo trims, 1 cm CoM offset, +-20 % friction: heading hold keeps the path straight."""
+    perturbed = {"vx": 0.15, "duration": 25.0, "trim_error_deg": 1.0, "com_offset": 0.01, "friction_spread": 0.2}
+    held = walk(heading_hold="on", **perturbed).metrics
+    free = walk(heading_hold="off", **perturbed).metrics
+    assert abs(held["lateral_drift"].value) <= 10.0  # mm per metre
+    assert abs(held["heading_drift"].value) <= 0.1  # deg per metre
+    assert abs(free["heading_drift"].value) > 5 * abs(held["heading_drift"].value)  # why heading hold exists
+
+
+def test_perturbations_are_seeded():
+    a = scenario._perturbations(params.resolve(scenario.HexabotParams, {}, {"trim_error_deg": 1, "seed": 3}))
+    b = scenario._perturbations(params.resolve(scenario.HexabotParams, {}, {"trim_error_deg": 1, "seed": 3}))
+    c = scenario._perturbations(params.resolve(scenario.HexabotParams, {}, {"trim_error_deg": 1, "seed": 4}))
+    assert all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
+    assert not np.array_equal(a[0], c[0])
+    assert np.abs(a[0]).max() <= math.radians(1.0)
+
+
+# --- refusals ---------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("overrides", "fragment"),
+    [
+        ({"vx": 0.6}, "the largest feasible in this direction is vx = "),
+        ({"gait": "wave", "vx": 0.25}, "the largest feasible in this direction is vx = "),
+        ({"vx": 100}, "did you mean 100 mm/s = 0.1 m/s"),
+        ({"gait": "wave", "period": 0.5}, "even stepping in place is infeasible"),
+        ({"timestep": 0.005}, "timestep"),
+    ],
+)
+def test_infeasible_commands_are_refused_up_front(overrides, fragment):
+    with pytest.raises(UsageError, match=None) as info:
+        params.resolve(scenario.HexabotParams, {}, overrides)
+    assert fragment in str(info.value)
+
+
+def test_refused_largest_feasible_command_is_feasible():
+    with pytest.raises(UsageError) as info:
+        params.resolve(scenario.HexabotParams, {}, {"vx": 0.6})
+    largest = float(str(info.value).split("vx = ")[1].split()[0].rstrip(","))
+    params.resolve(scenario.HexabotParams, {}, {"vx": largest * 0.999})
+
+
+# --- the run folder and metrics recomputed independently ---------------------------------------------
+
+
+def test_cli_run_folder_and_metrics_recomputed_from_the_trajectory(tmp_path, capsys):
+    out = tmp_path / "walk"
+    code = main(["run", "hexabot-walk", "--set", "duration=6", "--out", str(out)])
+    _, err = capsys.readouterr()
+    assert code == 0, err
+    record = json.loads((out / "run.json").read_text())
+    names = {p.name for p in out.iterdir()}
+    assert {"run.json", "model.xml", "timeseries.csv", "trajectory.npz", "path.png", "gait_diagram.png"} <= names
+    assert {"velocity.png", "body.png", "slip.png"} <= names
+    header = (out / "timeseries.csv").read_text().splitlines()[0].split(",")
+    assert header[:7] == ["t", "x", "y", "z", "roll", "pitch", "yaw"]
+    assert {f"contact_{leg}" for leg in LEGS} <= set(header)
+    assert {f"q_{leg}_{j}" for leg in LEGS for j in hx.JOINTS} <= set(header)
+
+    # Recompute from model.xml + trajectory.npz alone, by other means than the scenario's code.
+    model = mujoco.MjModel.from_xml_path(str(out / "model.xml"))
+    data = mujoco.MjData(model)
+    traj = np.load(out / "trajectory.npz")
+    t, qpos, qvel, ctrl = traj["t"], traj["qpos"], traj["qvel"], traj["ctrl"]
+    assert ctrl.shape == (len(t), 36)
+    metrics = record["metrics"]
+    period, settle = record["params"]["period"], scenario.SETTLE_TIME
+    cycles = math.floor((t[-1] - settle - 2 * period) / period + 1e-9)
+    i0 = np.searchsorted(t, settle + 2 * period - 1e-9)
+    i1 = np.searchsorted(t, settle + (2 + cycles) * period - 1e-9)
+    # Mean forward speed: displacement along the (nearly constant) heading over whole cycles.
+    yaw = np.array([math.atan2(2 * (q[0] * q[3] + q[1] * q[2]), 1 - 2 * (q[2] ** 2 + q[3] ** 2)) for q in qpos[:, 3:7]])
+    heading = yaw[i0:i1].mean()
+    disp = qpos[i1, :2] - qpos[i0, :2]
+    vx = (disp[0] * math.cos(heading) + disp[1] * math.sin(heading)) / (t[i1] - t[i0])
+    assert vx == pytest.approx(metrics["mean_vx"], rel=2e-3)
+    assert metrics["distance"] == pytest.approx(float(np.hypot(*disp)), rel=1e-9)
+    assert metrics["body_height_mean"] == pytest.approx(qpos[i0 : i1 + 1, 2].mean(), rel=1e-6)
+    # Slip: the foot's material-point velocity from the foot site's 6-D velocity (mj_objectVelocity).
+    weight = model.body_subtreemass[model.body("torso").id] * 9.81
+    slips, loads = [], []
+    force, vel = np.zeros(6), np.zeros(6)
+    for k in range(i0, i1 + 1, 5):
+        data.qpos[:], data.qvel[:], data.ctrl[:] = qpos[k], qvel[k], ctrl[min(k + 1, len(t) - 1)]
+        mujoco.mj_forward(model, data)
+        for c in range(data.ncon):
+            contact = data.contact[c]
+            name = (
+                model.geom(contact.geom2).name
+                if model.geom(contact.geom2).name.endswith("_foot")
+                else model.geom(contact.geom1).name
+            )
+            if not name.endswith("_foot"):
+                continue
+            mujoco.mj_contactForce(model, data, c, force)
+            site = model.site(name).id
+            mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_SITE, site, vel, 0)  # world frame
+            v = vel[3:] + np.cross(vel[:3], contact.pos - data.site_xpos[site])
+            slips.append(math.hypot(v[0], v[1]))
+            loads.append(force[0])
+    slips, loads = np.array(slips), np.array(loads)
+    loaded = loads > scenario.LOADED_FRACTION * weight / 6
+    assert slips[loaded].mean() == pytest.approx(metrics["slip_mean"], rel=0.1)  # every 5th row only
+    assert metrics["fell"] is False and qpos[:, 2].min() > 0.05
+    assert record["units"]["metrics"]["lateral_drift"] == "mm/m"
