@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-from hexabot_sim import params, plots, render, scenarios
+from hexabot_sim import params, render, scenarios
+from hexabot_sim.scenarios import leg, leg_sweep, pendulum, rrp_velocity
 from hexabot_sim.simulate import site_trajectory
 
 
@@ -50,7 +51,7 @@ def test_foot_orientation_is_continuous_and_is_the_foot_rotation(leg_outside):
     step = np.arctan2(sin, (np.trace(rel, axis1=1, axis2=2) - 1) / 2)  # accurate for small angles too
     # The CSV's principal angles jump by pi here while the foot turns by milliradians: the case to fix.
     assert np.max(np.abs(np.diff(c["yaw"]))) > 3 and np.max(step) < 0.05
-    fig = plots.foot_orientation_figure(result)
+    fig = leg.foot_orientation_figure(result)
     series = [ax.get_lines()[0].get_ydata() for ax in fig.axes[:3]]  # roll, pitch, yaw as plotted
     for values in series:
         assert np.all(np.abs(np.diff(values)) <= step * (1 + 1e-6) + 1e-12)
@@ -85,7 +86,7 @@ def _readable_ticks(fig):
 
 
 def test_leg_figures_legends_ticks_and_labels(leg_outside):
-    figures = _drawn(plots.leg_figures(leg_outside))
+    figures = _drawn(leg.figures(leg_outside))
     for fig in figures.values():
         _legend_outside_data(fig)
         _readable_ticks(fig)
@@ -96,7 +97,7 @@ def test_leg_figures_legends_ticks_and_labels(leg_outside):
 
 
 def test_pendulum_figures_and_energy_label():
-    figures = _drawn(plots.pendulum_figures(_run("pendulum", duration=2)))
+    figures = _drawn(pendulum.figures(_run("pendulum", duration=2)))
     for fig in figures.values():
         _legend_outside_data(fig)
         _readable_ticks(fig)
@@ -107,7 +108,7 @@ def test_pendulum_figures_and_energy_label():
 
 
 def test_rrp_velocity_draws_mujoco_for_all_six_and_one_unit_per_axis():
-    fig = plots.rrp_velocity_figures(_run("rrp-velocity", duration=3))["velocity"]
+    fig = rrp_velocity.figures(_run("rrp-velocity", duration=3))["velocity"]
     FigureCanvasAgg(fig).draw()
     _legend_outside_data(fig)
     _readable_ticks(fig)
@@ -121,7 +122,7 @@ def test_rrp_velocity_draws_mujoco_for_all_six_and_one_unit_per_axis():
 
 def test_leg_sweep_figure_on_a_small_grid():
     result = _run("leg-sweep", amplitudes="0.03,0.05", omegas="1,2", workers=1)
-    fig = _drawn({"sweep": plots.leg_sweep_figures(result)["sweep"]})["sweep"]
+    fig = _drawn({"sweep": leg_sweep.figures(result)["sweep"]})["sweep"]
     _legend_outside_data(fig)
     _readable_ticks(fig)
     heat = fig.axes[0]
@@ -132,7 +133,7 @@ def test_leg_sweep_figure_on_a_small_grid():
     assert np.allclose(heat.get_xlim(), (x_edges[0], x_edges[-1]))  # no empty columns
     circles = [line for line in heat.get_lines() if line.get_marker() == "o"]
     assert [(line.get_xdata()[0], line.get_ydata()[0]) for line in circles] == [(1.0, 50.0)]  # only cases in the grid
-    one = plots.leg_sweep_figures(_run("leg-sweep", amplitudes="0.03", omegas="1", workers=1))["sweep"]
+    one = leg_sweep.figures(_run("leg-sweep", amplitudes="0.03", omegas="1", workers=1))["sweep"]
     assert one.axes[0].get_ylim()[0] > 0 and not [line for line in one.axes[0].get_lines() if line.get_marker() == "o"]
 
 

@@ -17,7 +17,8 @@ class Scenario:
     Attributes:
         name: What users type after `hexabot-sim run`.
         summary: One line for `hexabot-sim list`.
-        module: Module under hexabot_sim.scenarios holding the parameter class and `run(name, params)`.
+        module: Module under hexabot_sim.scenarios holding the parameter class, `run(name, params)`
+            and `figures(result)`.
         params_class: Name of the frozen parameter dataclass in that module.
         defaults: Scenario-specific defaults applied over the dataclass defaults.
     """
@@ -42,12 +43,7 @@ class Scenario:
     @property
     def figures(self) -> Callable[..., dict[str, Any]]:
         """The scenario's figure set: result -> {file stem: matplotlib Figure}."""
-        module = self._module()
-        if hasattr(module, "figures"):
-            return module.figures
-        from hexabot_sim import plots
-
-        return plots.figures
+        return self._module().figures
 
 
 SCENARIOS: dict[str, Scenario] = {

@@ -35,7 +35,7 @@ class Marker:
 
 @dataclasses.dataclass
 class ScenarioResult:
-    """Everything a run produced in memory; output.py, plots.py and render.py read it, nothing else."""
+    """Everything a run produced in memory; output.py, the scenario's figures() and render.py read it."""
 
     scenario: str
     params: Any  # the scenario's frozen parameter dataclass
@@ -47,10 +47,9 @@ class ScenarioResult:
     metrics: dict[str, Metric]
     summary: list[str]  # metric names shown after the run
     camera: str | None  # camera the video is rendered from (None: this result has no video)
-    figures: str  # name of the figure set in plots.py
     csv_name: str = "timeseries.csv"
     markers: list[Marker] = dataclasses.field(default_factory=list)  # drawn into the video
     trail: np.ndarray | None = None  # (n, 3) world points whose path the video draws (e.g. the foot)
     # Text lines the video shows under the time: each maps a recording row to text (render.OverlayLine).
     overlay: list[Callable[[int], str]] = dataclasses.field(default_factory=list)
-    extras: dict[str, Any] = dataclasses.field(default_factory=dict)  # scenario data for plots
+    extras: dict[str, Any] = dataclasses.field(default_factory=dict)  # scenario data for its figures

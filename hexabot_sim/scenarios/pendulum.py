@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -13,6 +14,10 @@ from hexabot_sim import models, render
 from hexabot_sim.params import check_duration, check_run_cost, param
 from hexabot_sim.scenarios.base import Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import simulate, step_count
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 INTEGRATORS = ("RK4", "Euler", "implicit", "implicitfast")
 # Cost of a run for params.check_run_cost, measured on the 2-core development machine: seconds per
@@ -391,7 +396,6 @@ def run(name: str, p: PendulumParams, progress: Progress | None = None) -> Scena
         metrics=metrics,
         summary=[m for m in summary if m in metrics],
         camera="side",
-        figures="pendulum",
         markers=markers,
         overlay=overlay,
         extras={
@@ -400,3 +404,88 @@ def run(name: str, p: PendulumParams, progress: Progress | None = None) -> Scena
             "stable_equilibria": equilibria(k, mgc, target, float(theta.min()) - 7.0, float(theta.max()) + 7.0),
         },
     )
+
+
+# ---------------------------------------------------------------------------------------------
+# Figures (matplotlib is imported only when they are drawn: `hexabot-sim list` never loads it)
+
+
+def _title(result: ScenarioResult, text: str) -> str:
+    p = result.params
+    return (
+        f"{result.scenario}: {text}\n"
+        f"m = {p.mass:g} kg, L = {p.length:g} m, b = {p.damping:g} N·m·s/rad, k = {p.stiffness:g} N·m/rad, "
+        f"θ0 = {p.theta0_deg:g}°"
+    )
+
+
+def _angle_lines(ax: Axes, result: ScenarioResult, horizontal: bool = True) -> None:
+    """Draws the spring target and the predicted rest angle."""
+    from hexabot_sim import plots
+
+    draw = ax.axhline if horizontal else ax.axvline
+    target, rest = result.extras.get("target"), result.extras.get("rest_angle")
+    if target is not None:
+        draw(target, label=f"spring target {math.degrees(target):.1f}°", **plots.TARGET_STYLE)
+    if rest is not None and result.params.damping > 0:
+        draw(rest, label=f"predicted rest angle {math.degrees(rest):.2f}°", **plots.REST_STYLE)
+
+
+def figures(result: ScenarioResult) -> dict[str, Figure]:
+    """Angle and angular velocity vs time (report Figs. 5-8), phase portrait, energy balance."""
+    from hexabot_sim import plots
+
+    c = result.columns
+    t, theta, omega = c["t"], c["theta"], c["omega"]
+    figures: dict[str, Figure] = {}
+
+    fig, (ax1, ax2) = plots.figure(2, 1, figsize=(9, 6.5), sharex=True)
+    ax1.plot(t, theta, color="tab:blue", label="θ")
+    _angle_lines(ax1, result)
+    ax1.set_ylabel("angle θ [rad]")
+    deg = ax1.secondary_yaxis("right", functions=(np.degrees, np.radians))
+    deg.set_ylabel("θ [deg]")
+    plots.legend_above(ax1)
+    ax1.grid(alpha=0.3)
+    ax2.plot(t, omega, color="tab:orange")
+    ax2.set_ylabel("angular velocity ω [rad/s]")
+    ax2.set_xlabel("time t [s]")
+    ax2.grid(alpha=0.3)
+    fig.suptitle(_title(result, "angle and angular velocity"), fontsize=plots.TITLE_FONTSIZE)
+    figures["angle_velocity"] = fig
+
+    fig, ax = plots.figure(figsize=(6.5, 6))
+    ax.plot(theta, omega, color="tab:purple", linewidth=0.9)
+    ax.plot(theta[0], omega[0], "o", color="black", label="start")
+    ax.plot(theta[-1], omega[-1], "s", color="tab:purple", label="end")
+    _angle_lines(ax, result, horizontal=False)
+    ax.set_xlabel("angle θ [rad]")
+    ax.set_ylabel("angular velocity ω [rad/s]")
+    plots.legend_above(ax, ncol=2)
+    ax.grid(alpha=0.3)
+    fig.suptitle(_title(result, "phase portrait"), fontsize=plots.TITLE_FONTSIZE)
+    figures["phase"] = fig
+
+    fig, (ax1, ax2) = plots.figure(2, 1, figsize=(9, 7), sharex=True, gridspec_kw={"height_ratios": [3, 1.4]})
+    ax1.plot(t, c["energy_kinetic"], label="kinetic ½Iω²")
+    ax1.plot(t, c["energy_gravity"], label="gravity mgc(1 − cos θ)")
+    if result.params.stiffness > 0:
+        ax1.plot(t, c["energy_spring"], label="spring ½k(θ − θ_t)²")
+    if result.params.damping > 0:
+        ax1.plot(t, c["energy_dissipated"], label="dissipated by damping ∫bω² dt")
+    ax1.plot(t, c["energy_total"], color="black", linewidth=2, label="sum E(t): kinetic + potential + dissipated")
+    ax1.set_ylabel("energy [J]")
+    plots.legend_above(ax1, ncol=2)
+    ax1.grid(alpha=0.3)
+    fig.suptitle(_title(result, "energy"), fontsize=plots.TITLE_FONTSIZE)
+    e0 = c["energy_total"][0]
+    if e0 > 0:
+        err = np.abs(c["energy_total"] - e0) / e0
+        ax2.semilogy(t[1:], np.maximum(err[1:], 1e-17), color="black", linewidth=0.8)
+        ax2.set_ylabel("|E(t) − E(0)| / E(0)\n(energy balance error)")
+    else:
+        ax2.text(0.5, 0.5, "E(0) = 0: no relative balance error", transform=ax2.transAxes, ha="center")
+    ax2.set_xlabel("time t [s]")
+    ax2.grid(alpha=0.3, which="both")
+    figures["energy"] = fig
+    return figures

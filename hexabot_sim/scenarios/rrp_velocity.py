@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
@@ -13,6 +14,9 @@ from hexabot_sim.kinematics.mjcf import to_mjcf
 from hexabot_sim.params import check_duration, check_run_cost, param
 from hexabot_sim.scenarios.base import Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import Trajectory, step_count
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 # Cost of a run for params.check_run_cost, measured on the 2-core development machine: no physics
 # steps; per sample the Jacobian in Python and mj_forward (~1.1 ms; the CSV is counted apart); peak bytes.
@@ -135,8 +139,57 @@ def run(name: str, p: RrpVelocityParams, progress: Progress | None = None) -> Sc
         metrics=metrics,
         summary=["max_linear_speed", "max_angular_speed", "max_linear_diff_mujoco", "max_angular_diff_mujoco"],
         camera="three_quarter",
-        figures="rrp_velocity",
         trail=sites[:, -1].copy(),
         overlay=overlay,
         extras={"singular": singular, "zero_reach_times": metrics["zero_reach_times"].value},
     )
+
+
+# ---------------------------------------------------------------------------------------------
+# Figures (matplotlib is imported only when they are drawn: `hexabot-sim list` never loads it)
+
+
+def figures(result: ScenarioResult) -> dict[str, Figure]:
+    """Report 001 part 5: the tool's linear and angular velocity in the base frame, and the joints."""
+    from hexabot_sim import plots
+
+    c = result.columns
+    t = c["t"]
+    p = result.params
+    fig, (ax1, ax2, ax3, ax4, ax5) = plots.figure(
+        5, 1, figsize=(9, 11.5), sharex=True, gridspec_kw={"height_ratios": [2.2, 2.2, 1.2, 1.2, 1.2]}
+    )
+    mujoco_style: dict[str, Any] = {"linestyle": (0, (1, 2)), "color": "black", "linewidth": 1.2}
+    for ax, axes in ((ax1, ("vx", "vy", "vz")), (ax2, ("wx", "wy", "wz"))):
+        for axis in axes:
+            ax.plot(t, c[axis], label=f"{axis} = (J q̇)_{axis[1]}")
+        for n, axis in enumerate(axes):  # drawn over each curve
+            ax.plot(t, c[f"{axis}_mujoco"], **mujoco_style, label="MuJoCo site velocity (each)" if n == 0 else None)
+        ax.grid(alpha=0.3)
+        plots.legend_above(ax, ncol=4)
+    ax1.set_ylabel("tool linear velocity [m/s]")
+    ax2.set_ylabel("tool angular velocity [rad/s]")
+    ax3.plot(t, c["q1"], label="q1")
+    ax3.plot(t, c["q2"], label="q2")
+    ax3.set_ylabel("revolute joints [rad]")
+    ax4.plot(t, c["d3"], color="tab:green", label="d3")
+    ax4.plot(t, p.a2 + c["d3"], color="tab:olive", linestyle="--", label="a2 + d3 (0: singular)")
+    ax4.set_ylabel("prismatic joint [m]")
+    ax5.plot(t, c["det_jv"], color="tab:gray", label="det Jv = (a2 + d3)² cos q2")
+    ax5.set_ylabel("det Jv [m²]")
+    ax5.set_xlabel("time t [s]")
+    singular_times = result.extras.get("zero_reach_times") or []
+    for n, ts in enumerate(singular_times):
+        for ax in (ax4, ax5):
+            ax.axvline(ts, color="tab:red", linestyle=":", linewidth=1, label="a2 + d3 = 0" if n == 0 else None)
+    for ax in (ax3, ax4, ax5):
+        ax.axhline(0, color="black", linewidth=0.5)
+        ax.grid(alpha=0.3)
+        plots.plain(ax)
+        plots.legend_above(ax, ncol=3)
+    fig.suptitle(
+        f"{result.scenario}: q = (sin t, cos 2t, sin 3t), d1 = {p.d1:g} m, a2 = {p.a2:g} m; tool velocity in the base "
+        "frame",
+        fontsize=plots.TITLE_FONTSIZE,
+    )
+    return {"velocity": fig}
