@@ -7,6 +7,9 @@ Usage: python scripts/bench.py [--repeat N] [--check]
   video      frames rendered and encoded per second, 640x480, preview preset     target >= 100 fps
   leg-loop   the leg-step loop (resolved-rate controller + recording + mj_step, dynamic mode)
              vs a bare `mj_step` loop over the same model and number of steps   target <= 2x
+  hexabot    the walking hexabot's loop (mj_step + 18-joint controller + recording) at its 2 ms
+             implicitfast step: real-time factor                                 target >= 50x
+             vs bare `mj_step` replaying the recorded controls on the same walk  target <= 2.5x
   list       wall time of `hexabot-sim list` (python -m hexabot_sim list)        target <= 0.5 s
 
 Timings alternate between the two sides of a ratio and keep each side's best (least disturbed)
@@ -28,7 +31,10 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 import mujoco
 
 from hexabot_sim import gl, params, render, scenarios
-from hexabot_sim.scenarios import leg, pendulum
+from hexabot_sim.control.gait import GaitPlanner
+from hexabot_sim.control.hexabot import HexabotController, WalkSettings
+from hexabot_sim.control.resolved_rate import ResolvedRateGains
+from hexabot_sim.scenarios import hexabot, leg, pendulum
 from hexabot_sim.simulate import simulate, step_count
 
 
@@ -89,6 +95,50 @@ def bench_leg_loop(repeat: int) -> dict[str, float]:
     return paired_loops(prepare, loop, repeat)
 
 
+def bench_hexabot(repeat: int, duration: float = 10.0) -> dict[str, float]:
+    """The walking loop vs bare mj_step replaying its recorded controls (the walking robot, not a standing one)."""
+    scenario = scenarios.get("hexabot-walk")
+    p = params.resolve(scenario.params_type, scenario.defaults, {"duration": duration})
+    model = mujoco.MjModel.from_xml_string(hexabot.build_xml(p))
+    n = step_count(p.duration, p.timestep)
+    loop_s, bare_s = [], []
+    for _ in range(repeat):
+        # The whole loop: controller (gait targets, 6 resolved-rate steps), mj_step, recording, checks.
+        data = mujoco.MjData(model)
+        mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+        mujoco.mj_forward(model, data)
+        planner = GaitPlanner(
+            p.the_gait(), p.period, p.step_height, hexabot.neutral(p), p.timestep, hexabot.SETTLE_TIME
+        )
+        settings = WalkSettings(p.command(), settle_time=hexabot.SETTLE_TIME, ramp_time=p.period)
+        gains = ResolvedRateGains(p.task_gain, 0.01, 0.01, p.max_joint_speed, 200.0)
+        q0 = model.key("home").qpos[7:].reshape(6, 3)
+        controller = HexabotController(model, data, hexabot.LAYOUT, planner, gains, settings, q0)
+        start = time.perf_counter()
+        traj = simulate(model, data, n, controller=controller, record_ctrl=True)
+        loop_s.append(time.perf_counter() - start)
+        # Bare physics on the same walk: the recorded controls, replayed step by step.
+        data = mujoco.MjData(model)
+        mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+        mujoco.mj_forward(model, data)
+        ctrl = traj.ctrl
+        start = time.perf_counter()
+        for i in range(1, n + 1):
+            data.ctrl[:] = ctrl[i]
+            mujoco.mj_step(model, data)
+        bare_s.append(time.perf_counter() - start)
+        if not (data.qpos == traj.qpos[-1]).all():
+            raise RuntimeError("the replay did not reproduce the walk: the bare loop would not time the same physics")
+    return {
+        "steps": n,
+        "bare_us_per_step": min(bare_s) / n * 1e6,
+        "loop_us_per_step": min(loop_s) / n * 1e6,
+        "ratio": min(loop_s) / min(bare_s),
+        "real_time_factor": p.duration / min(loop_s),
+        "bare_real_time_factor": p.duration / min(bare_s),
+    }
+
+
 def bench_video(repeat: int) -> dict[str, float] | str:
     backend, reason, _notice = gl.choose()
     if backend is None:
@@ -141,6 +191,16 @@ def main() -> int:
             f"loop {result['loop_us_per_step']:.2f} us/step, ratio {result['ratio']:.2f}x (target <= {target:g}x) "
             f"{'ok' if ok else 'MISSED'}"
         )
+
+    walk = bench_hexabot(max(1, args.repeat // 2))
+    ok = walk["ratio"] <= 2.5 and walk["real_time_factor"] >= 50
+    failures += [] if ok else ["hexabot"]
+    print(
+        f"hexabot   {walk['steps']} steps of 2 ms: loop {walk['loop_us_per_step']:.1f} us/step = "
+        f"{walk['real_time_factor']:.0f}x real time (target >= 50x); bare mj_step replaying its controls "
+        f"{walk['bare_us_per_step']:.1f} us/step ({walk['bare_real_time_factor']:.0f}x); ratio {walk['ratio']:.2f}x "
+        f"(target <= 2.5x) {'ok' if ok else 'MISSED'}"
+    )
 
     video = bench_video(max(1, args.repeat // 2))
     if isinstance(video, str):

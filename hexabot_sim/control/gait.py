@@ -18,8 +18,9 @@ import math
 
 import numpy as np
 
-from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics.hexabot import LEGS
+
+CHUNK_TIME: float = 0.5  # [s] targets planned at once
 
 
 @dataclasses.dataclass(frozen=True)
@@ -132,8 +133,10 @@ class GaitPlanner:
         self.time = 0.0
         self.pos = self.neutral.copy()
         self.vel = np.zeros((6, 2))
-        # At most one phase event per leg inside a chunk.
-        self.max_chunk = max(1, int(min(self.stance_time, self.swing_time) / 2 / self.dt))
+        self.swing_targets: list[np.ndarray | None] = [None] * 6  # touchdown point of each swing under way
+        # Steps planned at once: planning costs ~0.5 ms a chunk whatever its length, and the command
+        # (heading hold) changes between chunks, so a quarter second balances the two.
+        self.max_chunk = max(1, round(CHUNK_TIME / self.dt))
 
     def phase(self, t: np.ndarray | float) -> np.ndarray:
         """Gait phase in [0, 1) of each leg (..., 6); stance while phase < duty. Before start_time: stance."""
@@ -141,9 +144,16 @@ class GaitPlanner:
         return np.mod(np.asarray(cycles)[..., None] + self.offsets, 1.0)
 
     def in_stance(self, t: np.ndarray | float) -> np.ndarray:
-        """True where the plan has the foot on the ground (..., 6)."""
+        """True where the plan has the foot on the ground (..., 6).
+
+        Every foot is down before start_time, and a swing whose lift-off would have come before it is
+        skipped (that foot stays down until its next lift-off): no foot is snatched up mid-swing.
+        """
         t = np.asarray(t, dtype=float)
-        return (self.phase(t) < self.gait.duty) | (t < self.start_time)[..., None]
+        frac = self.phase(t)
+        lift_time = t[..., None] - (frac - self.gait.duty) * self.period
+        swing = (frac >= self.gait.duty) & (lift_time >= self.start_time - 1e-9)
+        return ~swing
 
     def plan(self, cmd: Command, n_steps: int) -> np.ndarray:
         """Targets (n_steps + 1, 6, 3) at time, time + dt, ..., time + n_steps dt; advances the planner by n_steps dt.
@@ -161,14 +171,10 @@ class GaitPlanner:
         if times[-1] <= self.start_time:  # standing still before the gait starts
             self.time = float(times[-1])
             return out
-        duty, period = self.gait.duty, self.period
-        cycles = (times - self.start_time) / period  # (n+1,)
         new_vel = np.zeros((6, 2))
+        stance_all = self.in_stance(times)  # (n+1, 6)
         for leg in range(6):
-            phase = cycles + self.offsets[leg]
-            started = times >= self.start_time
-            frac = np.mod(phase, 1.0)
-            stance = (frac < duty) | ~started
+            stance = stance_all[:, leg]
             p0, v0 = self.pos[leg, :2], self.vel[leg]
             xy = np.empty((n_steps + 1, 2))
             z = np.full(n_steps + 1, self.neutral[leg, 2])
@@ -187,14 +193,11 @@ class GaitPlanner:
                     xy[rows] = stance_path(cmd, p_state, times[rows] - t_state)
                 else:  # swing: Hermite from the current state to the touchdown point
                     touchdown_t = self._next_touchdown(leg, t_state)
-                    target = touchdown_point(cmd, self.neutral[leg, :2], self.stance_time)
-                    target_v = stance_velocity(cmd, target)
+                    target, target_v = self._swing_target(cmd, leg, lifting=t_state > times[0])
                     duration = touchdown_t - t_state
                     s = (times[rows] - t_state) / duration
                     xy[rows] = hermite(p_state, v_state, target, target_v, duration, s)
-                    # A swing under way when the gait clock starts is lifted over what is left of it.
-                    lift_t = max(touchdown_t - self.swing_time, self.start_time)
-                    swing_s = (times[rows] - lift_t) / (touchdown_t - lift_t)
+                    swing_s = (times[rows] - (touchdown_t - self.swing_time)) / self.swing_time
                     z[rows] += self.step_height * np.sin(np.pi * np.clip(swing_s, 0.0, 1.0)) ** 2
                 if end <= n_steps:  # a phase event between end-1 and end: state at the event time
                     t_event = self._event_time(leg, times[end - 1], times[end])
@@ -212,6 +215,17 @@ class GaitPlanner:
         self.time = float(times[-1])
         return out
 
+    def _swing_target(self, cmd: Command, leg: int, lifting: bool) -> tuple[np.ndarray, np.ndarray]:
+        """Touchdown point of a swing and the stance velocity there.
+
+        Chosen from the command at lift-off and kept for the whole swing (re-aiming a foot late in its
+        swing, when the command changes, would take a jolt); the landing velocity follows the command.
+        """
+        if lifting or self.swing_targets[leg] is None:
+            self.swing_targets[leg] = touchdown_point(cmd, self.neutral[leg, :2], self.stance_time)
+        target = self.swing_targets[leg]
+        return target, stance_velocity(cmd, target)
+
     def _next_touchdown(self, leg: int, t: float) -> float:
         """First time > t at which the leg's phase wraps to 0 (touchdown)."""
         cycles = (t - self.start_time) / self.period + self.offsets[leg]
@@ -228,25 +242,30 @@ class GaitPlanner:
         return max(t0, self.start_time)  # the gait clock starting inside the step
 
     def _state_at(self, cmd, leg, stance, t_state, p_state, v_state, t):
-        """(position, velocity) of the leg's target at t, continuing the segment that started at t_state."""
+        """(position, velocity) of the leg's target at t, continuing the segment that started at t_state.
+
+        The same closed forms as `stance_path` and `hermite`, in plain floats (called a few times a chunk).
+        """
+        px, py = float(p_state[0]), float(p_state[1])
+        vx, vy, w = cmd.vx, cmd.vy, cmd.yaw_rate
         if stance:
-            p = stance_path(cmd, p_state, np.array([t - t_state]))[0]
-            return p, stance_velocity(cmd, p)
+            tau = t - t_state
+            if w == 0.0:
+                x, y = px - vx * tau, py - vy * tau
+            else:
+                cx, cy = -vy / w, vx / w
+                c, s = math.cos(-w * tau), math.sin(-w * tau)
+                x, y = cx + c * (px - cx) - s * (py - cy), cy + s * (px - cx) + c * (py - cy)
+            return np.array([x, y]), np.array([-vx + w * y, -vy - w * x])
         touchdown_t = self._next_touchdown(leg, t_state)
         duration = touchdown_t - t_state
-        target = touchdown_point(cmd, self.neutral[leg, :2], self.stance_time)
-        target_v = stance_velocity(cmd, target)
-        s = np.array([(t - t_state) / duration])
-        p = hermite(p_state, v_state, target, target_v, duration, s)[0]
-        return p, hermite_velocity(p_state, v_state, target, target_v, duration, s)[0]
-
-
-def check_gait_name(name: str) -> Gait:
-    """The gait called `name`."""
-    try:
-        return GAITS[name]
-    except KeyError:
-        raise UsageError(f"unknown gait '{name}'; known: {', '.join(GAITS)}") from None
+        target, target_v = self._swing_target(cmd, leg, lifting=False)
+        u = (t - t_state) / duration
+        h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
+        d00, d10, d01, d11 = 6 * u**2 - 6 * u, 3 * u**2 - 4 * u + 1, -6 * u**2 + 6 * u, 3 * u**2 - 2 * u
+        p = h00 * p_state + h10 * duration * v_state + h01 * target + h11 * duration * target_v
+        v = (d00 * p_state + d01 * target) / duration + d10 * v_state + d11 * target_v
+        return p, v
 
 
 __all__ = ["GAITS", "LEGS", "Command", "Gait", "GaitPlanner"]

@@ -2,7 +2,7 @@
 
 Per control period: read the 18 joint angles (the servos' encoders), take each foot's target at t
 and t + dt from the gait planner (planned a chunk ahead, in the leg's hip frame), and advance each
-leg's joint command with `resolved_rate.rate_step` — the same step leg-step uses. The servos get
+leg's joint command with `resolved_rate.rate_steps` — the same step leg-step uses. The servos get
 q_cmd (position) and dq (velocity feedforward).
 
 Two corrections make the body go where it is told:
@@ -24,10 +24,11 @@ import mujoco
 import numpy as np
 
 from hexabot_sim.control.gait import Command, GaitPlanner
-from hexabot_sim.control.resolved_rate import ResolvedRateGains, rate_step, step_constants
+from hexabot_sim.control.resolved_rate import ResolvedRateGains, rate_steps, step_constants
 from hexabot_sim.kinematics import hexabot as hx
 
 MAX_HEADING_CORRECTION: float = 0.3  # [rad/s] largest yaw-rate correction heading hold adds
+RAMP_CHUNK_TIME: float = 0.02  # [s] planning chunk while the command ramps up
 
 
 @dataclasses.dataclass(frozen=True)
@@ -90,6 +91,7 @@ class HexabotController:
         lower, upper = hx.JOINT_LOWER, hx.JOINT_UPPER
         self.consts = step_constants(layout.geometry, gains, lower, upper)
         self.trims = [float(v) for v in settings.trims]
+        self._trimmed = any(self.trims)
         self.q_cmd = [float(v) for v in np.asarray(q_start).ravel()]
         self.dq = [0.0] * 18
         self.rot = layout.hip_rotations()  # (6, 3, 3) hip -> body
@@ -98,10 +100,9 @@ class HexabotController:
         self._rows: list[list[float]] = []
         self._stance: list[list[bool]] = []
         self._k = 0
-        self._theta_td = [self.q_cmd[3 * i + 1] + self.q_cmd[3 * i + 2] for i in range(6)]  # foot pitch at touchdown
-        self._was_stance = [True] * 6
-        self._roll_lo = [(0.0, 0.0)] * 6  # rolling offset (x, y) [m] in the hip frame at lift-off
-        self._fade: list[list[float]] = []
+        # Rolling state carried between chunks: last row's offset (6, 2), offset at lift-off (6, 2), in stance.
+        self._rolling = (np.zeros((6, 2)), np.zeros((6, 2)), np.ones(6, dtype=bool))
+        self._chunk = 0  # steps in the current chunk (0: plan one first)
         # Heading: desired yaw (integral of the commanded yaw rate) and the unwrapped measured yaw.
         self._yaw_des = 0.0
         self._yaw_meas = yaw_of(data.sensordata[self.quat_adr : self.quat_adr + 4])
@@ -122,6 +123,9 @@ class HexabotController:
         """Plans the next chunk of targets with the command in force now (and the heading correction)."""
         s = self.settings
         n = self.planner.max_chunk
+        if self.scale(t) < 1.0:
+            # Ramping: short chunks, so the command grows in steps too small to jolt the servos.
+            n = max(1, min(n, round(RAMP_CHUNK_TIME / self.dt)))
         scale = self.scale(t + 0.5 * n * self.dt)
         cmd = s.command.scaled(scale)
         if s.heading_hold:
@@ -140,63 +144,76 @@ class HexabotController:
         stance = self.planner.in_stance(times)  # (n + 1, 6)
         duty = self.planner.gait.duty
         swing_s = np.where(stance, 0.0, (self.planner.phase(times) - duty) / (1.0 - duty))
-        # Weight of the stance's rolling offset, fading out smoothly over the first half of the swing.
-        fade = 1.0 - np.clip(2.0 * swing_s, 0.0, 1.0)
-        self._fade = (fade * fade * (3.0 - 2.0 * fade)).tolist()
         # Body -> hip frame of each leg: R^T (p - hip).
         hip = np.einsum("lji,klj->kli", self.rot, targets - self.hips)  # (n + 1, 6, 3)
+        hip += self._rolling_offsets(hip, stance, swing_s)
         self._rows = hip.reshape(n + 1, 18).tolist()
         self._stance = stance.tolist()
+        self._chunk = n
         self._k = 0
+
+    def _rolling_offsets(self, hip: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
+        """Offsets (n + 1, 6, 3) of the foot-centre targets for feet that roll without slipping.
+
+        A sphere foot rolling without slip moves its centre over the ground by r dtheta along the leg's
+        radial direction e_r, theta = q2 + q3 its pitch. So in stance the centre target is shifted by
+        the sum of r dtheta e_r since touchdown (theta from the target's IK, iterated once since the
+        shift changes theta a little; summed step by step because e_r turns with the coxa); in the
+        swing, the shift reached at lift-off fades out over the first half. The state at the end of a
+        chunk carries over to the next one, whose row 0 repeats the previous chunk's last row.
+        """
+        radial = hip[..., :2] / np.hypot(hip[..., 0], hip[..., 1])[..., None]  # (n + 1, 6, 2)
+        fade = 1.0 - np.clip(2.0 * swing_s[1:], 0.0, 1.0)
+        fade = fade * fade * (3.0 - 2.0 * fade)  # (n, 6) smoothstep from 1 to 0
+        offset = np.repeat(self._rolling[1][None], hip.shape[0], axis=0)  # (n + 1, 6, 2) [m]
+        for _ in range(2):
+            shifted = hip.copy()
+            shifted[..., :2] += offset
+            q, _ = hx.ik_hip_batch(self.layout, shifted)
+            offset, state = self._offsets(q[..., 1] + q[..., 2], stance, fade, radial)
+        self._rolling = state
+        out = np.zeros_like(hip)
+        out[..., :2] = offset
+        return out
+
+    def _offsets(self, theta, stance, fade, radial):
+        """Rolling offsets (n + 1, 6, 2) from the foot pitch theta (n + 1, 6), and the state to carry over."""
+        n = theta.shape[0] - 1
+        rows = np.arange(1, n + 1)[:, None]  # (n, 1)
+        offset0, lift0, was0 = self._rolling
+        st = stance[1:]  # (n, 6); row 0 is the previous chunk's last row
+        before = np.vstack([was0[None], st[:-1]])
+        touchdown, liftoff = st & ~before, ~st & before
+        # Stance: r dtheta e_r step by step, summed since the latest touchdown (else from the carried offset).
+        rolling = (st & before)[..., None]
+        e_mid = radial[1:] + radial[:-1]
+        e_mid /= np.linalg.norm(e_mid, axis=-1, keepdims=True)
+        increment = np.where(rolling, self.foot_radius * np.diff(theta, axis=0)[..., None] * e_mid, 0.0)
+        total = np.cumsum(increment, axis=0)  # (n, 6, 2)
+        last_td = np.maximum.accumulate(np.where(touchdown, rows, 0), axis=0)  # (n, 6) row, 0 = none yet
+        at_td = np.take_along_axis(total, np.maximum(last_td - 1, 0)[..., None], axis=0)
+        stance_offset = np.where((last_td > 0)[..., None], total - at_td, offset0 + total)
+        # Swing: the offset of the last stance row, faded out.
+        full = np.concatenate([offset0[None], np.where(st[..., None], stance_offset, 0.0)])  # (n + 1, 6, 2)
+        last_lo = np.maximum.accumulate(np.where(liftoff, rows, 0), axis=0)
+        at_lo = np.take_along_axis(full, np.maximum(last_lo - 1, 0)[..., None], axis=0)
+        lift = np.where((last_lo > 0)[..., None], at_lo, lift0)
+        offset = np.concatenate([offset0[None], np.where(st[..., None], stance_offset, lift * fade[..., None])])
+        return offset, (offset[-1], lift[-1], st[-1])
 
     def __call__(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
         """Sets data.ctrl for the step from data.time to data.time + dt."""
-        if self._k >= len(self._rows) - 1:
-            self._replan(data.time)
         k = self._k
-        row0, row1, stance = self._rows[k], self._rows[k + 1], self._stance[k]
-        fade0, fade1 = self._fade[k], self._fade[k + 1]
-        qpos, trims, q_cmd, dq, consts, dt, r = (
-            self._qpos,
-            self.trims,
-            self.q_cmd,
-            self.dq,
-            self.consts,
-            self.dt,
-            self.foot_radius,
-        )
-        q = qpos[7:25].tolist()
-        ctrl = [0.0] * 36
-        for leg in range(6):
-            j = 3 * leg
-            c1, c2, c3 = q_cmd[j], q_cmd[j + 1], q_cmd[j + 2]
-            x0, y0, z0, x1, y1, z1 = row0[j], row0[j + 1], row0[j + 2], row1[j], row1[j + 1], row1[j + 2]
-            if stance[leg]:
-                # Rolling foot: shift the centre target by r (theta - theta_td) along the leg's radial direction.
-                if not self._was_stance[leg]:
-                    self._theta_td[leg] = c2 + c3
-                    self._was_stance[leg] = True
-                roll0 = r * (c2 + c3 - self._theta_td[leg])
-                roll1 = roll0 + r * (dq[j + 1] + dq[j + 2]) * dt
-                e1, e2 = math.cos(c1), math.sin(c1)
-                x0, y0, x1, y1 = x0 + roll0 * e1, y0 + roll0 * e2, x1 + roll1 * e1, y1 + roll1 * e2
-            else:
-                if self._was_stance[leg]:  # lift-off: remember the rolling offset, fade it out in the swing
-                    self._was_stance[leg] = False
-                    roll = r * (c2 + c3 - self._theta_td[leg])
-                    self._roll_lo[leg] = (roll * math.cos(c1), roll * math.sin(c1))
-                ox, oy = self._roll_lo[leg]
-                f0, f1 = fade0[leg], fade1[leg]
-                x0, y0, x1, y1 = x0 + f0 * ox, y0 + f0 * oy, x1 + f1 * ox, y1 + f1 * oy
-            n1, n2, n3, v1, v2, v3 = rate_step(
-                consts,
-                q[j] - trims[j], q[j + 1] - trims[j + 1], q[j + 2] - trims[j + 2],
-                c1, c2, c3, dq[j], dq[j + 1], dq[j + 2],
-                x0, y0, z0, x1, y1, z1, dt,
-            )  # fmt: skip
-            q_cmd[j], q_cmd[j + 1], q_cmd[j + 2] = n1, n2, n3
-            dq[j], dq[j + 1], dq[j + 2] = v1, v2, v3
-            ctrl[j], ctrl[j + 1], ctrl[j + 2] = n1 + trims[j], n2 + trims[j + 1], n3 + trims[j + 2]
-            ctrl[18 + j], ctrl[19 + j], ctrl[20 + j] = v1, v2, v3
-        self._ctrl[:] = ctrl
+        if k >= self._chunk:
+            self._replan(data.time)
+            k = 0
+        q_cmd, dq = self.q_cmd, self.dq
+        if self._trimmed:
+            trims = self.trims
+            q = [a - b for a, b in zip(self._qpos[7:25].tolist(), trims, strict=True)]  # what the encoders read
+            rate_steps(self.consts, q, q_cmd, dq, self._rows[k], self._rows[k + 1], self.dt)
+            self._ctrl[:] = [a + b for a, b in zip(q_cmd, trims, strict=True)] + dq
+        else:
+            rate_steps(self.consts, self._qpos[7:25].tolist(), q_cmd, dq, self._rows[k], self._rows[k + 1], self.dt)
+            self._ctrl[:] = q_cmd + dq  # position servos: q_cmd; velocity servos: dq
         self._k = k + 1

@@ -142,15 +142,13 @@ class ResolvedRateController:
             xd0, yd0, zd0 = self.reference(t)
         self._next_t = t + dt
         self._next_ref = xd1, yd1, zd1 = self.reference(self._next_t)
-        c1, c2, c3 = self.q_cmd
-        p1, p2, p3 = self.dq
-        n1, n2, n3, v1, v2, v3 = rate_step(self._k, *q, c1, c2, c3, p1, p2, p3, xd0, yd0, zd0, xd1, yd1, zd1, dt)
-        self.q_cmd = [n1, n2, n3]
-        self.dq = (v1, v2, v3)
-        return n1, n2, n3, v1, v2, v3
+        dq = list(self.dq)
+        rate_steps(self._k, list(q), self.q_cmd, dq, [xd0, yd0, zd0], [xd1, yd1, zd1], dt)
+        self.dq = (dq[0], dq[1], dq[2])
+        return (*self.q_cmd, *dq)
 
 
-# Constants of one leg for rate_step, unpacked once per call (attribute lookups dominate a pure-Python loop).
+# Constants of one leg for rate_steps, unpacked once per call (attribute lookups dominate a pure-Python loop).
 StepConstants = tuple[float, ...]
 
 
@@ -163,87 +161,91 @@ def step_constants(geometry: LegGeometry, gains: ResolvedRateGains, q_lower: Vec
     )  # fmt: skip
 
 
-def rate_step(
+def rate_steps(
     k: StepConstants,
-    q1: float, q2: float, q3: float,
-    c1: float, c2: float, c3: float,
-    p1: float, p2: float, p3: float,
-    xd0: float, yd0: float, zd0: float,
-    xd1: float, yd1: float, zd1: float,
+    q: list[float],
+    cmd: list[float],
+    dq: list[float],
+    target0: list[float],
+    target1: list[float],
     dt: float,
-) -> tuple[float, float, float, float, float, float]:  # fmt: skip
-    """One resolved-rate step of one leg: dq = J^+ (v_des + K (x_des - x)), limited, integrated into q_cmd.
+) -> None:
+    """One resolved-rate step of each of len(q) // 3 legs: dq = J^+ (v_des + K (x_des - x)), limited, integrated.
 
     The leg's Jacobian has a block structure that gives its inverse in closed form: column 1 is
     rho (-s1, c1, 0), orthogonal to the leg plane spanned by columns 2 and 3, so the tangential rate
     is u_t / rho and the (femur, tibia) rates solve the planar 2x2 block B (det B = -l2 l3 sin q3).
     Near a singularity (sigma_min < threshold) damped least squares J^T (J J^T + lambda^2 I)^-1 u
-    decouples the same way. The ranges, the speed and the acceleration limits then apply as in
-    ResolvedRateController.
+    decouples the same way. Then: the joint speed limit on dq as a whole (the foot keeps its
+    direction), braking before a range limit, the acceleration limit on the change of dq, and the
+    integration inside the ranges. Pure Python floats: for 1 to 6 legs at 0.5-1 kHz this is cheaper
+    than numpy's per-call overhead (scripts/bench.py).
 
     Args:
-        k: step_constants of the leg.
-        q1, q2, q3: Measured joint angles [rad] at t.
-        c1, c2, c3: Joint command q_cmd [rad] at t (the controller's state).
-        p1, p2, p3: Joint rate of the previous step [rad/s].
-        xd0, yd0, zd0: Desired foot position [m] at t, hip frame.
-        xd1, yd1, zd1: Desired foot position [m] at t + dt.
+        k: step_constants of the legs (the same for all).
+        q: Measured joint angles [rad] at t, 3 per leg (coxa, femur, tibia).
+        cmd: Joint command q_cmd [rad] at t; replaced by q_cmd at t + dt (in place).
+        dq: Joint rates of the previous step [rad/s]; replaced by the rates q_cmd moved at (in place).
+        target0: Desired foot positions [m] at t, 3 per leg, each in its leg's hip frame.
+        target1: Desired foot positions [m] at t + dt.
         dt: Control period [s].
-
-    Returns:
-        (q_cmd at t + dt [rad], dq [rad/s]): the new command and the rate it moved at.
     """
     l1, l2, l3, gain, threshold, max_damping, max_speed, max_acc, zone, lo1, lo2, lo3, hi1, hi2, hi3 = k
-    s1, co1 = math.sin(q1), math.cos(q1)
-    s2, co2 = math.sin(q2), math.cos(q2)
-    s23, c23 = math.sin(q2 + q3), math.cos(q2 + q3)
-    rho = l1 + l2 * co2 + l3 * c23  # horizontal distance of the foot from the coxa axis
-    h = l2 * s2 + l3 * s23  # depth of the foot below the hip
-    # Task-space rate: the reference's mean velocity over the step plus K times the position error.
-    ux = (xd1 - xd0) / dt + gain * (xd0 - co1 * rho)
-    uy = (yd1 - yd0) / dt + gain * (yd0 - s1 * rho)
-    uz = (zd1 - zd0) / dt + gain * (zd0 + h)
-    # Tangential part (coxa column) and the leg plane (radial, vertical).
-    ut = co1 * uy - s1 * ux
-    ur = co1 * ux + s1 * uy
-    b11, b12, b21, b22 = -h, -l3 * s23, -(l2 * co2 + l3 * c23), -l3 * c23
-    det = b11 * b22 - b12 * b21
-    frob = b11 * b11 + b12 * b12 + b21 * b21 + b22 * b22
-    # sigma_min >= min(|rho|, |det| / sqrt(frob)): far from every singularity, the exact inverse.
-    if abs(rho) >= threshold and det * det >= threshold * threshold * frob:
-        d1 = ut / rho
-        d2 = (b22 * ur - b12 * uz) / det
-        d3 = (b11 * uz - b21 * ur) / det
-    else:
-        planar = math.sqrt(2 * det * det / (frob + math.sqrt(max(frob * frob - 4 * det * det, 0.0))))
-        ratio = min(abs(rho), planar) / threshold
-        lam = max(max_damping * math.sqrt(max(1.0 - ratio * ratio, 0.0)), MIN_DAMPING) if ratio < 1.0 else 0.0
-        lam2 = lam * lam
-        d1 = rho * ut / (rho * rho + lam2) if rho * rho + lam2 > 0 else 0.0
-        a11, a12, a22 = b11 * b11 + b12 * b12 + lam2, b11 * b21 + b12 * b22, b21 * b21 + b22 * b22 + lam2
-        da = a11 * a22 - a12 * a12
-        w1, w2 = (a22 * ur - a12 * uz) / da, (a11 * uz - a12 * ur) / da
-        d2, d3 = b11 * w1 + b21 * w2, b12 * w1 + b22 * w2
-    # Joint speed limit, applied to dq as a whole so the foot keeps its direction.
-    fastest = max(abs(d1), abs(d2), abs(d3))
-    if fastest > max_speed:
-        scale = max_speed / fastest
-        d1, d2, d3 = d1 * scale, d2 * scale, d3 * scale
-    # Joint ranges: never faster toward a limit than braking at max_acc allows.
-    if c1 - lo1 < zone or hi1 - c1 < zone:
-        d1 = _brake(d1, c1 - lo1, hi1 - c1, max_acc)
-    if c2 - lo2 < zone or hi2 - c2 < zone:
-        d2 = _brake(d2, c2 - lo2, hi2 - c2, max_acc)
-    if c3 - lo3 < zone or hi3 - c3 < zone:
-        d3 = _brake(d3, c3 - lo3, hi3 - c3, max_acc)
-    # Joint acceleration limit on the change of the command, as a whole.
-    largest = max(abs(d1 - p1), abs(d2 - p2), abs(d3 - p3))
-    limit = max_acc * dt
-    if largest > limit:
-        f = limit / largest
-        d1, d2, d3 = p1 + (d1 - p1) * f, p2 + (d2 - p2) * f, p3 + (d3 - p3) * f
-    # Integrate inside the ranges; the returned rate is what q_cmd actually did.
-    n1 = min(max(c1 + d1 * dt, lo1), hi1)
-    n2 = min(max(c2 + d2 * dt, lo2), hi2)
-    n3 = min(max(c3 + d3 * dt, lo3), hi3)
-    return n1, n2, n3, (n1 - c1) / dt, (n2 - c2) / dt, (n3 - c3) / dt
+    thr2, limit, sin, cos, sqrt = threshold * threshold, max_acc * dt, math.sin, math.cos, math.sqrt
+    for j in range(0, len(q), 3):
+        q1, q2, q3 = q[j], q[j + 1], q[j + 2]
+        s1, co1 = sin(q1), cos(q1)
+        s2, co2 = sin(q2), cos(q2)
+        s23, c23 = sin(q2 + q3), cos(q2 + q3)
+        rho = l1 + l2 * co2 + l3 * c23  # horizontal distance of the foot from the coxa axis
+        h = l2 * s2 + l3 * s23  # depth of the foot below the hip
+        # Task-space rate: the reference's mean velocity over the step plus K times the position error.
+        xd0, yd0, zd0 = target0[j], target0[j + 1], target0[j + 2]
+        ux = (target1[j] - xd0) / dt + gain * (xd0 - co1 * rho)
+        uy = (target1[j + 1] - yd0) / dt + gain * (yd0 - s1 * rho)
+        uz = (target1[j + 2] - zd0) / dt + gain * (zd0 + h)
+        # Tangential part (coxa column) and the leg plane (radial, vertical).
+        ut = co1 * uy - s1 * ux
+        ur = co1 * ux + s1 * uy
+        b11, b12, b21, b22 = -h, -l3 * s23, -(l2 * co2 + l3 * c23), -l3 * c23
+        det = b11 * b22 - b12 * b21
+        frob = b11 * b11 + b12 * b12 + b21 * b21 + b22 * b22
+        # sigma_min >= min(|rho|, |det| / sqrt(frob)): far from every singularity, the exact inverse.
+        if (rho >= threshold or rho <= -threshold) and det * det >= thr2 * frob:
+            d1 = ut / rho
+            d2 = (b22 * ur - b12 * uz) / det
+            d3 = (b11 * uz - b21 * ur) / det
+        else:
+            planar = sqrt(2 * det * det / (frob + sqrt(max(frob * frob - 4 * det * det, 0.0))))
+            ratio = min(abs(rho), planar) / threshold
+            lam = max(max_damping * sqrt(max(1.0 - ratio * ratio, 0.0)), MIN_DAMPING) if ratio < 1.0 else 0.0
+            lam2 = lam * lam
+            d1 = rho * ut / (rho * rho + lam2) if rho * rho + lam2 > 0 else 0.0
+            a11, a12, a22 = b11 * b11 + b12 * b12 + lam2, b11 * b21 + b12 * b22, b21 * b21 + b22 * b22 + lam2
+            da = a11 * a22 - a12 * a12
+            w1, w2 = (a22 * ur - a12 * uz) / da, (a11 * uz - a12 * ur) / da
+            d2, d3 = b11 * w1 + b21 * w2, b12 * w1 + b22 * w2
+        # Joint speed limit, applied to dq as a whole so the foot keeps its direction.
+        if not (-max_speed <= d1 <= max_speed and -max_speed <= d2 <= max_speed and -max_speed <= d3 <= max_speed):
+            scale = max_speed / max(abs(d1), abs(d2), abs(d3))
+            d1, d2, d3 = d1 * scale, d2 * scale, d3 * scale
+        # Joint ranges: never faster toward a limit than braking at max_acc allows.
+        c1, c2, c3 = cmd[j], cmd[j + 1], cmd[j + 2]
+        if c1 - lo1 < zone or hi1 - c1 < zone:
+            d1 = _brake(d1, c1 - lo1, hi1 - c1, max_acc)
+        if c2 - lo2 < zone or hi2 - c2 < zone:
+            d2 = _brake(d2, c2 - lo2, hi2 - c2, max_acc)
+        if c3 - lo3 < zone or hi3 - c3 < zone:
+            d3 = _brake(d3, c3 - lo3, hi3 - c3, max_acc)
+        # Joint acceleration limit on the change of the command, as a whole.
+        p1, p2, p3 = dq[j], dq[j + 1], dq[j + 2]
+        e1, e2, e3 = d1 - p1, d2 - p2, d3 - p3
+        if not (-limit <= e1 <= limit and -limit <= e2 <= limit and -limit <= e3 <= limit):
+            f = limit / max(abs(e1), abs(e2), abs(e3))
+            d1, d2, d3 = p1 + e1 * f, p2 + e2 * f, p3 + e3 * f
+        # Integrate inside the ranges; the rate recorded is what q_cmd actually did.
+        n1, n2, n3 = c1 + d1 * dt, c2 + d2 * dt, c3 + d3 * dt
+        if not (lo1 <= n1 <= hi1 and lo2 <= n2 <= hi2 and lo3 <= n3 <= hi3):
+            n1, n2, n3 = min(max(n1, lo1), hi1), min(max(n2, lo2), hi2), min(max(n3, lo3), hi3)
+        cmd[j], cmd[j + 1], cmd[j + 2] = n1, n2, n3
+        dq[j], dq[j + 1], dq[j + 2] = (n1 - c1) / dt, (n2 - c2) / dt, (n3 - c3) / dt

@@ -441,7 +441,6 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
         metrics=metrics,
         summary=["mean_vx", "mean_vy", "mean_yaw_rate", "lateral_drift", "heading_drift", "slip_per_stance", "fell"],
         camera="track",
-        figures="hexabot",
         trail=trail,
         overlay=overlay,
         extras={"contacts": contacts, "planned_stance": controller.planner.in_stance(t), "window": steady_window(p, t)},
@@ -486,7 +485,7 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     out: dict[str, Any] = {}
 
     # Path seen from above, with the footprints (where each foot touched down) and the heading.
-    fig, ax = plots._figure(figsize=(8, 7))
+    fig, ax = plots.figure(figsize=(8, 7))
     ax.plot(c["x"], c["y"], color="k", lw=1.5, label="body (plate centre)")
     loaded = np.stack([c[f"contact_{leg}"] for leg in hx.LEGS], axis=1) > 0.5
     for i, leg in enumerate(hx.LEGS):
@@ -505,7 +504,7 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.grid(True, alpha=0.3)
-    plots._legend_right(ax)
+    plots.legend_right(ax)
     fig.suptitle(_title(result, "path seen from above"), fontsize=plots.TITLE_FONTSIZE)
     out["path"] = fig
 
@@ -515,7 +514,7 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     show = (t >= start) & (t <= start + 4 * p.period)
     if not show.any():
         show = t >= 0
-    fig, ax = plots._figure(figsize=(9, 4.5))
+    fig, ax = plots.figure(figsize=(9, 4.5))
     for i, leg in enumerate(hx.LEGS):
         y = len(hx.LEGS) - 1 - i
         ts = t[show]
@@ -526,12 +525,12 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     ax.set_yticks(range(len(hx.LEGS)), list(reversed(hx.LEGS)))
     ax.set_xlabel("t [s]")
     ax.set_xlim(t[show][0], t[show][-1])
-    plots._legend_above(ax, ncol=2)
+    plots.legend_above(ax, ncol=2)
     fig.suptitle(_title(result, "gait diagram (bars: measured stance; black: plan)"), fontsize=plots.TITLE_FONTSIZE)
     out["gait_diagram"] = fig
 
     # Commanded vs achieved body velocity (body frame), raw and averaged over one gait period.
-    fig, axes = plots._figure(3, 1, figsize=(9, 8), sharex=True)
+    fig, axes = plots.figure(3, 1, figsize=(9, 8), sharex=True)
     n = max(1, round(p.period / p.timestep))
     for ax, key, cmd, label, unit in (
         (axes[0], "vx_body", "cmd_vx", "forward speed", "m/s"),
@@ -543,39 +542,39 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
         ax.plot(t, c[cmd], **plots.TARGET_STYLE, label="command (with ramp and heading hold)")
         ax.set_ylabel(f"{label} [{unit}]")
         ax.grid(True, alpha=0.3)
-    plots._legend_above(axes[0])
+    plots.legend_above(axes[0])
     axes[-1].set_xlabel("t [s]")
     fig.suptitle(_title(result, "commanded vs achieved velocity (body frame)"), fontsize=plots.TITLE_FONTSIZE)
     out["velocity"] = fig
 
     # Body height and attitude.
-    fig, axes = plots._figure(2, 1, figsize=(9, 6), sharex=True)
+    fig, axes = plots.figure(2, 1, figsize=(9, 6), sharex=True)
     planned_h = (p.stand_height + LAYOUT.foot_radius) * 1000
     axes[0].plot(t, c["z"] * 1000, color="tab:blue", label="body height")
     axes[0].axhline(planned_h, **plots.TARGET_STYLE, label="planned height")
     axes[0].set_ylabel("height [mm]")
-    plots._plain(axes[0])
-    plots._min_span(axes[0], 2.0)
+    plots.plain(axes[0])
+    plots.min_span(axes[0], 2.0)
     axes[1].plot(t, np.degrees(c["roll"]), label="roll")
     axes[1].plot(t, np.degrees(c["pitch"]), label="pitch")
     axes[1].set_ylabel("attitude [deg]")
-    plots._min_span(axes[1], 0.5)
+    plots.min_span(axes[1], 0.5)
     for ax in axes:
         ax.grid(True, alpha=0.3)
-        plots._legend_right(ax)
+        plots.legend_right(ax)
     axes[-1].set_xlabel("t [s]")
     fig.suptitle(_title(result, "body height and attitude"), fontsize=plots.TITLE_FONTSIZE)
     out["body"] = fig
 
     # Foot slip: contact-point speed of the loaded feet.
-    fig, ax = plots._figure(figsize=(9, 4.5))
+    fig, ax = plots.figure(figsize=(9, 4.5))
     for i, leg in enumerate(hx.LEGS):
         slip = np.where(loaded[:, i], contacts.slip[:, i] * 1000, np.nan)
         ax.plot(t, slip, lw=0.8, color=LEG_COLOURS[leg], label=leg)
     ax.set_xlabel("t [s]")
     ax.set_ylabel("contact-point speed while loaded [mm/s]")
     ax.grid(True, alpha=0.3)
-    plots._legend_right(ax)
+    plots.legend_right(ax)
     m = result.metrics
     fig.suptitle(
         _title(
