@@ -1,4 +1,4 @@
-"""Writes models/{rrp,elbow,stanford,scara}.xml and their scenes from the DH tables in hexabot_sim.kinematics.robots.
+"""Writes models/{rrp,elbow,stanford,scara,hexabot}.xml and their scenes from the DH tables (kinematics.robots, .leg).
 
 Usage: python scripts/generate_models.py [--check]   (--check: exit 1 if a file differs, write nothing)
 """
@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hexabot_sim.kinematics import robots
+from hexabot_sim.kinematics import hexabot_mjcf, robots
 from hexabot_sim.kinematics.mjcf import home_pose, to_mjcf
 
 ROBOTS = ("rrp", "elbow", "stanford", "scara")
@@ -87,6 +87,8 @@ def generate() -> dict[str, str]:
     for name in ROBOTS:
         files[f"{name}.xml"] = robot_xml(name)
         files[f"{name}_scene.xml"] = scene_xml(name)
+    files["hexabot.xml"] = hexabot_mjcf.robot_xml()
+    files["hexabot_scene.xml"] = hexabot_mjcf.scene_xml()
     return files
 
 

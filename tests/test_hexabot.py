@@ -275,7 +275,7 @@ def test_infeasible_commands_are_refused_up_front(overrides, fragment):
 def test_refused_largest_feasible_command_is_feasible():
     with pytest.raises(UsageError) as info:
         params.resolve(scenario.HexabotParams, {}, {"vx": 0.6})
-    largest = float(str(info.value).split("vx = ")[1].split()[0].rstrip(","))
+    largest = float(str(info.value).split("vx = ")[1].split(" m/s")[0])
     params.resolve(scenario.HexabotParams, {}, {"vx": largest * 0.999})
 
 

@@ -141,11 +141,8 @@ def feasibility(p: HexabotParams) -> str:
         mid = (lo + hi) / 2
         lo, hi = (mid, hi) if not _cycle_problem(p, cmd.scaled(mid)) else (lo, mid)
     best = cmd.scaled(lo)
-    parts = [
-        f"{name} = {value:.3g}"
-        for name, value in (("vx", best.vx), ("vy", best.vy), ("yaw_rate", best.yaw_rate))
-        if value
-    ]
+    named = (("vx", best.vx, "m/s"), ("vy", best.vy, "m/s"), ("yaw_rate", best.yaw_rate, "rad/s"))
+    parts = [f"{name} = {value:.3g} {unit}" for name, value, unit in named if value]
     stride = math.hypot(p.vx, p.vy) * p.the_gait().duty * p.period
     return (
         f"the legs cannot deliver this command at period {p.period:g} s (stride {stride:.3g} m): {problem}; "
@@ -485,7 +482,11 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     out: dict[str, Any] = {}
 
     # Path seen from above, with the footprints (where each foot touched down) and the heading.
-    fig, ax = plots.figure(figsize=(8, 7))
+    points = np.concatenate([np.c_[c["x"], c["y"]], contacts.point[..., :2].reshape(-1, 2)])
+    points = points[np.isfinite(points).all(axis=1)]
+    span_x, span_y = np.ptp(points, axis=0) + 0.1
+    height = float(np.clip(7.0 * span_y / span_x, 3.0, 8.0))  # equal axes, a frame that fits the walk
+    fig, ax = plots.figure(figsize=(10, height + 1.2))
     ax.plot(c["x"], c["y"], color="k", lw=1.5, label="body (plate centre)")
     loaded = np.stack([c[f"contact_{leg}"] for leg in hx.LEGS], axis=1) > 0.5
     for i, leg in enumerate(hx.LEGS):
@@ -501,6 +502,7 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     ax.plot(c["x"][0], c["y"][0], "g^", ms=9, label="start")
     ax.plot(c["x"][-1], c["y"][-1], "rs", ms=8, label="end")
     ax.set_aspect("equal", adjustable="datalim")
+    ax.margins(0.03)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.grid(True, alpha=0.3)
