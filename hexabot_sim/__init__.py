@@ -1,9 +1,36 @@
-"""hexabot-sim: robotics-course kinematics and dynamics exercises on MuJoCo."""
+"""hexabot-sim: robotics-course kinematics and dynamics exercises on MuJoCo.
+
+Python API (see the README): `scenarios()` lists the scenarios and their parameters, `run(name, **params)`
+runs one and returns a `Result` (params, metrics, columns, to_pandas(), figures(), save(dir), video(path)).
+Importing the package imports neither MuJoCo nor matplotlib's pyplot and never picks a matplotlib backend.
+"""
 
 import os as _os
+from typing import Any as _Any
 
 # MuJoCo picks its OpenGL backend when it is first imported: default to headless EGL.
 USER_MUJOCO_GL: str | None = _os.environ.get("MUJOCO_GL")  # what the user had set, for `hexabot-sim check`
 _os.environ.setdefault("MUJOCO_GL", "egl")
 
 __version__ = "0.1.0"
+
+# The API lives in hexabot_sim.api and is imported on first use, so `import hexabot_sim` stays cheap
+# and MuJoCo is not imported before the CLI has chosen its OpenGL backend.
+_API = ("run", "Result", "ScenarioInfo", "Parameter", "Columns", "Metric")
+__all__ = ["__version__", "scenarios", *_API]
+
+
+def __getattr__(name: str) -> _Any:
+    if name == "scenarios":  # the sub-package, callable: hexabot_sim.scenarios() is the API's list of scenarios
+        import importlib
+
+        return importlib.import_module("hexabot_sim.scenarios")
+    if name in _API:
+        from hexabot_sim import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'hexabot_sim' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), "scenarios", *_API])

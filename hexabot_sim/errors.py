@@ -7,8 +7,11 @@ class HexabotError(Exception):
     exit_code = 1
 
 
-class UsageError(HexabotError):
-    """Bad input from the user: unknown name, malformed or out-of-range value, unwritable path."""
+class UsageError(HexabotError, ValueError):
+    """Bad input from the user: unknown name, malformed or out-of-range value, unwritable path.
+
+    A ValueError too, so Python callers of the API (`hexabot_sim.run`) can catch it as one.
+    """
 
     exit_code = 2
 

@@ -1,7 +1,8 @@
-"""The only writer of run folders: timeseries.csv, run.json, model.xml, figures and video, all or nothing."""
+"""The only writer of run folders: timeseries.csv, run.json, model.xml, figures, video and report, all or nothing."""
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as _dt
 import errno
 import json
@@ -12,7 +13,8 @@ import shutil
 import signal
 import tempfile
 import threading
-from collections.abc import Iterator, Mapping
+import time
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -25,6 +27,8 @@ JSON_NAME = "run.json"
 MODEL_NAME = "model.xml"
 VIDEO_NAME = "video.mp4"
 TRAJECTORY_NAME = "trajectory.npz"
+REPORT_NAME = "report.html"
+NOT_REQUESTED = "not requested (add --video)"  # run.json's video reason when no video was asked for
 
 
 # Every run is written into a hidden staging folder next to its destination and renamed into
@@ -326,3 +330,177 @@ def display_path(path: Path) -> str:
         return os.path.relpath(path) if Path(path).resolve().is_relative_to(Path.cwd()) else str(path)
     except ValueError:
         return str(path)
+
+
+@contextmanager
+def package_style() -> Iterator[None]:
+    """Matplotlib's default style for the block, whatever the caller's rcParams; all restored afterwards.
+
+    The figures of a run folder look the same from the CLI, a notebook or a script with its own
+    matplotlibrc; the backend is never touched.
+    """
+    import matplotlib.style
+
+    with matplotlib.style.context("default"):
+        yield
+
+
+@dataclasses.dataclass(frozen=True)
+class VideoSettings:
+    """How video.mp4 is rendered.
+
+    Attributes:
+        width, height: Frame size in [px] (even, checked by the caller).
+        fps: Frame rate in [1/s].
+        quality: "preview" or "high" (render.QUALITY).
+    """
+
+    width: int = 640
+    height: int = 480
+    fps: int = 30
+    quality: str = "preview"
+
+
+@dataclasses.dataclass(frozen=True)
+class Written:
+    """What write_run put into a run folder: file names, the run.json `video` entry, video time [s]."""
+
+    files: list[str]
+    video: dict[str, Any]
+    video_seconds: float
+
+
+def write_video(
+    folder: Path,
+    result: Any,
+    settings: VideoSettings,
+    backend: str,
+    progress: Callable[[int, int], None] | None = None,
+    name: str = VIDEO_NAME,
+) -> tuple[dict[str, Any], float]:
+    """Renders `name` (video.mp4) into `folder`; a failure of the GL or ffmpeg is no reason to lose the run.
+
+    Returns:
+        (run.json's `video` entry, seconds spent). The entry says why there is no video if it failed.
+
+    Raises:
+        OSError: when the disk is full (ENOSPC, EDQUOT): the run cannot be written at all.
+    """
+    from hexabot_sim import render
+
+    started = time.perf_counter()
+    try:
+        frames = render.render_video(
+            result.model,
+            result.trajectory.t,
+            result.trajectory.qpos,
+            folder / name,
+            camera=result.camera,
+            width=settings.width,
+            height=settings.height,
+            fps=settings.fps,
+            quality=settings.quality,
+            markers=result.markers,
+            trail=result.trail,
+            overlay=result.overlay,
+            progress=progress,
+        )
+    except (KeyboardInterrupt, MemoryError):
+        raise
+    except Exception as e:  # OpenGL context or encoder failure: keep CSV and plots, say why
+        (folder / name).unlink(missing_ok=True)
+        if isinstance(e, OSError) and e.errno in (errno.ENOSPC, errno.EDQUOT):
+            raise
+        reason = f"rendering failed: {type(e).__name__}: {str(e).strip().splitlines()[-1] if str(e).strip() else ''}"
+        return {"written": False, "reason": reason.rstrip(": ")}, time.perf_counter() - started
+    video = {
+        "written": True,
+        "file": name,
+        "frames": frames,
+        "fps": settings.fps,
+        "size": [settings.width, settings.height],
+        "quality": settings.quality,
+        "gl_backend": backend,
+    }
+    return video, time.perf_counter() - started
+
+
+def write_run(
+    folder: Path,
+    scenario: Any,
+    params: Any,
+    result: Any,
+    *,
+    sim_seconds: float,
+    plots: bool = True,
+    video: VideoSettings | None = None,
+    backend: str | None = None,
+    no_video_reason: str = NOT_REQUESTED,
+    video_progress: Callable[[int, int], None] | None = None,
+) -> Written:
+    """Writes everything of a finished run into `folder` (a staging folder from run_folder).
+
+    The one writer of a run folder's content, for the CLI and the Python API alike: the CSV,
+    model.xml, trajectory.npz, the figures, video.mp4, run.json and report.html.
+
+    Args:
+        scenario: The registry entry (scenarios.Scenario): name, summary, figures().
+        params: The resolved parameter object the run used.
+        result: The scenario's ScenarioResult.
+        sim_seconds: Wall time of the simulation [s], recorded in run.json.
+        plots: Whether to write the PNG figures.
+        video: Render video.mp4 with these settings (None: no video).
+        backend: The working OpenGL backend (None: no video, for `no_video_reason`).
+        no_video_reason: Why there is no video, when there is none.
+        video_progress: Called with (frames done, frames in all) while the video renders.
+    """
+    from hexabot_sim import params as params_mod
+    from hexabot_sim import report
+
+    write_csv(folder / result.csv_name, result.columns)
+    write_text(folder / MODEL_NAME, result.model_xml)
+    files = [result.csv_name, JSON_NAME, MODEL_NAME]
+    if result.trajectory is not None:  # the full recorded state: recompute anything from model.xml
+        traj = result.trajectory
+        arrays = {"t": traj.t, "qpos": traj.qpos, "qvel": traj.qvel}
+        arrays["ctrl"] = traj.ctrl if traj.ctrl is not None else np.zeros((len(traj.t), result.model.nu))
+        write_arrays(folder / TRAJECTORY_NAME, arrays)
+        files.append(TRAJECTORY_NAME)
+    if plots:
+        with package_style():
+            files += write_figures(scenario.figures(result), folder)
+
+    if video is not None and (result.camera is None or result.trajectory is None):
+        backend, no_video_reason = None, f"{scenario.name} produces no trajectory to film"
+    video_record: dict[str, Any] = {"written": False, "reason": no_video_reason}
+    video_seconds = 0.0
+    if video is not None and backend is not None:
+        video_record, video_seconds = write_video(folder, result, video, backend, video_progress)
+        if video_record["written"]:
+            files.append(VIDEO_NAME)
+    files.append(REPORT_NAME)
+
+    record = {
+        "scenario": scenario.name,
+        "description": scenario.summary,
+        "params": params_mod.as_dict(params),
+        "metrics": {name: m.value for name, m in result.metrics.items()},
+        "units": {
+            "params": params_mod.units(type(params)),
+            "metrics": {name: m.unit for name, m in result.metrics.items()},
+            "columns": result.column_units,
+        },
+        "metric_docs": {name: m.doc for name, m in result.metrics.items()},
+        "files": files,
+        "video": video_record,
+        "simulation": {
+            "steps": None if result.trajectory is None else len(result.trajectory.t) - 1,
+            "simulated_time": None if result.trajectory is None else float(result.trajectory.t[-1]),
+            "wall_time": sim_seconds,
+        },
+        "versions": versions(),
+    }
+    write_json(folder / JSON_NAME, record)
+    param_docs = {name: info.doc for name, (info, _) in params_mod.infos(type(params)).items()}
+    write_text(folder / REPORT_NAME, report.html_page(record, param_docs, result.summary, folder))
+    return Written(files, video_record, video_seconds)

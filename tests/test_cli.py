@@ -33,6 +33,7 @@ def test_run_folder_contents(tmp_path, capsys):
         "angle_velocity.png",
         "phase.png",
         "energy.png",
+        "report.html",
     }
     record = json.loads((out_dir / "run.json").read_text())
     assert {"scenario", "params", "metrics", "versions"} <= set(record)

@@ -457,7 +457,13 @@ def test_cli_run_writes_the_columns_and_metrics(tmp_path, capsys):
     code = main(["run", "leg-step", "--out", str(out), "--no-plots"])
     _, err = capsys.readouterr()
     assert code == 0, err
-    assert {f.name for f in out.iterdir()} == {"timeseries.csv", "run.json", "model.xml", "trajectory.npz"}
+    assert {f.name for f in out.iterdir()} == {
+        "timeseries.csv",
+        "run.json",
+        "model.xml",
+        "trajectory.npz",
+        "report.html",
+    }
     header = (out / "timeseries.csv").read_text().splitlines()[0].split(",")
     assert set(COLUMNS) <= set(header) and header[0] == "t"
     record = json.loads((out / "run.json").read_text())

@@ -1,0 +1,349 @@
+"""The Python API: list the scenarios, run one, and look at, save or film its result (for notebooks and scripts)."""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import os
+import time
+import warnings
+from collections.abc import Callable, Iterator, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from hexabot_sim import output
+from hexabot_sim import params as params_mod
+from hexabot_sim import scenarios as registry
+from hexabot_sim.errors import OutputError, UsageError
+from hexabot_sim.scenarios.base import Metric
+
+__all__ = ["Columns", "Metric", "Parameter", "Result", "ScenarioInfo", "run", "scenarios"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Parameter:
+    """One parameter of a scenario, as `hexabot-sim list` shows it.
+
+    Attributes:
+        name: What `run(..., name=value)` and `--set name=value` take.
+        default: This scenario's default value.
+        unit: Unit of the value, e.g. "m/s" ("" for text, "1" for a plain number).
+        doc: One-line meaning.
+        allowed: The allowed values in words, e.g. "-1 <= amplitude <= 1 m/s" or "one of dynamic, kinematic".
+        bounds: (lowest, highest) allowed number (whether each end is included: see `allowed`); None for text.
+        choices: The allowed strings of a text parameter (case-insensitive), else None.
+    """
+
+    name: str
+    default: Any
+    unit: str
+    doc: str
+    allowed: str
+    bounds: tuple[float, float] | None
+    choices: tuple[str, ...] | None
+
+
+@dataclasses.dataclass(frozen=True)
+class ScenarioInfo:
+    """A scenario: its name, one-line summary and parameters (name -> Parameter, in declaration order)."""
+
+    name: str
+    summary: str
+    parameters: dict[str, Parameter]
+
+    @property
+    def defaults(self) -> dict[str, Any]:
+        """Parameter name -> default value."""
+        return {name: p.default for name, p in self.parameters.items()}
+
+
+def _info(scenario: registry.Scenario) -> ScenarioInfo:
+    parameters = {}
+    for name, (info, default) in params_mod.infos(scenario.params_type).items():
+        value = scenario.defaults.get(name, default)
+        bounds = None
+        if info.choices is None:
+            low = info.ge if info.ge is not None else info.gt
+            high = info.le if info.le is not None else info.lt
+            bounds = (float(low), float(high))  # type: ignore[arg-type]
+        parameters[name] = Parameter(
+            name, value, info.unit, info.doc, params_mod.describe_range(info, name), bounds, info.choices
+        )
+    return ScenarioInfo(scenario.name, scenario.summary, parameters)
+
+
+def scenarios() -> dict[str, ScenarioInfo]:
+    """Every scenario by name, with its parameters (default, unit, meaning, allowed range)."""
+    return {name: _info(scenario) for name, scenario in registry.SCENARIOS.items()}
+
+
+class Columns(dict):
+    """The recorded columns of a run: name -> numpy array (n,), in CSV order; `.units` maps name -> unit."""
+
+    def __init__(self, columns: Mapping[str, np.ndarray], units: Mapping[str, str]) -> None:
+        super().__init__(columns)
+        self.units: dict[str, str] = dict(units)
+
+
+def _plain(value: Any) -> Any:
+    """A numpy scalar or array as the Python value the CLI's parser takes (a number or a list of numbers)."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+@contextlib.contextmanager
+def _mujoco_warnings() -> Iterator[None]:
+    """MuJoCo's warnings become Python RuntimeWarnings (its default handler writes MUJOCO_LOG.TXT to the cwd)."""
+    import mujoco
+
+    seen: list[str] = []
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(seen.append)
+    try:
+        yield
+    finally:
+        mujoco.set_mju_user_warning(previous)
+        for message in dict.fromkeys(seen):
+            warnings.warn(f"MuJoCo warning: {' '.join(message.split())}", RuntimeWarning, stacklevel=3)
+
+
+def run(
+    scenario: str,
+    *,
+    config: str | os.PathLike[str] | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    **params: Any,
+) -> Result:
+    """Runs a scenario and returns its result (nothing is written; see Result.save).
+
+    Parameters are checked exactly as `hexabot-sim run` checks them, with the same messages;
+    precedence is the same too: scenario defaults < `config` < keyword parameters.
+
+    Args:
+        scenario: Scenario name, e.g. "leg-step" (see `scenarios()`).
+        config: Optional TOML file of `name = value` lines (like `--config`).
+        progress: Called with (done, total) while the run goes, e.g. for a progress bar.
+        **params: Parameter values, e.g. `amplitude=0.08, mode="kinematic"`; numbers, strings (as
+            `--set` takes them), or lists of numbers for list parameters.
+
+    Raises:
+        hexabot_sim.errors.UsageError: (a ValueError) an unknown scenario or parameter, a value out of
+            its range, a run too large; the message names what is allowed.
+        hexabot_sim.errors.SimulationError: the simulation went unstable (names the time and likely cause).
+    """
+    entry = registry.get(scenario)
+    layer = {name: _plain(value) for name, value in params.items()}
+    layers = [params_mod.read_config(Path(config))] if config is not None else []
+    p: Any = params_mod.resolve(entry.params_type, entry.defaults, *layers, layer)
+    started = time.perf_counter()
+    with _mujoco_warnings():
+        result = entry.runner(entry.name, p, progress=progress)
+    return Result(entry, p, result, time.perf_counter() - started)
+
+
+class Result:
+    """What one run produced, in memory.
+
+    Attributes:
+        scenario: Scenario name.
+        description: The scenario's one-line summary.
+        params: Parameter name -> the value the run used (fully resolved); `run(name, **r.params)` repeats it.
+        param_units: Parameter name -> unit.
+        metrics: Metric name -> Metric(value, unit, doc).
+        summary: Names of the metrics that sum the run up (what the CLI prints).
+        columns: Column name -> numpy array (the CSV's columns), with `.columns.units`.
+        raw: The scenario's ScenarioResult (the compiled MjModel, the trajectory, ...).
+        wall_time: Wall time of the simulation [s].
+    """
+
+    def __init__(self, scenario: registry.Scenario, params: Any, raw: Any, wall_time: float) -> None:
+        self._scenario = scenario
+        self._params = params
+        self.raw = raw
+        self.wall_time = wall_time
+        self.scenario: str = scenario.name
+        self.description: str = scenario.summary
+        self.params: dict[str, Any] = params_mod.as_dict(params)
+        self.param_units: dict[str, str] = params_mod.units(type(params))
+        self.metrics: dict[str, Metric] = dict(raw.metrics)
+        self.summary: list[str] = list(raw.summary)
+        self.columns = Columns(raw.columns, raw.column_units)
+
+    def __repr__(self) -> str:
+        key = "; ".join(f"{name}={_short(self.metrics[name])}" for name in self.summary)
+        return f"<hexabot_sim.Result {self.scenario}: {key}>"
+
+    def _repr_html_(self) -> str:
+        from hexabot_sim import report
+
+        record = {
+            "metrics": {name: m.value for name, m in self.metrics.items()},
+            "units": {"metrics": {name: m.unit for name, m in self.metrics.items()}},
+        }
+        line = report.summary_line(record, self.summary)
+        import html
+
+        return f"<p><b>{html.escape(self.scenario)}</b>: {html.escape(line)}</p>"
+
+    def to_pandas(self) -> Any:
+        """The columns as a pandas DataFrame (units in `df.attrs["units"]`).
+
+        Raises:
+            ImportError: when pandas is not installed (it is not a dependency of hexabot-sim).
+        """
+        try:
+            import pandas as pd
+        except ImportError as e:
+            raise ImportError(
+                "Result.to_pandas() needs pandas, which hexabot-sim does not install: pip install pandas "
+                "(the columns are also in Result.columns as numpy arrays)"
+            ) from e
+        frame = pd.DataFrame({name: np.asarray(values) for name, values in self.columns.items()})
+        frame.attrs["units"] = dict(self.columns.units)
+        return frame
+
+    def figures(self) -> dict[str, Any]:
+        """The scenario's figures: file stem -> matplotlib Figure (new ones at every call).
+
+        They are made without pyplot, in matplotlib's default style, whatever the global rcParams
+        are; no backend is chosen and no rcParams are changed.
+        """
+        with output.package_style():
+            return dict(self._scenario.figures(self.raw))
+
+    def save(
+        self,
+        out: str | os.PathLike[str] | None = None,
+        *,
+        force: bool = False,
+        plots: bool = True,
+        video: bool = False,
+        quality: str = "preview",
+        size: tuple[int, int] | str = (640, 480),
+        fps: int = 30,
+        progress: Callable[[int, int], None] | None = None,
+    ) -> Path:
+        """Writes the run folder `hexabot-sim run` writes: the same files with the same bytes (timings aside).
+
+        Args:
+            out: The run folder (new or empty; default: runs/<scenario>-<timestamp>[-N]).
+            force: Replace a non-empty `out` (as `--force`).
+            plots: Write the PNG figures (as not `--no-plots`).
+            video: Also render video.mp4; when no OpenGL or ffmpeg works, the folder is written
+                without it and run.json's `video.reason` says why (as `--video`).
+            quality, size, fps: The video's preset, (width, height) [px] or "WxH", frame rate.
+            progress: Called with (frames done, frames in all) while the video renders.
+
+        Returns:
+            The run folder.
+
+        Raises:
+            hexabot_sim.errors.UsageError: a refused `out` (see the README's run folder contract) or bad video options.
+            hexabot_sim.errors.OutputError: the folder could not be written.
+        """
+        settings = _video_settings(quality, size, fps) if video else None
+        backend, reason = None, output.NOT_REQUESTED
+        if video:
+            backend, reason = _video_backend()
+        with output.run_folder(out, self.scenario, force=force) as folder:
+            output.write_run(
+                folder.path,
+                self._scenario,
+                self._params,
+                self.raw,
+                sim_seconds=self.wall_time,
+                plots=plots,
+                video=settings,
+                backend=backend,
+                no_video_reason=reason,
+                video_progress=progress,
+            )
+        assert folder.final is not None
+        return folder.final
+
+    def video(
+        self,
+        path: str | os.PathLike[str] = "video.mp4",
+        *,
+        quality: str = "preview",
+        size: tuple[int, int] | str = (640, 480),
+        fps: int = 30,
+        progress: Callable[[int, int], None] | None = None,
+    ) -> Path:
+        """Renders the run as an MP4 (H.264) at `path`, in real time, as `hexabot-sim run --video` does.
+
+        Args:
+            path: The file to write (replaced if it exists).
+            quality: "preview" (fast) or "high" (multisampling, shadows).
+            size: (width, height) [px] or "WxH": even sides, 64x64 to 3840x2160, at most 4:1.
+            fps: Frames per second, 1 to 240.
+
+        Returns:
+            The path written.
+
+        Raises:
+            hexabot_sim.errors.UsageError: bad options, or a scenario without a trajectory (leg-sweep).
+            hexabot_sim.errors.OutputError: no working OpenGL or ffmpeg here, or rendering failed.
+        """
+        settings = _video_settings(quality, size, fps)
+        if self.raw.camera is None or self.raw.trajectory is None:
+            raise UsageError(f"{self.scenario} produces no trajectory to film")
+        backend, reason = _video_backend()
+        if backend is None:
+            raise OutputError(f"no video: {reason}")
+        path = Path(path)
+        if path.is_dir():
+            raise UsageError(f"video path {str(path)!r} is a folder; give a file name such as video.mp4")
+        staging = path.with_name(f".{path.name}.partial-{os.getpid()}.mp4")
+        try:
+            record, _ = output.write_video(staging.parent, self.raw, settings, backend, progress, name=staging.name)
+            if not record["written"]:
+                raise OutputError(f"no video: {record['reason']}")
+            os.replace(staging, path)
+        finally:
+            staging.unlink(missing_ok=True)
+        return path
+
+
+def _short(metric: Metric) -> str:
+    from hexabot_sim import report
+
+    unit = "" if metric.unit in ("", "1") or metric.value is None else f" {metric.unit}"
+    return f"{report.format_value(metric.value)}{unit}"
+
+
+def _video_settings(quality: str, size: tuple[int, int] | str, fps: int) -> output.VideoSettings:
+    """Checks video options with the CLI's own rules and messages (--quality, --size, --fps)."""
+    import argparse
+
+    from hexabot_sim import render
+    from hexabot_sim.__main__ import _fps, _size
+
+    if quality not in render.QUALITY:
+        raise UsageError(f"video quality must be one of {', '.join(render.QUALITY)}; got {quality!r}")
+    text = size if isinstance(size, str) else "x".join(str(_plain(v)) for v in size)
+    try:
+        width, height = _size(text)
+        rate = _fps(str(_plain(fps)))
+    except argparse.ArgumentTypeError as e:
+        raise UsageError(f"video: {e}") from None
+    return output.VideoSettings(width=width, height=height, fps=rate, quality=quality)
+
+
+def _video_backend() -> tuple[str | None, str]:
+    """(working OpenGL backend, "") or (None, why there is no video)."""
+    from hexabot_sim import gl
+
+    backend, reason, _notice = gl.choose()
+    if backend is not None:
+        problem = gl.ffmpeg_problem()
+        if problem is not None:
+            return None, problem
+    return backend, reason
