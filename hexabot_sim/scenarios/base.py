@@ -53,3 +53,23 @@ class ScenarioResult:
     # Text lines the video shows under the time: each maps a recording row to text (render.OverlayLine).
     overlay: list[Callable[[int], str]] = dataclasses.field(default_factory=list)
     extras: dict[str, Any] = dataclasses.field(default_factory=dict)  # scenario data for its figures
+
+
+@dataclasses.dataclass
+class Live:
+    """A scenario ready to be stepped interactively (`hexabot-sim view NAME`): model and state at the start.
+
+    Each scenario module with a motion has `live(params) -> Live`; the viewer steps it in real time
+    and draws `markers`, the path of `trail` and the `overlay` text as the videos do.
+    """
+
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    step: Callable[[], None]  # advances `data` by one control period: controller, then physics
+    timestep: float  # [s] simulated time one step() advances
+    duration: float  # [s] the scenario's simulated time
+    camera: str  # the scene camera of the videos: the viewer starts from its viewpoint
+    track_body: str | None = None  # the view follows this body (a walking robot)
+    markers: list[Marker] = dataclasses.field(default_factory=list)
+    trail: Callable[[mujoco.MjData], np.ndarray] | None = None  # (3,) world point whose path is drawn
+    overlay: list[Callable[[mujoco.MjData], str]] = dataclasses.field(default_factory=list)  # ASCII text lines

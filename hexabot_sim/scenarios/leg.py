@@ -16,7 +16,7 @@ from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.kinematics import robots
 from hexabot_sim.params import check_duration, check_run_cost, param
-from hexabot_sim.scenarios.base import Marker, Metric, Progress, ScenarioResult
+from hexabot_sim.scenarios.base import Live, Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import Controller, simulate, site_trajectory, step_count
 
 if TYPE_CHECKING:
@@ -653,3 +653,32 @@ def workspace_figure(result: ScenarioResult) -> Figure:
         fontsize=plots.TITLE_FONTSIZE,
     )
     return fig
+
+
+def live(p: LegStepParams) -> Live:
+    """The leg at its start pose with the resolved-rate controller wired in, for the interactive viewer."""
+    loop = prepare(p)
+    model, data, control, advance = loop.model, loop.data, loop.control, loop.step
+    hip_pos = data.site("hip").xpos.copy()
+    hip_rot = data.site("hip").xmat.reshape(3, 3).copy()
+    start_world = hip_pos + hip_rot @ loop.start
+    forward, backward = excursion(p)
+    x_dir = hip_rot[:, 0]
+    target_line = Marker(
+        tuple(start_world - backward * x_dir), tuple(start_world + forward * x_dir), 0.0015, (0.9, 0.2, 0.15, 0.6)
+    )
+    ref = reference(p, loop.start)
+    foot = model.site("foot").id
+
+    def step() -> None:
+        control(model, data)
+        advance(model, data)
+
+    def foot_text(d: mujoco.MjData) -> str:
+        target = hip_pos + hip_rot @ np.array(ref(float(d.time)))
+        return f"foot x = {d.site_xpos[foot][0] * 1000:6.1f} mm  target {target[0] * 1000:6.1f} mm"
+
+    return Live(
+        model, data, step, p.timestep, p.duration, camera="three_quarter", markers=[target_line],
+        trail=lambda d: d.site_xpos[foot], overlay=[foot_text],
+    )  # fmt: skip

@@ -12,7 +12,7 @@ import numpy as np
 
 from hexabot_sim import models, render
 from hexabot_sim.params import check_duration, check_run_cost, param
-from hexabot_sim.scenarios.base import Marker, Metric, Progress, ScenarioResult
+from hexabot_sim.scenarios.base import Live, Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import simulate, step_count
 
 if TYPE_CHECKING:
@@ -489,3 +489,31 @@ def figures(result: ScenarioResult) -> dict[str, Figure]:
     ax2.grid(alpha=0.3, which="both")
     figures["energy"] = fig
     return figures
+
+
+def live(p: PendulumParams) -> Live:
+    """The pendulum released from theta0, for the interactive viewer (no controller: it swings freely)."""
+    model = mujoco.MjModel.from_xml_string(build_xml(p))
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    hinge = model.joint("hinge")
+    qadr, dadr = int(hinge.qposadr[0]), int(hinge.dofadr[0])
+    link = model.body("link").id
+    mgc = float(model.body_mass[link] * -model.opt.gravity[2] * np.linalg.norm(model.body_ipos[link]))
+    markers = []
+    rest = rest_angle(p.stiffness, mgc, math.radians(p.target_deg), near=math.radians(p.theta0_deg))
+    if rest is not None and p.damping > 0:  # the predicted rest angle, green beside the link (as in the video)
+        pivot, length = model.body("link").pos, float(np.linalg.norm(model.site("tip").pos))
+        end = (pivot[0] + length * math.sin(rest), pivot[1] - 0.02 * length, pivot[2] - length * math.cos(rest))
+        markers.append(
+            Marker((pivot[0], pivot[1] - 0.02 * length, pivot[2]), end, 0.008 * length, (0.1, 0.75, 0.2, 0.6))
+        )
+
+    def step() -> None:
+        mujoco.mj_step(model, data)
+
+    return Live(
+        model, data, step, p.timestep, p.duration, camera="side", markers=markers,
+        overlay=[lambda d: f"theta = {math.degrees(d.qpos[qadr]):7.2f} deg  omega = {d.qvel[dadr]:6.2f} rad/s"],
+    )  # fmt: skip

@@ -12,7 +12,7 @@ from hexabot_sim import models, render
 from hexabot_sim.kinematics import robots
 from hexabot_sim.kinematics.mjcf import to_mjcf
 from hexabot_sim.params import check_duration, check_run_cost, param
-from hexabot_sim.scenarios.base import Metric, Progress, ScenarioResult
+from hexabot_sim.scenarios.base import Live, Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import Trajectory, step_count
 
 if TYPE_CHECKING:
@@ -193,3 +193,29 @@ def figures(result: ScenarioResult) -> dict[str, Figure]:
         fontsize=plots.TITLE_FONTSIZE,
     )
     return {"velocity": fig}
+
+
+def live(p: RrpVelocityParams) -> Live:
+    """The RRP arm playing q(t) = (sin t, cos 2t, sin 3t), for the interactive viewer."""
+    chain = robots.get("rrp").chain({"d1": p.d1, "a2": p.a2})
+    robot = to_mjcf(chain, comment="rrp-velocity: report 001 part 5", link_radius=VIDEO_LINK_RADIUS)
+    model = mujoco.MjModel.from_xml_string(models.to_xml(models.load_tree("rrp_scene", replace={"rrp.xml": robot})))
+    data = mujoco.MjData(model)
+    addr = [int(model.joint(j.name).qposadr[0]) for j in chain.joints]
+    dadr = [int(model.joint(j.name).dofadr[0]) for j in chain.joints]
+    tool = model.site("tool").id
+
+    def step() -> None:
+        # Kinematic playback: the prescribed q(t) and its derivative, one timestep on.
+        q, dq = joint_trajectory(np.array([data.time + p.timestep]))
+        data.time += p.timestep
+        data.qpos[addr], data.qvel[dadr] = q[0], dq[0]
+        mujoco.mj_kinematics(model, data)
+
+    q0, _ = joint_trajectory(np.zeros(1))
+    data.qpos[addr] = q0[0]
+    mujoco.mj_forward(model, data)
+    return Live(
+        model, data, step, p.timestep, p.duration, camera="three_quarter",
+        trail=lambda d: d.site_xpos[tool], overlay=[lambda d: f"q1 = {d.qpos[addr[0]]:6.3f} rad"],
+    )  # fmt: skip
