@@ -217,3 +217,242 @@ class HexabotController:
             rate_steps(self.consts, self._qpos[7:25].tolist(), q_cmd, dq, self._rows[k], self._rows[k + 1], self.dt)
             self._ctrl[:] = q_cmd + dq  # position servos: q_cmd; velocity servos: dq
         self._k = k + 1
+
+
+# Swing state machine of GroundController, per leg.
+STANCE, SWING, EARLY, SEEKING = 0, 1, 2, 3
+
+
+@dataclasses.dataclass(frozen=True)
+class GroundSettings:
+    """How the walking controller meets uneven ground (GroundController).
+
+    Attributes:
+        sensed: A swing foot whose touch sensor fires in the second half of its swing goes to stance at
+            once (early touchdown); one that has not touched at the planned touchdown keeps descending
+            (late touchdown) until it touches or its target leaves `depth_range` (no ground found).
+        level: Keep the body level relative to gravity from the IMU's roll and pitch; else the body
+            follows the plane of the stance feet.
+        stand_height: Depth of the stance feet below the body's origin over the local ground [m].
+        depth_range: (smallest, largest) depth of a foot target below its hip [m] (the legs' workspace).
+        attitude_gain: Rate at which tilt errors are removed [1/s].
+        height_gain: Rate at which body-height errors are removed [1/s].
+        touch_threshold: Touch-sensor force that counts as contact [N].
+        update_every: Control steps between updates of the ground plane and the levelling.
+    """
+
+    sensed: bool = True
+    level: bool = False
+    stand_height: float = 0.09
+    depth_range: tuple[float, float] = (0.03, 0.17)
+    attitude_gain: float = 10.0
+    height_gain: float = 5.0
+    touch_threshold: float = 0.3
+    update_every: int = 5
+
+
+@dataclasses.dataclass(frozen=True)
+class Touchdown:
+    """A swing that ended: when the plan said and when the foot touched (NaN: no ground found)."""
+
+    leg: int
+    planned: float  # [s] planned touchdown time
+    touched: float  # [s] touch-sensor time (sensed) or the planned time (planned); NaN: no ground
+
+
+class GroundController(HexabotController):
+    """HexabotController with feet that find the ground and (optionally) a body kept level.
+
+    The gait planner's targets keep their horizontal motion; the height of each foot target (the z of
+    the body/hip frame, which the hip frames share) is set here:
+    - stance: z_i, the height where the foot touched down, moved with the whole stance by a plane
+      a + b x + c y every `update_every` steps: a drives the stance plane's height at the body origin
+      to -stand_height, (b, c) drive the body's roll and pitch from the IMU quaternion to zero (level)
+      or the stance plane's slope to zero (follow the ground); clipped to the workspace depths;
+    - swing: from the lift-off height to the stance plane under the landing point (smoothstep), plus
+      the planner's lift h sin^2(pi s);
+    - sensed touchdown: early, the leg is in stance from the touch on (its horizontal target becomes
+      ground-fixed, the offset to the plan fading out over its next swing); late, the target keeps
+      descending at SEEK_SPEED until it touches or leaves the workspace.
+    """
+
+    def __init__(self, model, data, layout, planner, gains, settings, q_start, ground: GroundSettings) -> None:
+        super().__init__(model, data, layout, planner, gains, settings, q_start)
+        self.ground = ground
+        self.touch_adr = [int(model.sensor_adr[model.sensor(f"{leg}_touch").id]) for leg in hx.LEGS]
+        feet = hx.feet_body(layout, np.asarray(q_start).reshape(6, 3))  # (6, 3)
+        self.z = [float(v) for v in feet[:, 2]]  # stance height of each foot target (body frame) [m]
+        self.mode = [STANCE] * 6
+        self.grounded = [True] * 6  # in stance on something (False: no ground was found)
+        self.offset = [[0.0, 0.0] for _ in range(6)]  # horizontal target offset (hip frame) [m]
+        self.offset_lift = [[0.0, 0.0] for _ in range(6)]
+        self.z_lift = list(self.z)
+        self.t_lift = [0.0] * 6
+        self.events: list[Touchdown] = []
+        self.clipped_updates = 0
+        self.updates = 0
+        self._cos = [math.cos(y) for y in layout.yaws]
+        self._sin = [math.sin(y) for y in layout.yaws]
+        self._hips_xy = [(float(h[0]), float(h[1])) for h in self.hips]
+        self._neutral = [(float(p[0]), float(p[1])) for p in planner.neutral]
+        self._neutral_z = [float(p[2]) for p in planner.neutral]
+        self._landing = list(self._neutral)
+        self._plane = [-ground.stand_height, 0.0, 0.0]  # stance plane z = a + b x + c y (body frame)
+        self._was_stance = [True] * 6
+        self._row_prev: list[float] | None = None
+        self._count = 0
+        self._cmd = Command()
+        swing_time = planner.swing_time
+        self.seek_speed = math.pi * planner.step_height / (2 * swing_time)  # [m/s] half the swing's peak
+
+    def _rolling_offsets(self, hip: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
+        """The rolling offsets of the feet at the heights they stand at now (not the planned flat-ground height)."""
+        shifted = hip.copy()
+        shifted[..., 2] += np.array(self.z) - np.array(self._neutral_z)
+        return super()._rolling_offsets(shifted, stance, swing_s)
+
+    def _body_xy(self, row: list[float], i: int) -> tuple[float, float]:
+        """Body-frame horizontal position of leg i's target in a hip-frame row."""
+        c, s = self._cos[i], self._sin[i]
+        x, y = row[3 * i], row[3 * i + 1]
+        return c * x - s * y + self._hips_xy[i][0], s * x + c * y + self._hips_xy[i][1]
+
+    def _update_plane(self, row: list[float]) -> None:
+        """Refits the stance plane and moves every grounded stance target by the levelling/height correction."""
+        g = self.ground
+        legs = [i for i in range(6) if self.mode[i] in (STANCE, EARLY) and self.grounded[i]]
+        xy = [self._body_xy(row, i) for i in legs]
+        if len(legs) >= 3:
+            a_mat = np.array([[1.0, x, y] for x, y in xy])
+            sol, *_ = np.linalg.lstsq(a_mat, np.array([self.z[i] for i in legs]), rcond=None)
+            plane = [float(v) for v in sol]
+        else:
+            plane = list(self._plane)
+        step = g.update_every * self.dt
+        da = -g.height_gain * (plane[0] + g.stand_height) * step
+        if g.level:
+            w, x, y, z = (float(v) for v in self._sensordata[self.quat_adr : self.quat_adr + 4])
+            roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+            pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
+            db, dc = -g.attitude_gain * math.tan(pitch) * step, g.attitude_gain * math.tan(roll) * step
+        else:
+            db, dc = -g.attitude_gain * plane[1] * step, -g.attitude_gain * plane[2] * step
+        lo, hi = -g.depth_range[1], -g.depth_range[0]
+        clipped = False
+        for i, (x, y) in zip(legs, xy, strict=True):
+            z = self.z[i] + da + db * x + dc * y
+            if not lo <= z <= hi:
+                z, clipped = min(hi, max(lo, z)), True
+            self.z[i] = z
+        self.updates += 1
+        self.clipped_updates += clipped
+        self._plane = [plane[0] + da, plane[1] + db, plane[2] + dc]
+
+    def _targets(self, row: list[float], stance: list[bool], t: float, row_prev: list[float]) -> list[float]:
+        """The planner's hip-frame row at time t with the heights and offsets of uneven ground."""
+        g = self.ground
+        out = list(row)
+        sensed = g.sensed
+        for i in range(6):
+            planned = stance[i]
+            mode = self.mode[i]
+            was = self._was_stance[i]
+            self._was_stance[i] = planned
+            if mode in (STANCE, SEEKING) and was and not planned:  # planned lift-off
+                if mode == SEEKING:
+                    self.events.append(Touchdown(i, self.t_lift[i] + self.planner.swing_time, math.nan))
+                self.mode[i] = mode = SWING
+                self.z_lift[i] = self.z[i]
+                self.offset_lift[i] = list(self.offset[i])
+                self.t_lift[i] = t - self.dt
+                self.grounded[i] = True
+                # Where the foot will land (body frame): the planner's touchdown point of this swing.
+                landing = self.planner.swing_targets[i]
+                self._landing[i] = self._neutral[i] if landing is None else (float(landing[0]), float(landing[1]))
+            elif mode == EARLY and planned:
+                self.mode[i] = mode = STANCE
+            if mode == SWING:
+                swing_time = self.planner.swing_time
+                s = min(1.0, (t - self.t_lift[i]) / swing_time)
+                u = s * s * (3 - 2 * s)
+                x, y = self._landing[i]
+                a, b, c = self._plane
+                z_land = a + b * x + c * y
+                base = self.z_lift[i] + (z_land - self.z_lift[i]) * u
+                z = base + row[3 * i + 2] - self._neutral_z[i]  # + the planner's lift
+                fade = 1.0 - min(1.0, 2.0 * s)
+                fade = fade * fade * (3 - 2 * fade)
+                self.offset[i][0] = self.offset_lift[i][0] * fade
+                self.offset[i][1] = self.offset_lift[i][1] * fade
+                if sensed and s >= 0.5 and self._sensordata[self.touch_adr[i]] > g.touch_threshold:
+                    self.events.append(Touchdown(i, self.t_lift[i] + swing_time, t))
+                    self.z[i] = z
+                    self.mode[i] = mode = EARLY if not planned else STANCE
+                    if planned:  # touched right at the planned touchdown
+                        out[3 * i + 2] = z
+                        out[3 * i] += self.offset[i][0]
+                        out[3 * i + 1] += self.offset[i][1]
+                        continue
+                elif planned:  # the planned touchdown came without a touch
+                    self.z[i] = base
+                    if sensed:
+                        self.mode[i] = mode = SEEKING
+                    else:
+                        self.mode[i] = mode = STANCE
+                        self.events.append(Touchdown(i, t, t))
+                else:
+                    out[3 * i + 2] = z
+                    out[3 * i] += self.offset[i][0]
+                    out[3 * i + 1] += self.offset[i][1]
+                    continue
+            if mode == EARLY:
+                # Ground-fixed from the touch on: the target moves at the stance velocity, not along the swing.
+                cmd = self._cmd
+                bx, by = self._body_xy(row_prev, i)
+                bx += self.offset[i][0] * self._cos[i] - self.offset[i][1] * self._sin[i]
+                by += self.offset[i][0] * self._sin[i] + self.offset[i][1] * self._cos[i]
+                vx, vy = -cmd.vx + cmd.yaw_rate * by, -cmd.vy - cmd.yaw_rate * bx
+                c, s_ = self._cos[i], self._sin[i]
+                hx_, hy_ = c * vx + s_ * vy, -s_ * vx + c * vy  # body -> hip frame
+                self.offset[i][0] += hx_ * self.dt - (row[3 * i] - row_prev[3 * i])
+                self.offset[i][1] += hy_ * self.dt - (row[3 * i + 1] - row_prev[3 * i + 1])
+            elif mode == SEEKING:
+                if self._sensordata[self.touch_adr[i]] > g.touch_threshold:
+                    self.events.append(Touchdown(i, self.t_lift[i] + self.planner.swing_time, t))
+                    self.mode[i] = mode = STANCE
+                elif self.z[i] - self.seek_speed * self.dt < -g.depth_range[1]:
+                    self.events.append(Touchdown(i, self.t_lift[i] + self.planner.swing_time, math.nan))
+                    self.mode[i] = mode = STANCE
+                    self.grounded[i] = False
+                else:
+                    self.z[i] -= self.seek_speed * self.dt
+            out[3 * i] += self.offset[i][0]
+            out[3 * i + 1] += self.offset[i][1]
+            out[3 * i + 2] = self.z[i]
+        return out
+
+    def __call__(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """Sets data.ctrl for the step from data.time to data.time + dt."""
+        k = self._k
+        if k >= self._chunk:
+            self._replan(data.time)
+            k = 0
+            self._cmd = Command(*self.commands[-1][1:])
+        if self._row_prev is None:
+            self._row_prev = self._targets(self._rows[k], self._stance[k], data.time, self._rows[k])
+        row0 = self._row_prev
+        if self._count % self.ground.update_every == 0:
+            self._update_plane(row0)
+        self._count += 1
+        row1 = self._targets(self._rows[k + 1], self._stance[k + 1], data.time + self.dt, self._rows[k])
+        q_cmd, dq = self.q_cmd, self.dq
+        if self._trimmed:
+            trims = self.trims
+            q = [a - b for a, b in zip(self._qpos[7:25].tolist(), trims, strict=True)]
+            rate_steps(self.consts, q, q_cmd, dq, row0, row1, self.dt)
+            self._ctrl[:] = [a + b for a, b in zip(q_cmd, trims, strict=True)] + dq
+        else:
+            rate_steps(self.consts, self._qpos[7:25].tolist(), q_cmd, dq, row0, row1, self.dt)
+            self._ctrl[:] = q_cmd + dq
+        self._row_prev = row1
+        self._k = k + 1

@@ -12,11 +12,12 @@ import numpy as np
 
 from hexabot_sim import models
 from hexabot_sim.control.gait import GAITS, Command, Gait, GaitPlanner
-from hexabot_sim.control.hexabot import HexabotController, WalkSettings
+from hexabot_sim.control.hexabot import GroundController, GroundSettings, HexabotController, WalkSettings
 from hexabot_sim.control.resolved_rate import ResolvedRateGains
 from hexabot_sim.kinematics import hexabot as hx
+from hexabot_sim.kinematics.hexabot_terrain import HFIELD_CELL, HFIELD_MARGIN, HFIELD_MAX_POINTS, Terrain
 from hexabot_sim.params import param
-from hexabot_sim.scenarios.base import Metric, Progress, ScenarioResult
+from hexabot_sim.scenarios.base import Live, Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import simulate, step_count
 
 INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")
@@ -26,6 +27,11 @@ SPEED_MARGIN: float = 0.9  # planned joint speeds must stay below this fraction 
 LOADED_FRACTION: float = 0.05  # a foot counts as loaded above this fraction of the robot's weight
 TORQUE_LIMIT: float = 1.5  # [N m] the joints' actuatorfrcrange (models/hexabot.xml)
 FALL_TILT_DEG: float = 45.0  # body tilt beyond which the robot has fallen over
+# Friction-to-normal impedance ratio on uneven ground. MuJoCo's soft friction lets a foot under a
+# steady tangential load creep: on a 10 deg slope the standing robot slid down at 1.8 mm/s with the
+# default 1, 0.19 mm/s with 10 and 0.02 mm/s with 100 (measured). The flat floor keeps the default
+# (its published results were measured with it; there is no steady tangential load there).
+TERRAIN_IMPRATIO: float = 100.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -50,7 +56,7 @@ class HexabotParams:
         0.0, "m", "centre-of-mass offset of the body, in a seeded direction", ge=0.0, le=0.05, typo=("mm", 1e-3)
     )
     friction_spread: float = param(0.0, "1", "foot friction varies by +-this fraction (seeded)", ge=0.0, le=0.9)
-    seed: int = param(0, "1", "random seed of the perturbations", ge=0, le=2**32 - 1)
+    seed: int = param(0, "1", "random seed of the perturbations and of the rough terrain", ge=0, le=2**32 - 1)
     max_joint_speed: float = param(
         10.0, "rad/s", "joint speed limit (a standard digital hobby servo: 0.1 s/60 deg)", gt=0.0, le=50.0
     )
@@ -60,6 +66,23 @@ class HexabotParams:
         0.002, "s", "physics and control step (the feet's contact time constant is 6 ms)", ge=1e-4, le=0.002
     )
     integrator: str = param("implicitfast", "", "MuJoCo integrator", choices=INTEGRATORS)
+    slope_deg: float = param(0.0, "deg", "floor tilt (0: flat)", ge=0.0, le=45.0)
+    slope_heading: str = param(
+        "uphill", "", "the walking direction relative to the slope", choices=("uphill", "downhill", "across")
+    )
+    roughness: float = param(
+        0.0, "m", "peak height of a seeded heightfield of ~4 cm bumps (0: none)", ge=0.0, le=0.05, typo=("mm", 1e-3)
+    )
+    kerb_height: float = param(
+        0.0, "m", "a step up across the path (0: none)", ge=0.0, le=0.1, typo=("mm", 1e-3)
+    )  # fmt: skip
+    kerb_distance: float = param(0.5, "m", "distance of the kerb's edge ahead of the start", ge=0.3, le=100.0)
+    touchdown: str = param(
+        "planned", "", "swing ends at the planned phase, or when the foot's touch sensor fires (sensed)",
+        choices=("planned", "sensed"),
+    )  # fmt: skip
+    level_body: str = param("off", "", "keep the body level from the IMU (on) or follow the ground (off)",
+                            choices=("off", "on"))  # fmt: skip
 
     def __post_init__(self) -> None:
         if self.duty and not self.gait_duty_range()[0] <= self.duty < 1.0:
@@ -76,6 +99,9 @@ class HexabotParams:
         problem = feasibility(self)
         if problem:
             raise ValueError(problem)
+        problem = terrain_problem(self)
+        if problem:
+            raise ValueError(problem)
 
     def gait_duty_range(self) -> tuple[float, float]:
         """Smallest duty that keeps the robot statically supported with this gait's phase pattern."""
@@ -88,6 +114,10 @@ class HexabotParams:
 
     def command(self) -> Command:
         return Command(self.vx, self.vy, self.yaw_rate)
+
+    def on_ground(self) -> bool:
+        """The run uses the ground-finding controller (sensed touchdown or a levelled body)."""
+        return self.touchdown == "sensed" or self.level_body == "on"
 
 
 def neutral(p: HexabotParams) -> np.ndarray:
@@ -150,6 +180,113 @@ def feasibility(p: HexabotParams) -> str:
     )
 
 
+def walking_direction(p: HexabotParams) -> np.ndarray:
+    """Horizontal unit vector (2,) of the commanded walk in the world at the start (+x when standing or turning)."""
+    speed = math.hypot(p.vx, p.vy)
+    return np.array([p.vx, p.vy]) / speed if speed > 0 else np.array([1.0, 0.0])
+
+
+def terrain(p: HexabotParams) -> Terrain:
+    """The run's ground: slope direction from the walking direction, heightfield over the walk's area."""
+    along = walking_direction(p)
+    uphill = {"uphill": along, "downhill": -along, "across": np.array([-along[1], along[0]])}[p.slope_heading]
+    speed = math.hypot(p.vx, p.vy)
+    if p.yaw_rate:  # an arc (or turning on the spot): a box about the start holding the circle
+        half = min(speed * p.duration, 2 * speed / abs(p.yaw_rate)) + HFIELD_MARGIN
+        extent = (-half, half, -half, half)
+    else:
+        end = np.array([p.vx, p.vy]) * p.duration
+        extent = (
+            min(0.0, end[0]) - HFIELD_MARGIN, max(0.0, end[0]) + HFIELD_MARGIN,
+            min(0.0, end[1]) - HFIELD_MARGIN, max(0.0, end[1]) + HFIELD_MARGIN,
+        )  # fmt: skip
+    extent = tuple(round(v / HFIELD_CELL) * HFIELD_CELL for v in extent)
+    return Terrain(
+        slope_deg=p.slope_deg, uphill=(float(uphill[0]), float(uphill[1])), roughness=p.roughness, seed=p.seed,
+        extent=extent, kerb_height=p.kerb_height, kerb_distance=p.kerb_distance,
+        along=(float(along[0]), float(along[1])),
+    )  # fmt: skip
+
+
+def depth_range(p: HexabotParams) -> tuple[float, float]:
+    """(smallest, largest) depth [m] of the stance feet below the hips that keeps every planned target reachable.
+
+    The steady cycle of the command (stance and swing, with the lift) is shifted up and down as a whole:
+    the stance depth may move by as much as every target of the cycle stays inside the reach and the
+    joint ranges (bisection to 0.1 mm).
+    """
+    hip, _ = _plan_cycle(p, p.command())
+
+    def ok(shift: float) -> bool:
+        shifted = hip.copy()
+        shifted[..., 2] += shift
+        return bool(hx.ik_hip_batch(LAYOUT, shifted)[1].all())
+
+    limits = []
+    for sign in (1.0, -1.0):
+        lo, hi = 0.0, p.stand_height + 0.2
+        while hi - lo > 1e-4:
+            mid = (lo + hi) / 2
+            lo, hi = (mid, hi) if ok(sign * mid) else (lo, mid)
+        limits.append(lo)
+    return p.stand_height - limits[0], p.stand_height + limits[1]
+
+
+def largest_climbable_kerb(p: HexabotParams) -> float:
+    """Highest kerb [m] the walk can climb: a swing clears it and the legs can hold the cycle raised by it.
+
+    Clearing: the foot lifts step_height above the ground it left, and its centre must pass the kerb's
+    edge at least a foot radius above it (measured: a 30 mm kerb with step_height 0.03 m made the
+    robot stumble, 15 deg of roll; with 0.04 m it walked up cleanly). Holding: the whole planned cycle
+    raised by the kerb height stays inside the reach and the joint ranges (depth_range).
+    """
+    return min(p.step_height - LAYOUT.foot_radius, p.stand_height - depth_range(p)[0])
+
+
+def terrain_problem(p: HexabotParams) -> str:
+    """'' if the ground can be walked as asked, else a one-line reason."""
+    features = [name for name in ("slope_deg", "roughness", "kerb_height") if getattr(p, name)]
+    if len(features) > 1:
+        return f"one terrain feature at a time: {', '.join(features)} are set; keep one, set the others to 0"
+    if p.slope_deg:
+        tan = math.tan(math.radians(p.slope_deg))
+        if tan > p.friction:
+            return (
+                f"a {p.slope_deg:g} deg slope needs a friction coefficient of at least tan(slope) = {tan:.3g} "
+                f"to hold the feet; friction is {p.friction:g} (the steepest slope it holds is "
+                f"{math.degrees(math.atan(p.friction)):.3g} deg)"
+            )
+        if p.level_body == "on":
+            # A level body on a slope: the stance feet reach down or up by x tan(slope) (x along the uphill).
+            reach = float(np.abs(neutral(p)[:, :2] @ terrain(p).uphill).max()) * tan
+            lo, hi = depth_range(p)
+            if p.stand_height - reach < lo or p.stand_height + reach > hi:
+                steepest = math.degrees(math.atan(min(p.stand_height - lo, hi - p.stand_height) / (reach / tan)))
+                return (
+                    f"a level body on a {p.slope_deg:g} deg slope needs the feet {reach * 1000:.0f} mm above and "
+                    f"below the neutral stance, beyond the legs' workspace (stance depth {lo:.3f} to {hi:.3f} m with "
+                    f"this gait); the steepest levelled slope is {steepest:.3g} deg (or set level_body=off)"
+                )
+    if p.kerb_height:
+        largest = largest_climbable_kerb(p)
+        if p.kerb_height > largest:
+            return (
+                f"a {p.kerb_height * 1000:.0f} mm kerb is above the largest climbable, {largest * 1000:.1f} mm "
+                f"(the foot lifts step_height = {p.step_height:g} m, less a foot radius of clearance; the legs reach "
+                f"{(p.stand_height - depth_range(p)[0]) * 1000:.0f} mm above the stance); raise 'step_height'"
+            )
+    if p.roughness:
+        t = terrain(p)
+        x0, x1, y0, y1 = t.extent
+        points = ((x1 - x0) / HFIELD_CELL + 1) * ((y1 - y0) / HFIELD_CELL + 1)
+        if points > HFIELD_MAX_POINTS:
+            return (
+                f"the rough ground under this walk would be a {x1 - x0:.3g} x {y1 - y0:.3g} m heightfield of "
+                f"{points:.3g} points (at most {HFIELD_MAX_POINTS:.3g}); shorten 'duration' or lower the speed"
+            )
+    return ""
+
+
 def _perturbations(p: HexabotParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Seeded servo trims (18,) [rad], body CoM offset (3,) [m] and per-foot friction factors (6,)."""
     rng = np.random.default_rng(p.seed)
@@ -161,24 +298,85 @@ def _perturbations(p: HexabotParams) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 
 def build_xml(p: HexabotParams) -> str:
-    """The hexabot scene with the run's options, stance, friction and perturbations written in."""
+    """The hexabot scene with the run's options, stance, friction, perturbations and ground written in."""
     root = models.load_tree("hexabot_scene")
     models.find(root, "option").attrib.update(timestep=models.fmt(p.timestep), integrator=p.integrator)
     _, com, friction = _perturbations(p)
-    models.find(root, "inertial", None) if False else None
     torso = models.find(root, "body", "torso")
     torso.find("inertial").set("pos", models.fmt(com))
     feet = neutral(p)
     q0, _ = hx.ik_hip_batch(LAYOUT, hx.body_to_hip(LAYOUT, feet))
     z0 = p.stand_height + LAYOUT.foot_radius
-    torso.set("pos", models.fmt([0.0, 0.0, z0]))
+    pose = [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0]
+    ground = terrain(p)
+    if not ground.flat:
+        pose, q0 = _add_terrain(root, p, ground, feet, q0)
+    torso.set("pos", models.fmt(pose[:3]))
     for leg, factor in zip(hx.LEGS, friction, strict=True):
         foot = models.find(root, "geom", f"{leg}_foot")
         foot.set("friction", models.fmt([p.friction * factor, 0.005, 0.0001]))
     key = models.find(root, "key", "home")
-    key.set("qpos", models.fmt([0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0, *q0.ravel()]))
+    key.set("qpos", models.fmt([*pose, *q0.ravel()]))
     key.set("ctrl", models.fmt([*q0.ravel(), *np.zeros(18)]))
     return models.to_xml(root)
+
+
+def _add_terrain(root, p: HexabotParams, ground: Terrain, feet: np.ndarray, q0: np.ndarray):
+    """Writes the ground into the scene tree; the start pose (7,) and joint angles (6, 3) standing on it.
+
+    With the ground-finding controller the body starts level, its feet on the ground under their
+    neutral points (IK). With the planned controller it starts parallel to a slope, or level on its
+    neutral stance above the highest ground under a foot (it settles onto the feet that touch).
+    """
+    import xml.etree.ElementTree as ET
+
+    assets, geoms = ground.mjcf()
+    asset = root.findall("asset")[-1]  # the scene's (the robot's comes first)
+    for text in assets:
+        asset.append(ET.fromstring(text))
+    world = root.findall("worldbody")[-1]
+    for text in geoms:
+        world.append(ET.fromstring(text))
+    floor = models.find(root, "geom", "floor")
+    models.find(root, "option").set("impratio", models.fmt(TERRAIN_IMPRATIO))
+    if ground.slope_deg:
+        floor.set("quat", models.fmt(ground.floor_quat()))
+    if ground.roughness:  # the heightfield replaces the floor under the walk; the plane stays as scenery below
+        floor.attrib.update(conaffinity="0", pos=models.fmt([0.0, 0.0, -ground.roughness - 0.002]))
+    r = LAYOUT.foot_radius
+    normal = ground.normal()
+    if p.on_ground():
+        # Level body; every foot centre r (along the normal) above the ground under its neutral point.
+        g = ground.height(feet[:, 0], feet[:, 1]) + r / normal[2]  # (6,)
+        z0 = p.stand_height + float(g.mean())
+        target = feet.copy()
+        target[:, 2] = g - z0
+        q = hx.ik_body(LAYOUT, target)
+        return [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0], q
+    if ground.slope_deg:
+        pos = normal * (p.stand_height + r)
+        return [*pos, *ground.floor_quat()], q0
+    z0 = p.stand_height + r + float(ground.height(feet[:, 0], feet[:, 1]).max())
+    return [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0], q0
+
+
+def make_controller(p: HexabotParams, model: mujoco.MjModel, data: mujoco.MjData) -> HexabotController:
+    """The walking controller of a run (the ground-finding one for sensed touchdown or a levelled body)."""
+    trims, _, _ = _perturbations(p)
+    planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), p.timestep, start_time=SETTLE_TIME)
+    settings = WalkSettings(
+        p.command(), settle_time=SETTLE_TIME, ramp_time=p.period, heading_hold=p.heading_hold == "on",
+        trims=tuple(trims.tolist()),
+    )  # fmt: skip
+    gains = ResolvedRateGains(p.task_gain, 0.01, 0.01, p.max_joint_speed, 200.0)
+    q0 = model.key("home").qpos[7:].reshape(6, 3)
+    if not p.on_ground():
+        return HexabotController(model, data, LAYOUT, planner, gains, settings, q0)
+    ground = GroundSettings(
+        sensed=p.touchdown == "sensed", level=p.level_body == "on", stand_height=p.stand_height,
+        depth_range=depth_range(p),
+    )  # fmt: skip
+    return GroundController(model, data, LAYOUT, planner, gains, settings, q0, ground)
 
 
 def run(name: str, p: HexabotParams, progress: Progress | None = None) -> ScenarioResult:
@@ -188,16 +386,7 @@ def run(name: str, p: HexabotParams, progress: Progress | None = None) -> Scenar
     data = mujoco.MjData(model)
     mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
     mujoco.mj_forward(model, data)
-    trims, _, _ = _perturbations(p)
-    planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), p.timestep, start_time=SETTLE_TIME)
-    settings = WalkSettings(
-        p.command(), settle_time=SETTLE_TIME, ramp_time=p.period, heading_hold=p.heading_hold == "on",
-        trims=tuple(trims.tolist()),
-    )  # fmt: skip
-    gains = ResolvedRateGains(p.task_gain, 0.01, 0.01, p.max_joint_speed, 200.0)
-    controller = HexabotController(
-        model, data, LAYOUT, planner, gains, settings, model.key("home").qpos[7:].reshape(6, 3)
-    )
+    controller = make_controller(p, model, data)
     n_steps = step_count(p.duration, p.timestep)
     started = time.perf_counter()
     traj = simulate(model, data, n_steps, controller=controller, progress=progress, record_ctrl=True)
@@ -383,6 +572,73 @@ def walking_metrics(
     }
 
 
+TOUCHDOWN_TOLERANCE: float = 0.02  # [s] a touchdown further than this from the plan counts as early or late
+
+
+def terrain_metrics(
+    p: HexabotParams, ground: Terrain, t: np.ndarray, qpos: np.ndarray, controller: HexabotController
+) -> dict[str, Metric]:
+    """Attitude relative to gravity, height above the local ground, progress, touchdowns, levelling limits."""
+    window = steady_window(p, t)
+    rpy = np.degrees(rpy_from_quat(qpos[window, 3:7]))  # z-y-x angles: roll and pitch are relative to gravity
+    roll, pitch = rpy[:, 0], rpy[:, 1]
+    above = qpos[window, 2] - ground.height(qpos[window, 0], qpos[window, 1])
+    w = np.flatnonzero(window)
+    i0, i1 = w[0], w[-1]
+    along = walking_direction(p)
+    made_good = float((qpos[i1, :2] - qpos[i0, :2]) @ along)
+    speed = math.hypot(p.vx, p.vy)
+    speed_made_good = made_good / (t[i1] - t[i0])
+    events = [e for e in getattr(controller, "events", []) if e.planned > SETTLE_TIME]
+    touched = np.array([e.touched - e.planned for e in events if math.isfinite(e.touched)])
+    updates = getattr(controller, "updates", 0)
+    return {
+        "roll_peak": Metric(float(np.abs(roll).max()), "deg", "largest |body roll| relative to gravity (steady walk)"),
+        "pitch_peak": Metric(float(np.abs(pitch).max()), "deg", "largest |body pitch| relative to gravity"),
+        "roll_rms": Metric(float(np.sqrt(np.mean(roll**2))), "deg", "RMS body roll relative to gravity"),
+        "pitch_rms": Metric(float(np.sqrt(np.mean(pitch**2))), "deg", "RMS body pitch relative to gravity"),
+        "height_above_ground_mean": Metric(
+            float(above.mean()), "m", "body origin above the ground straight under it (mean over the steady walk)"
+        ),
+        "height_above_ground_ptp": Metric(float(np.ptp(above)), "m", "peak-to-peak height above the local ground"),
+        "distance_made_good": Metric(
+            made_good, "m", "horizontal progress along the commanded direction over the steady walk"
+        ),
+        "speed_made_good": Metric(speed_made_good, "m/s", "distance_made_good / its time"),
+        "speed_made_good_error": Metric(
+            _relative_error(speed_made_good, speed), "1", "(speed_made_good - |command|) / |command| (null at 0)"
+        ),
+        "touchdowns": Metric(len(events), "1", "swings that ended after the settling time"),
+        "touchdown_error_mean": Metric(
+            float(touched.mean()) if touched.size else None, "s", "touch time - planned touchdown, mean"
+        ),
+        "touchdown_error_max": Metric(
+            float(np.abs(touched).max()) if touched.size else None, "s", "largest |touch time - planned touchdown|"
+        ),
+        "early_touchdowns": Metric(
+            int((touched < -TOUCHDOWN_TOLERANCE).sum()),
+            "1",
+            f"feet that touched more than {TOUCHDOWN_TOLERANCE * 1000:g} ms before the plan",
+        ),
+        "late_touchdowns": Metric(
+            int((touched > TOUCHDOWN_TOLERANCE).sum()),
+            "1",
+            f"feet that touched more than {TOUCHDOWN_TOLERANCE * 1000:g} ms after the plan",
+        ),
+        "feet_without_ground": Metric(
+            len(events) - int(touched.size), "1", "swings that found no ground by the end of the leg's reach"
+        ),
+        "level_clipped_fraction": Metric(
+            controller.clipped_updates / updates if updates else 0.0,
+            "1",
+            "fraction of stance-height updates clipped to the legs' workspace",
+        ),
+        "largest_climbable_kerb": Metric(
+            largest_climbable_kerb(p), "m", "highest kerb this gait can climb (step height and workspace)"
+        ),
+    }
+
+
 def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     """Columns, metrics and figure data of a walk."""
     t, qpos, qvel, ctrl = traj.t, traj.qpos, traj.qvel, traj.ctrl
@@ -395,6 +651,9 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
         "duty": Metric(gait.duty, "1", "stance fraction of the gait cycle"),
         "real_time_factor": Metric(t[-1] / wall, "1", "simulated time / wall time of the simulation loop"),
     }
+    ground = terrain(p)
+    if not ground.flat or p.on_ground():  # flat runs with the planned controller keep their metrics as they were
+        metrics |= terrain_metrics(p, ground, t, qpos, controller)
     rpy = rpy_from_quat(qpos[:, 3:7])
     # Command in force at every row (the controller re-plans it every chunk).
     plan_t = np.array([c[0] for c in controller.commands])
@@ -440,7 +699,13 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
         camera="track",
         trail=trail,
         overlay=overlay,
-        extras={"contacts": contacts, "planned_stance": controller.planner.in_stance(t), "window": steady_window(p, t)},
+        extras={
+            "contacts": contacts,
+            "planned_stance": controller.planner.in_stance(t),
+            "window": steady_window(p, t),
+            "terrain": ground,
+            "touchdowns": getattr(controller, "events", []),
+        },
     )
 
 
@@ -586,4 +851,67 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
         fontsize=plots.TITLE_FONTSIZE,
     )
     out["slip"] = fig
+    ground: Terrain = result.extras["terrain"]
+    if not ground.flat:
+        out["terrain"] = _terrain_figure(result, ground)
     return out
+
+
+def _terrain_figure(result: ScenarioResult, ground: Terrain) -> Any:
+    """Ground profile under the body's path, the body height and the feet's touchdown points (side view)."""
+    from hexabot_sim import plots
+
+    p, c = result.params, result.columns
+    contacts: Contacts = result.extras["contacts"]
+    along = walking_direction(p)
+    s_body = np.c_[c["x"], c["y"]] @ along  # distance along the commanded direction [m]
+    s_line = np.linspace(s_body.min() - 0.3, s_body.max() + 0.3, 2000)
+    offset = np.c_[c["x"], c["y"]][0] - s_body[0] * along  # the start's sideways offset
+    line = offset + s_line[:, None] * along
+    fig, ax = plots.figure(figsize=(10, 4.8))
+    ax.fill_between(
+        s_line, ground.height(line[:, 0], line[:, 1]) * 1000, -60, color="0.8", label="ground under the path"
+    )
+    ax.plot(s_body, c["z"] * 1000, color="k", lw=1.2, label="body origin")
+    loaded = np.stack([c[f"contact_{leg}"] for leg in hx.LEGS], axis=1) > 0.5
+    for i, leg in enumerate(hx.LEGS):
+        down = np.flatnonzero(np.diff(loaded[:, i].astype(int)) == 1) + 1
+        pts = contacts.point[down, i]
+        ax.plot(pts[:, :2] @ along, pts[:, 2] * 1000, "o", ms=3.5, mfc="none", color=LEG_COLOURS[leg],
+                label=f"{leg} touchdowns")  # fmt: skip
+    ax.set_xlabel("distance along the commanded direction [m]")
+    ax.set_ylabel("height [mm]")
+    ax.grid(True, alpha=0.3)
+    plots.legend_right(ax)
+    if p.slope_deg:
+        kind = f"{p.slope_deg:g} deg slope ({p.slope_heading})"
+    elif p.roughness:
+        kind = f"roughness {p.roughness * 1000:g} mm, seed {p.seed}"
+    else:
+        kind = f"{p.kerb_height * 1000:g} mm kerb at {p.kerb_distance:g} m"
+    fig.suptitle(
+        _title(result, f"terrain under the path: {kind}, touchdown {p.touchdown}, level_body {p.level_body}"),
+        fontsize=plots.TITLE_FONTSIZE,
+    )
+    return fig
+
+
+def live(p: HexabotParams) -> Live:
+    """The hexabot on its neutral stance with its walking controller, for the interactive viewer."""
+    model = mujoco.MjModel.from_xml_string(build_xml(p))
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    controller = make_controller(p, model, data)  # the same controller a run uses (terrain, levelling)
+
+    def step() -> None:
+        controller(model, data)
+        mujoco.mj_step(model, data)
+
+    def speed_text(d: mujoco.MjData) -> str:
+        return f"{p.gait} gait, speed {math.hypot(d.qvel[0], d.qvel[1]) * 1000:4.0f} mm/s, x = {d.qpos[0]:6.3f} m"
+
+    return Live(
+        model, data, step, p.timestep, p.duration, camera="track", track_body="torso",
+        trail=lambda d: np.array([d.qpos[0], d.qpos[1], 0.002]), overlay=[speed_text],
+    )  # fmt: skip
