@@ -14,8 +14,6 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
-import numpy as np
-
 from hexabot_sim import params as params_mod
 from hexabot_sim import scenarios
 from hexabot_sim.errors import HexabotError, Interrupted, UsageError
@@ -71,7 +69,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--debug", action="store_true", help="show the Python traceback of an internal error (or HEXABOT_SIM_DEBUG=1)"
     )
     sub = parser.add_subparsers(
-        dest="command", required=True, parser_class=_Parser, metavar="{list,run,check,kin,clean}"
+        dest="command", required=True, parser_class=_Parser, metavar="{list,run,view,sweep,compare,check,kin,clean}"
     )
     sub.add_parser("list", help="scenarios and their parameters with defaults and units")
     run = sub.add_parser("run", help="run a scenario and write a run folder")
@@ -134,6 +132,24 @@ def build_parser() -> argparse.ArgumentParser:
         help="also derive T0n and J with sympy, printed with c1/s23 abbreviations and as LaTeX "
         "(needs sympy, the extra 'symbolic': pip install \".[symbolic]\" in the hexabot-sim folder)",
     )
+    view = sub.add_parser(
+        "view",
+        help="MuJoCo's interactive viewer: a scenario driven live, or a run folder replayed",
+        description="NAME: the scenario's model driven live by its controller at real time. RUN_DIR: the run "
+        "folder's exact model.xml replaying its trajectory.npz. Keys: space play/pause, - and = half/double "
+        "speed, Left/Right step 1/30 s, Down/Up jump 1 s, Home/End first/last state (live: Right one frame, "
+        "Home restart); the mouse turns, moves and zooms the view. Needs a display and the 'viewer' extra "
+        '(glfw): pip install "hexabot-sim[viewer]".',
+    )
+    view.add_argument("target", metavar="NAME|RUN_DIR", help="scenario name, or a run folder written by 'run'")
+    view.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE", help="parameter")
+    view.add_argument("--config", metavar="FILE", help="TOML file of 'name = value' parameter lines")
+    view.add_argument("--speed", type=_view_speed, default=1.0, help="playback speed, times real time (default 1)")
+    view.add_argument("--paused", action="store_true", help="start paused at t = 0 (space plays)")
+    view.add_argument(
+        "--quit-after", type=_view_seconds, metavar="SECONDS", help="close the window after this wall time (scripts)"
+    )
+    _add_study_parsers(sub)
     return parser
 
 
@@ -243,46 +259,12 @@ def _format(value: Any, unit: str) -> str:
     return f"{value}{' ' + unit if unit and unit != '1' else ''}"
 
 
-def _render(args: argparse.Namespace, result: Any, folder: Path, backend: str) -> tuple[dict[str, Any], float]:
-    """Renders video.mp4 into the staging folder; a failure of the GL or ffmpeg is no reason to lose the run."""
-    from hexabot_sim import output, render
+def _video_settings(args: argparse.Namespace) -> Any:
+    """The --video options as output.VideoSettings."""
+    from hexabot_sim import output
 
     width, height = args.size
-    started = time.perf_counter()
-    try:
-        frames = render.render_video(
-            result.model,
-            result.trajectory.t,
-            result.trajectory.qpos,
-            folder / output.VIDEO_NAME,
-            camera=result.camera,
-            width=width,
-            height=height,
-            fps=args.fps,
-            quality=args.quality,
-            markers=result.markers,
-            trail=result.trail,
-            overlay=result.overlay,
-            progress=ProgressBar("video"),
-        )
-    except (KeyboardInterrupt, MemoryError):
-        raise
-    except Exception as e:  # OpenGL context or encoder failure: keep CSV and plots, say why
-        (folder / output.VIDEO_NAME).unlink(missing_ok=True)
-        if isinstance(e, OSError) and e.errno in (errno.ENOSPC, errno.EDQUOT):
-            raise
-        reason = f"rendering failed: {type(e).__name__}: {str(e).strip().splitlines()[-1] if str(e).strip() else ''}"
-        return {"written": False, "reason": reason.rstrip(": ")}, time.perf_counter() - started
-    video = {
-        "written": True,
-        "file": output.VIDEO_NAME,
-        "frames": frames,
-        "fps": args.fps,
-        "size": [width, height],
-        "quality": args.quality,
-        "gl_backend": backend,
-    }
-    return video, time.perf_counter() - started
+    return output.VideoSettings(width=width, height=height, fps=args.fps, quality=args.quality)
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -333,59 +315,26 @@ def _execute(args: argparse.Namespace, scenario: Any, p: Any, backend: str | Non
     out = args.out
     started = time.perf_counter()
     with output.run_folder(out, scenario.name, force=args.force) as run:
-        folder = run.path
         result = scenario.runner(scenario.name, p, progress=ProgressBar(scenario.name))
         sim_seconds = time.perf_counter() - started
-
-        output.write_csv(folder / result.csv_name, result.columns)
-        output.write_text(folder / output.MODEL_NAME, result.model_xml)
-        files = [result.csv_name, output.JSON_NAME, output.MODEL_NAME]
-        if result.trajectory is not None:  # the full recorded state: recompute anything from model.xml
-            traj = result.trajectory
-            arrays = {"t": traj.t, "qpos": traj.qpos, "qvel": traj.qvel}
-            arrays["ctrl"] = traj.ctrl if traj.ctrl is not None else np.zeros((len(traj.t), result.model.nu))
-            output.write_arrays(folder / output.TRAJECTORY_NAME, arrays)
-            files.append(output.TRAJECTORY_NAME)
         if not args.no_plots:
             from hexabot_sim import plots
 
             plots.use_agg()  # the CLI draws off-screen; importing the package never picks a backend
-            files += output.write_figures(scenario.figures(result), folder)
-
-        if args.video and (result.camera is None or result.trajectory is None):
-            backend, no_video_reason = None, f"{scenario.name} produces no trajectory to film"
-        video: dict[str, Any] = {"written": False, "reason": no_video_reason}
-        video_seconds = 0.0
-        if args.video and backend is not None:
-            video, video_seconds = _render(args, result, folder, backend)
-            if video["written"]:
-                files.append(output.VIDEO_NAME)
-            else:
-                no_video_reason = video["reason"]
-
-        output.write_json(
-            folder / output.JSON_NAME,
-            {
-                "scenario": scenario.name,
-                "description": scenario.summary,
-                "params": params_mod.as_dict(p),
-                "metrics": {name: m.value for name, m in result.metrics.items()},
-                "units": {
-                    "params": params_mod.units(type(p)),
-                    "metrics": {name: m.unit for name, m in result.metrics.items()},
-                    "columns": result.column_units,
-                },
-                "metric_docs": {name: m.doc for name, m in result.metrics.items()},
-                "files": files,
-                "video": video,
-                "simulation": {
-                    "steps": None if result.trajectory is None else len(result.trajectory.t) - 1,
-                    "simulated_time": None if result.trajectory is None else float(result.trajectory.t[-1]),
-                    "wall_time": sim_seconds,
-                },
-                "versions": output.versions(),
-            },
+        written = output.write_run(
+            run.path,
+            scenario,
+            p,
+            result,
+            sim_seconds=sim_seconds,
+            plots=not args.no_plots,
+            video=_video_settings(args) if args.video else None,
+            backend=backend,
+            no_video_reason=no_video_reason,
+            video_progress=ProgressBar("video"),
         )
+        files, video, video_seconds = written.files, written.video, written.video_seconds
+        no_video_reason = video.get("reason", no_video_reason)
     assert run.final is not None
     total_seconds = time.perf_counter() - started
 
@@ -421,6 +370,257 @@ def cmd_clean(args: argparse.Namespace) -> int:
             print(f"removed {path}")
     if not stale:
         print(f"no staging folders left by interrupted runs in {args.folder}")
+    return 0
+
+
+def _view_speed(text: str) -> float:
+    from hexabot_sim.viewer import MAX_SPEED, MIN_SPEED
+
+    try:
+        speed = float(text)
+    except ValueError:
+        speed = float("nan")
+    if not MIN_SPEED <= speed <= MAX_SPEED:
+        raise argparse.ArgumentTypeError(f"expected a speed from {MIN_SPEED:g} to {MAX_SPEED:g}; got {text!r}")
+    return speed
+
+
+def _view_seconds(text: str) -> float:
+    try:
+        seconds = float(text)
+    except ValueError:
+        seconds = float("nan")
+    if not 0 < seconds <= 86400:
+        raise argparse.ArgumentTypeError(f"expected seconds, more than 0 and at most 86400; got {text!r}")
+    return seconds
+
+
+def cmd_view(args: argparse.Namespace) -> int:
+    """`view NAME` (live) or `view RUN_DIR` (replay) in MuJoCo's viewer: a window, so GLFW and a display."""
+    from hexabot_sim import gl, viewer
+
+    folder = Path(args.target)
+    replaying = folder.is_dir() or os.sep in args.target or args.target in (".", "..")
+    if replaying and not folder.is_dir():
+        raise UsageError(f"run folder {args.target!r} does not exist")
+    if replaying and (args.sets or args.config):
+        raise UsageError("--set and --config choose a scenario's parameters; a run folder replays its own")
+    # Bad input is reported before the display is looked at.
+    recording = viewer.load_recording(folder) if replaying else None
+    scenario = None if replaying else scenarios.get(args.target)
+    problem = viewer.display_problem()
+    if problem is not None:
+        raise UsageError(f"cannot open the viewer: {problem}")
+    if gl.loaded_backend() is None:
+        os.environ["MUJOCO_GL"] = "glfw"  # MuJoCo binds its OpenGL at import: the window's, not EGL's
+    options = {"speed": args.speed, "paused": args.paused, "quit_after": args.quit_after}
+
+    def announce(text: str) -> None:
+        print(f"{PROG}: {text}", file=sys.stderr, flush=True)
+
+    with _mujoco_warnings_to_stderr():
+        if recording is not None:
+            summary = viewer.replay(recording, announce=announce, **options)
+        else:
+            assert scenario is not None
+            sets = params_mod.parse_assignments(args.sets)
+            config = params_mod.read_config(args.config) if args.config else {}
+            p: Any = params_mod.resolve(scenario.params_type, scenario.defaults, config, sets)
+            make = viewer.live_maker(scenario.name, p)  # a grid scenario is refused before the window opens
+            summary = viewer.live(make, scenario.name, announce=announce, **options)
+    print(summary)
+    return 0
+
+
+def _workers(text: str) -> int:
+    from hexabot_sim import sweep
+
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if not 1 <= n <= sweep.MAX_WORKERS:
+        raise argparse.ArgumentTypeError(f"expected a whole number of worker processes from 1 to {sweep.MAX_WORKERS}")
+    return n
+
+
+def _add_study_parsers(sub: Any) -> None:
+    """The `sweep` and `compare` sub-commands (studies over many runs)."""
+    sweep = sub.add_parser(
+        "sweep",
+        help="run a scenario over a grid of parameter values (all cores, or a Dask cluster) into a sweep folder",
+        description="Full-factorial grid: each --grid adds an axis (the first varies slowest). Writes sweep.csv "
+        "(one row per cell: swept parameters, every scalar metric, 'error'), sweep.json (grid, fixed parameters, "
+        "units, versions, timing) and a figure per metric (one axis: metric vs the parameter; two: a heatmap).",
+    )
+    sweep.add_argument("scenario", help="scenario name (see 'hexabot-sim list')")
+    sweep.add_argument(
+        "--grid",
+        action="append",
+        default=[],
+        metavar="PARAM=VALUES",
+        help="swept parameter: V1,V2,... or START:STOP:N (linear) or log:START:STOP:N (repeatable)",
+    )
+    sweep.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE", help="fixed value")
+    sweep.add_argument("--config", metavar="FILE", help="TOML file of 'name = value' parameter lines (fixed)")
+    sweep.add_argument("--out", metavar="DIR", help="sweep folder (default: runs/sweep-<scenario>-<timestamp>)")
+    sweep.add_argument("--force", action="store_true", help="replace --out if it already holds files")
+    sweep.add_argument("--workers", type=_workers, help="local worker processes (default: all cores)")
+    sweep.add_argument(
+        "--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://10.0.0.5:8786 (extra 'cluster')"
+    )
+    sweep.add_argument("--keep-runs", action="store_true", help="also write every cell's run folder under cells/")
+    sweep.add_argument("--no-plots", action="store_true", help="skip the PNG figures (also in the kept runs)")
+    compare = sub.add_parser(
+        "compare",
+        help="parameters and metrics of run folders side by side, their shared columns overlaid",
+        description="Prints the parameters (differing first) and metrics of two or more run folders with the "
+        "differences to the first, and writes them (compare.csv, compare.json) with overlay figures of the "
+        "columns their CSVs share into a new compare folder.",
+    )
+    compare.add_argument("runs", nargs="+", metavar="RUN_DIR", help="run folders written by 'run' (two or more)")
+    compare.add_argument("--out", metavar="DIR", help="compare folder (default: runs/compare-<timestamp>)")
+    compare.add_argument("--force", action="store_true", help="replace --out if it already holds files")
+    compare.add_argument("--no-plots", action="store_true", help="skip the overlay figures")
+
+
+def _duration(seconds: float) -> str:
+    if seconds < 60:
+        return f"{seconds:.0f} s"
+    if seconds < 3600:
+        return f"{seconds // 60:.0f} min {seconds % 60:02.0f} s"
+    return f"{seconds // 3600:.0f} h {seconds % 3600 // 60:02.0f} min"
+
+
+class SweepProgress(ProgressBar):
+    """Cells done / total with the elapsed time and an ETA; in logs a plain line every 10 % or PLAIN_SECONDS."""
+
+    PLAIN_EVERY: int = 10  # [%]
+    PLAIN_SECONDS: float = 60.0  # [s] a log line at least this often while cells finish
+
+    def __init__(self, label: str, stream: Any = None) -> None:
+        super().__init__(label, stream)
+        self._start = time.monotonic()
+        self._last_line = self._start
+
+    def __call__(self, done: int, total: int) -> None:
+        now = time.monotonic()
+        elapsed = now - self._start
+        percent = 100 * done // max(total, 1)
+        eta = f", ETA {_duration(elapsed / done * (total - done))}" if 0 < done < total else ""
+        text = f"{done}/{total} cells, {_duration(elapsed)}{eta}"
+        if not self.tty:
+            step = percent // self.PLAIN_EVERY * self.PLAIN_EVERY
+            if step > self._last or now - self._last_line >= self.PLAIN_SECONDS or done == total != 0 > self._last:
+                self._last, self._last_line = max(step, self._last), now
+                self._write(f"{self.label}: {percent}% ({text})\n")
+            return
+        filled = percent * 30 // 100
+        self._write(f"\r{self.label} [{'#' * filled}{'.' * (30 - filled)}] {percent:3d}% ({text})\x1b[K")
+        if done >= total:
+            self._write("\n")
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from hexabot_sim import output, sweep
+
+    sets = params_mod.parse_assignments(args.sets)
+    config = params_mod.read_config(args.config) if args.config else {}
+    plan = sweep.plan(args.scenario, args.grid, config, sets)  # every cell validated: nothing runs before
+    if args.scheduler is not None and args.workers is not None:
+        raise UsageError("--workers is for the local pool; with --scheduler the cluster's workers run the cells")
+    if args.out is not None:
+        output.check_out(args.out, force=args.force)
+    name = f"sweep-{plan.scenario}"
+    if args.scheduler is not None:
+        pool: Any = sweep.dask_executor(args.scheduler)  # connects now: an unreachable scheduler writes nothing
+    else:
+        workers = min(args.workers or sweep.workers_default(), len(plan.cells))
+        pool = contextlib.nullcontext((sweep.local_executor(workers), workers))
+    started = time.perf_counter()
+    with pool as (executor, workers), output.run_folder(args.out, name, force=args.force) as run:
+        where = f"Dask scheduler {args.scheduler} ({workers} worker threads)" if args.scheduler else None
+        where = where or f"{workers} local process{'es' if workers > 1 else ''}"
+        kept = 0
+
+        def keep(result: sweep.CellResult) -> None:
+            nonlocal kept
+            if result.files:
+                folder = run.path / sweep.cell_folder(result.index, len(plan.cells))
+                folder.mkdir(parents=True)
+                for relative, content in result.files.items():
+                    (folder / relative).parent.mkdir(parents=True, exist_ok=True)
+                    (folder / relative).write_bytes(content)
+                kept += 1
+
+        jobs = sweep.jobs(plan, args.keep_runs, plots=not args.no_plots)
+        results = sweep.run_cells(executor, jobs, SweepProgress(name), keep)
+        wall = time.perf_counter() - started
+        table = sweep.table(plan, results)
+        sweep.write_csv(run.path / sweep.CSV_NAME, table)
+        files = [sweep.CSV_NAME, sweep.JSON_NAME]
+        if not args.no_plots:
+            from hexabot_sim import plots
+
+            plots.use_agg()
+            with output.package_style():
+                files += output.write_figures(sweep.figures(plan, table), run.path)
+        executor_record = {"kind": "dask" if args.scheduler else "local processes", "workers": workers}
+        executor_record |= {"scheduler": args.scheduler} if args.scheduler else {}
+        record = sweep.record(plan, table, results, executor_record, wall)
+        record |= {"files": files, "kept_runs": f"{sweep.CELLS_DIR}/ ({kept} folders)" if args.keep_runs else None}
+        record["versions"] = output.versions()
+        output.write_json(run.path / sweep.JSON_NAME, record)
+    assert run.final is not None
+    total = time.perf_counter() - started
+    failed = [r for r in results if r.error]
+    shape = " x ".join(f"{len(a.values)} {a.name}" for a in plan.axes)
+    _COMPLETED[:] = [f"the sweep folder {output.display_path(run.final)} is complete"]
+    if failed:
+        first = failed[0]
+        values = plan.cell_values(first.index)
+        label = ", ".join(f"{n} = {sweep._text(v)}" for n, v in zip(table.swept, values, strict=True))
+        print(
+            f"{PROG}: warning: {len(failed)} of {len(results)} cells failed (rows with an 'error' in "
+            f"{sweep.CSV_NAME}); the first, {label}: {first.error}",
+            file=sys.stderr,
+        )
+    cell_time = sum(r.seconds for r in results)
+    print(
+        f"{name}: {len(results)} cells ({shape}) on {where} in {total:.2f} s "
+        f"(cells {cell_time:.2f} s in all) -> {output.display_path(run.final)}"
+    )
+    print(f"  cells ok: {len(results) - len(failed)}, failed: {len(failed)}")
+    figures = [f for f in files if f.endswith(".png")]
+    print(f"  files: {sweep.CSV_NAME}, {sweep.JSON_NAME}, {len(figures)} figures" + (
+        f", {sweep.CELLS_DIR}/ ({kept} run folders)" if args.keep_runs else ""))  # fmt: skip
+    return 0
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
+    from hexabot_sim import compare, output
+
+    runs = compare.load_all(args.runs)  # refuses anything that is not a run folder, before writing
+    if args.out is not None:
+        output.check_out(args.out, force=args.force)
+    table = compare.rows(runs)
+    shared = compare.shared_columns([compare.header(r) for r in runs])
+    with output.run_folder(args.out, "compare", force=args.force) as run:
+        compare.write_csv(run.path / compare.CSV_NAME, runs, table)
+        files = [compare.CSV_NAME, compare.JSON_NAME]
+        if not args.no_plots:
+            from hexabot_sim import plots
+
+            plots.use_agg()
+            with output.package_style():
+                files += output.write_figures(compare.figures(runs), run.path)
+        output.write_json(run.path / compare.JSON_NAME, compare.record(runs, table, shared, files))
+    assert run.final is not None
+    _COMPLETED[:] = [f"the compare folder {output.display_path(run.final)} is complete"]
+    print(compare.text(runs, table), end="")
+    overlaid = f"{len(shared) - 1} shared columns overlaid" if len(shared) > 1 else "no shared columns to overlay"
+    print(f"compare: {len(runs)} runs, {overlaid} -> {output.display_path(run.final)}")
+    print(f"  files: {', '.join(files)}")
     return 0
 
 
@@ -500,6 +700,8 @@ def _main(argv: list[str]) -> int:
     try:
         # --debug is honoured wherever it is typed (before or after the sub-command).
         args = build_parser().parse_args([a for a in argv if a != "--debug"])
+        if args.command == "view":  # draws in a window: GLFW, chosen inside cmd_view
+            return cmd_view(args)
         if not (args.command == "run" and args.video):
             from hexabot_sim import gl
 
@@ -512,6 +714,8 @@ def _main(argv: list[str]) -> int:
             return cmd_kin(args)
         if args.command == "clean":
             return cmd_clean(args)
+        if args.command in ("sweep", "compare"):
+            return cmd_sweep(args) if args.command == "sweep" else cmd_compare(args)
         return cmd_run(args)
     except HexabotError as e:
         print(f"{PROG}: error: {e}", file=sys.stderr)

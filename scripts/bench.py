@@ -10,6 +10,8 @@ Usage: python scripts/bench.py [--repeat N] [--check]
   hexabot    the walking hexabot's loop (mj_step + 18-joint controller + recording) at its 2 ms
              implicitfast step: real-time factor                                 target >= 50x
              vs bare `mj_step` replaying the recorded controls on the same walk  target <= 2.5x
+  sweep      a 64-cell pendulum sweep on 2 local workers vs 1 (pool start included) target >= 1.7x
+             and the per-cell overhead of the Dask path (LocalCluster) vs the local pool
   list       wall time of `hexabot-sim list` (python -m hexabot_sim list)        target <= 0.5 s
 
 Timings alternate between the two sides of a ratio and keep each side's best (least disturbed)
@@ -160,6 +162,39 @@ def bench_video(repeat: int) -> dict[str, float] | str:
     return out
 
 
+def bench_sweep(repeat: int, duration: float = 5.0) -> dict[str, float]:
+    """A 64-cell pendulum sweep on 2 local workers vs 1, and the per-cell cost of the Dask path vs the pool."""
+    from hexabot_sim import sweep
+
+    grid = ["damping=log:0.001:0.1:8", "stiffness=0.2:2:8"]
+    plan = sweep.plan("pendulum", grid, {}, {"duration": str(duration)})
+
+    def timed(executor, jobs) -> float:
+        start = time.perf_counter()
+        sweep.run_cells(executor, jobs)
+        return time.perf_counter() - start
+
+    one, two = [], []
+    for _ in range(repeat):  # pool start-up included: it is part of every sweep
+        one.append(timed(sweep.local_executor(1), sweep.jobs(plan)))
+        two.append(timed(sweep.local_executor(2), sweep.jobs(plan)))
+    out = {"cells": len(plan.cells), "one_s": min(one), "two_s": min(two), "speedup": min(one) / min(two)}
+    try:
+        from distributed import LocalCluster
+    except ImportError:
+        return out
+    # Per-cell overhead: cells of a few steps, so the time is the executor's, not the physics'.
+    tiny = sweep.plan("pendulum", ["damping=0.001:0.1:200"], {}, {"duration": "0.01"})
+    pool_s, dask_s = [], []
+    with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None, silence_logs=50) as cluster:
+        for _ in range(repeat):
+            pool_s.append(timed(sweep.local_executor(2), sweep.jobs(tiny)))
+            with sweep.dask_executor(cluster.scheduler_address) as (executor, _workers):
+                dask_s.append(timed(executor, sweep.jobs(tiny)))
+    n = len(tiny.cells)
+    return out | {"tiny_cells": n, "pool_ms_per_cell": min(pool_s) / n * 1e3, "dask_ms_per_cell": min(dask_s) / n * 1e3}
+
+
 def bench_list(repeat: int) -> dict[str, float]:
     def timed(argv: list[str]) -> float:
         start = time.perf_counter()
@@ -214,6 +249,20 @@ def main() -> int:
             f"(target >= 100) {'ok' if ok else 'MISSED'}; high {video['high_fps']:.0f} fps "
             f"(preview/high = {video['preview_fps'] / video['high_fps']:.1f}x)"
         )
+
+    sw = bench_sweep(max(1, args.repeat // 2))
+    ok = sw["speedup"] >= 1.7 or (os.cpu_count() or 1) < 2
+    failures += [] if ok else ["sweep"]
+    dask = (
+        f"; per cell (2 workers, {sw['tiny_cells']} cells of 10 steps): pool {sw['pool_ms_per_cell']:.2f} ms, "
+        f"Dask LocalCluster {sw['dask_ms_per_cell']:.2f} ms (+{sw['dask_ms_per_cell'] - sw['pool_ms_per_cell']:.2f} ms)"
+        if "dask_ms_per_cell" in sw
+        else "; Dask: skipped (distributed not installed)"
+    )
+    print(
+        f"sweep     {sw['cells']} pendulum cells: 1 worker {sw['one_s']:.2f} s, 2 workers {sw['two_s']:.2f} s, "
+        f"speed-up {sw['speedup']:.2f}x (target >= 1.7x) {'ok' if ok else 'MISSED'}{dask}"
+    )
 
     lst = bench_list(args.repeat)
     ok = lst["list_s"] <= 0.5

@@ -59,7 +59,14 @@ def test_cli_writes_grid_and_figures(tmp_path, capsys):
     assert main([*argv, "--out", str(out), "--video"]) == 0
     err = capsys.readouterr().err
     assert "no video: leg-sweep produces no trajectory to film" in err
-    assert {p.name for p in out.iterdir()} == {"grid.csv", "run.json", "model.xml", "sweep.png", "workspace.png"}
+    assert {p.name for p in out.iterdir()} == {
+        "grid.csv",
+        "run.json",
+        "model.xml",
+        "sweep.png",
+        "workspace.png",
+        "report.html",
+    }
     header = (out / "grid.csv").read_text().splitlines()[0].split(",")
     assert header[:2] == ["amplitude", "omega"] and "max_deviation" in header
     record = json.loads((out / "run.json").read_text())

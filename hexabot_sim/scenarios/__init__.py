@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
+import sys
+import types
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -119,3 +121,16 @@ SCENARIOS: dict[str, Scenario] = {
 def get(name: str) -> Scenario:
     """The scenario called `name`."""
     return lookup(SCENARIOS, name, "scenario")
+
+
+class _CallableModule(types.ModuleType):
+    """This module is also the API's `hexabot_sim.scenarios()`: importing a sub-package named
+    `scenarios` replaces any attribute of that name on the package, so the module itself answers the call."""
+
+    def __call__(self) -> Any:
+        from hexabot_sim import api
+
+        return api.scenarios()
+
+
+sys.modules[__name__].__class__ = _CallableModule

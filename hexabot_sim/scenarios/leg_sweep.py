@@ -1,19 +1,17 @@
-"""The reports' amplitude and frequency studies as one grid of leg-step runs, in parallel on all cores."""
+"""The reports' amplitude and frequency studies: a grid of leg-step runs on the sweep engine, with their figures."""
 
 from __future__ import annotations
 
 import dataclasses
 import math
-import multiprocessing
-import multiprocessing.pool
 import os
-import signal
-import sys
 from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
 
+from hexabot_sim import sweep
+from hexabot_sim.errors import SimulationError
 from hexabot_sim.params import CSV_BYTES_PER_VALUE, check_budget, param
 from hexabot_sim.scenarios import leg
 from hexabot_sim.scenarios.base import Metric, Progress, ScenarioResult
@@ -102,52 +100,18 @@ class LegSweepParams(leg.LegParams):
         )
 
 
-def _run_indexed_cell(job: tuple[int, leg.LegStepParams]) -> tuple[int, dict[str, Any]]:
-    """One leg-step run; only its index and metrics travel back to the parent process."""
-    index, cell = job
-    result = leg.run("leg-step", cell)
-    return index, {name: metric.value for name, metric in result.metrics.items()}
-
-
-def _worker_init() -> None:
-    """Worker processes leave Ctrl-C to the parent (which stops them) and die with it (Linux)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    signal.signal(signal.SIGHUP, signal.SIG_DFL)
-    if sys.platform.startswith("linux"):
-        try:
-            import ctypes
-
-            pr_set_pdeathsig = 1
-            ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL)
-        except (OSError, AttributeError):
-            pass
-
-
-def _pool(workers: int) -> multiprocessing.pool.Pool:
-    # fork is cheap and safe here (no GL, no threads yet); spawn elsewhere.
-    methods = multiprocessing.get_all_start_methods()
-    context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-    return context.Pool(processes=workers, initializer=_worker_init)
-
-
 def run(name: str, p: LegSweepParams, progress: Progress | None = None) -> ScenarioResult:
-    """Runs every (amplitude, omega) cell and tabulates the deviations from the line."""
+    """Runs every (amplitude, omega) cell as a leg-step run on the sweep engine and tabulates the deviations."""
     cells = [(a, w) for a in p.amplitudes for w in p.omegas]
-    workers = p.workers or os.cpu_count() or 1
-    results: dict[int, dict[str, Any]] = {}
-    pool = _pool(min(workers, len(cells)))
-    try:
-        # Cells come back as they finish; Ctrl-C or SIGTERM in the parent lands here and stops all workers.
-        jobs = pool.imap_unordered(_run_indexed_cell, [(i, p.cell(a, w)) for i, (a, w) in enumerate(cells)])
-        for done, (i, metrics) in enumerate(jobs, start=1):
-            results[i] = metrics
-            if progress is not None:
-                progress(done, len(cells))
-        pool.close()
-    finally:
-        pool.terminate()
-        pool.join()
+    workers = min(p.workers or sweep.workers_default(), len(cells))
+    jobs = [sweep.CellJob(i, "leg-step", p.cell(a, w), keep_run=False) for i, (a, w) in enumerate(cells)]
+    # Ctrl-C or SIGTERM in the parent stops all workers (sweep.run_cells); nothing partial is returned.
+    done = sweep.run_cells(sweep.local_executor(workers), jobs, progress)
+    for cell in done:
+        if cell.error:  # this study's table needs every cell: a failed one fails the run, naming the cell
+            a, w = cells[cell.index]
+            raise SimulationError(f"grid cell amplitude = {a:g} m/s, omega = {w:g} rad/s: {cell.error}")
+    results: dict[int, dict[str, Any]] = {cell.index: cell.metrics for cell in done}
 
     amplitude = np.array([a for a, _ in cells])
     omega = np.array([w for _, w in cells])

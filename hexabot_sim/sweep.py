@@ -1,0 +1,668 @@
+"""Parameter sweeps: a full-factorial grid of one scenario's runs on any concurrent.futures.Executor."""
+
+from __future__ import annotations
+
+import concurrent.futures
+import contextlib
+import csv
+import dataclasses
+import math
+import multiprocessing
+import os
+import signal
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from hexabot_sim import params as params_mod
+from hexabot_sim import scenarios
+from hexabot_sim.errors import HexabotError, UsageError
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+CSV_NAME = "sweep.csv"
+JSON_NAME = "sweep.json"
+CELLS_DIR = "cells"  # --keep-runs: cells/cell-0000 ... one run folder per row of sweep.csv
+ERROR_COLUMN = "error"
+
+MAX_CELLS: int = 100_000  # cells of one sweep (a cell is one run)
+MAX_AXIS_POINTS: int = 10_000  # values of one --grid axis
+MAX_WORKERS: int = 256  # local worker processes
+HEATMAP_LABELS_MAX: int = 12  # an axis with more values labels every k-th only
+ANNOTATE_MAX_CELLS: int = 100  # heatmaps up to this many cells print each value in its cell
+DECADES_FOR_LOG: float = 2.0  # positive values spanning this many decades get a log scale
+CONSTANT_RTOL: float = 1e-12  # a metric that varies less than this (round-off) is not plotted
+
+# Metrics that measure the computer, not the physics (wall time): left out of sweep.csv, whose bytes
+# must not depend on the machine, the load or the executor.
+WALL_CLOCK_METRICS: frozenset[str] = frozenset({"real_time_factor"})
+
+# Scenarios that are themselves grids of runs: a sweep sweeps their single-run scenario instead.
+NOT_SWEEPABLE: dict[str, str] = {
+    "leg-sweep": "leg-sweep is itself a grid of leg-step runs; sweep leg-step instead, "
+    "e.g. --grid amplitude=0.02:0.1:5 --grid omega=log:0.5:3:6",
+}
+
+
+class WorkerFailed(HexabotError):
+    """A worker could not run a cell at all (process died, package missing on a cluster worker)."""
+
+    exit_code = 1
+
+
+# ---------------------------------------------------------------------------------------------
+# The plan: every cell resolved and validated before anything runs
+
+
+@dataclasses.dataclass(frozen=True)
+class Axis:
+    """One swept parameter: its name, the text the user gave and its resolved values in grid order."""
+
+    name: str
+    spec: str
+    values: tuple[Any, ...]
+    log: bool  # given as log:START:STOP:N (drawn on a log axis)
+
+
+@dataclasses.dataclass(frozen=True)
+class Plan:
+    """A validated sweep: scenario, axes, the fixed parameters and one parameter object per cell.
+
+    Cells run in row-major order of the axes (the last --grid varies fastest), the order of sweep.csv.
+    """
+
+    scenario: str
+    axes: tuple[Axis, ...]
+    base: Any  # the scenario's parameters with --config/--set applied, before the grid
+    cells: tuple[Any, ...]  # (n,) resolved parameter objects
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(a.values) for a in self.axes)
+
+    def cell_values(self, index: int) -> tuple[Any, ...]:
+        """The swept values of cell `index`."""
+        return tuple(getattr(self.cells[index], a.name) for a in self.axes)
+
+
+def _number(text: str, what: str, spec: str) -> float:
+    value = params_mod._to_float(text)
+    if value is None or not math.isfinite(value):
+        raise UsageError(f"--grid {spec!r}: {what} must be a finite number; got {text!r}")
+    return value
+
+
+def parse_axis(spec: str) -> tuple[str, list[Any], bool]:
+    """Parses PARAM=V1,V2,... | PARAM=START:STOP:N | PARAM=log:START:STOP:N into (name, raw values, log).
+
+    Raises:
+        UsageError: for a malformed spec, a count below 2 or above MAX_AXIS_POINTS, or a log range not > 0.
+    """
+    shown = spec if len(spec) <= params_mod.MAX_SHOWN else spec[: params_mod.MAX_SHOWN - 3] + "..."
+    name, sep, text = spec.partition("=")
+    name, text = name.strip(), text.strip()
+    if not sep or not name or not text:
+        raise UsageError(
+            f"malformed --grid {shown!r}: expected PARAM=V1,V2,... or PARAM=START:STOP:N or PARAM=log:START:STOP:N"
+        )
+    if ":" not in text:
+        items = [v.strip() for v in text.split(",", MAX_AXIS_POINTS)]
+        if any(not v for v in items):
+            raise UsageError(f"--grid {shown!r}: empty value in the list (two commas, or one at an end)")
+        if len(items) > MAX_AXIS_POINTS:
+            raise UsageError(f"--grid {shown!r}: at most {MAX_AXIS_POINTS} values per axis")
+        return name, items, False
+    parts = text.split(":")
+    log = parts[0].strip().casefold() == "log"
+    parts = parts[1:] if log else parts
+    if len(parts) != 3:
+        raise UsageError(f"malformed --grid {shown!r}: a range is START:STOP:N or log:START:STOP:N")
+    start, stop = _number(parts[0], "START", shown), _number(parts[1], "STOP", shown)
+    count = params_mod._to_float(parts[2])
+    if count is None or count != int(count) or not 2 <= count <= MAX_AXIS_POINTS:
+        raise UsageError(f"--grid {shown!r}: N must be a whole number from 2 to {MAX_AXIS_POINTS}; got {parts[2]!r}")
+    if start == stop:
+        raise UsageError(f"--grid {shown!r}: START and STOP are equal; give the value with --set instead")
+    if log and (start <= 0 or stop <= 0):
+        raise UsageError(f"--grid {shown!r}: a log range needs START > 0 and STOP > 0")
+    values = np.geomspace(start, stop, int(count)) if log else np.linspace(start, stop, int(count))
+    values[0], values[-1] = start, stop  # exactly as typed
+    return name, [float(v) for v in values], log
+
+
+def _label(names: Sequence[str], values: Sequence[Any]) -> str:
+    return ", ".join(f"{n} = {_text(v)}" for n, v in zip(names, values, strict=True))
+
+
+def plan(scenario_name: str, grid: Sequence[str], config: Mapping[str, Any], sets: Mapping[str, str]) -> Plan:
+    """Resolves and validates every cell of the grid (nothing runs).
+
+    Args:
+        scenario_name: Scenario to sweep.
+        grid: --grid specs, in order: the first is the slowest-varying axis.
+        config: Parameters from --config.
+        sets: Parameters from --set (fixed in every cell).
+
+    Raises:
+        UsageError: naming the bad spec, value or cell and what is allowed.
+    """
+    scenario = scenarios.get(scenario_name)
+    if scenario.name in NOT_SWEEPABLE:
+        raise UsageError(NOT_SWEEPABLE[scenario.name])
+    if not grid:
+        raise UsageError("give at least one --grid PARAM=V1,V2,... (or START:STOP:N, log:START:STOP:N)")
+    cls = scenario.params_type
+    base = params_mod.resolve(cls, scenario.defaults, config, sets)
+    known = params_mod.infos(cls)
+    kinds = {f.name: type(f.default) for f in dataclasses.fields(cls)}
+    parsed: list[tuple[str, str, list[Any], bool]] = []
+    for spec in grid:
+        name, raw, log = parse_axis(spec)
+        if name not in known:
+            raise UsageError(f"--grid {spec!r}: unknown parameter {name!r}; known: {', '.join(known)}")
+        if kinds[name] is tuple:
+            raise UsageError(f"--grid {spec!r}: parameter {name!r} is a list and cannot be swept")
+        if name in sets:
+            raise UsageError(f"parameter {name!r} is given both with --set and with --grid; keep one")
+        if any(name == other for other, *_ in parsed):
+            raise UsageError(f"parameter {name!r} is given twice with --grid; give all its values in one")
+        parsed.append((name, spec, raw, log))
+
+    # Each value on its own first: the message names the parameter's range, not a cell.
+    axes = []
+    for name, spec, raw, log in parsed:
+        values = []
+        for value in raw:
+            try:
+                p = params_mod.resolve(cls, scenario.defaults, config, sets, {name: value})
+            except UsageError as e:
+                raise UsageError(f"--grid {spec!r}: {e}") from None
+            values.append(getattr(p, name))
+        seen = set()
+        for value in values:
+            if value in seen:
+                raise UsageError(f"--grid {spec!r}: the value {_text(value)} appears twice")
+            seen.add(value)
+        axes.append(Axis(name, spec, tuple(values), log))
+
+    shape = [len(a.values) for a in axes]
+    count = math.prod(shape)
+    if count > MAX_CELLS:
+        raise UsageError(
+            f"the grid has {' x '.join(map(str, shape))} = {count} cells; the limit is {MAX_CELLS}: "
+            "split the study into several sweeps"
+        )
+    names = [a.name for a in axes]
+    cells = []
+    for index in np.ndindex(*shape):
+        values = [a.values[i] for a, i in zip(axes, index, strict=True)]
+        try:
+            cells.append(
+                params_mod.resolve(cls, scenario.defaults, config, sets, dict(zip(names, values, strict=True)))
+            )
+        except UsageError as e:  # a cross-parameter check (e.g. the leg's omega * timestep)
+            raise UsageError(f"grid cell {_label(names, values)}: {e}") from None
+    return Plan(scenario.name, tuple(axes), base, tuple(cells))
+
+
+# ---------------------------------------------------------------------------------------------
+# One cell, in a worker process (local pool or Dask worker): only plain data travels back
+
+
+@dataclasses.dataclass(frozen=True)
+class CellJob:
+    """What a worker needs to run one cell."""
+
+    index: int
+    scenario: str
+    params: Any
+    keep_run: bool  # also write the cell's run folder and send its files back
+    plots: bool = True  # the kept run folder has the scenario's figures
+
+
+@dataclasses.dataclass
+class CellResult:
+    """What one cell sends back: its scalar metrics (JSON-clean), or the error that stopped it."""
+
+    index: int
+    metrics: dict[str, Any]
+    units: dict[str, str]
+    docs: dict[str, str]
+    error: str | None
+    seconds: float  # wall time in the worker [s]
+    files: dict[str, bytes] | None = None  # --keep-runs: relative path -> content of the cell's run folder
+
+
+def _scalar(value: Any) -> tuple[bool, Any]:
+    """(is a scalar, JSON-clean value): numpy numbers become Python numbers, non-finite floats None."""
+    if isinstance(value, (np.floating, np.integer, np.bool_)):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return True, None
+    return value is None or isinstance(value, (bool, int, float, str)), value
+
+
+def _collect(metrics: Mapping[str, Any], units: Mapping[str, str], docs: Mapping[str, str]) -> tuple[dict, dict, dict]:
+    out = {}
+    for name, value in metrics.items():
+        ok, clean = _scalar(value)
+        if ok and name not in WALL_CLOCK_METRICS:
+            out[name] = clean
+    return out, {k: units.get(k, "") for k in out}, {k: docs.get(k, "") for k in out}
+
+
+def run_cell(job: CellJob) -> CellResult:
+    """Runs one cell; a cell that fails (diverges, or anything else) is a result with its message, not a crash.
+
+    With `keep_run` the cell's run folder is written by output.write_run, the writer of `hexabot-sim run`
+    (figures, no video), into a private temporary folder, and its files travel back with the result:
+    the worker may be on another machine than the sweep folder.
+    """
+    from hexabot_sim import output
+
+    started = time.perf_counter()
+    scenario = scenarios.get(job.scenario)
+    try:
+        result = scenario.runner(job.scenario, job.params)
+        metrics, units, docs = _collect(
+            {k: m.value for k, m in result.metrics.items()},
+            {k: m.unit for k, m in result.metrics.items()},
+            {k: m.doc for k, m in result.metrics.items()},
+        )
+        files = None
+        if job.keep_run:
+            sim_seconds = time.perf_counter() - started
+            with tempfile.TemporaryDirectory(prefix="hexabot-sim-cell-") as tmp:
+                folder = Path(tmp)
+                output.write_run(folder, scenario, job.params, result, sim_seconds=sim_seconds, plots=job.plots,
+                                 no_video_reason="not made in a sweep")  # fmt: skip
+                files = {
+                    path.relative_to(folder).as_posix(): path.read_bytes()
+                    for path in sorted(folder.rglob("*"))
+                    if path.is_file()
+                }
+        return CellResult(job.index, metrics, units, docs, None, time.perf_counter() - started, files)
+    except (KeyboardInterrupt, MemoryError):
+        raise
+    except HexabotError as e:
+        message = " ".join(str(e).split())
+    except Exception as e:  # one cell's failure must not cost the other cells
+        message = f"internal error: {type(e).__name__}: {' '.join(str(e).split())[:300]} (a bug, please report it)"
+    return CellResult(job.index, {}, {}, {}, message, time.perf_counter() - started)
+
+
+# ---------------------------------------------------------------------------------------------
+# Executors: a process pool here, or a Dask cluster; the sweep only sees concurrent.futures
+
+
+def _worker_init() -> None:
+    """Worker processes leave Ctrl-C to the parent (which stops them) and die with it (Linux)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            pr_set_pdeathsig = 1
+            ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL)
+        except (OSError, AttributeError):
+            pass
+
+
+def local_executor(workers: int) -> concurrent.futures.ProcessPoolExecutor:
+    """A pool of `workers` processes that ignore Ctrl-C and die with this process."""
+    # fork is cheap and safe here (no GL, no threads yet); spawn elsewhere.
+    methods = multiprocessing.get_all_start_methods()
+    context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+    return concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_worker_init)
+
+
+@contextlib.contextmanager
+def dask_executor(address: str, timeout: float = 10.0) -> Iterator[tuple[concurrent.futures.Executor, int]]:
+    """The Executor of a Dask distributed scheduler at `address`, and its current number of worker threads.
+
+    Raises:
+        UsageError: if `distributed` is not installed or the scheduler cannot be reached within `timeout` [s].
+    """
+    try:
+        from distributed import Client
+    except ImportError:
+        raise UsageError("--scheduler needs the 'distributed' package: pip install \"hexabot-sim[cluster]\"") from None
+    try:
+        client = Client(address, timeout=timeout, set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as e:
+        text = " ".join(str(e).split())[:200]
+        raise UsageError(f"cannot reach the Dask scheduler at {address!r}: {text or type(e).__name__}") from None
+    try:
+        yield client.get_executor(pure=False), sum(client.nthreads().values())
+    finally:
+        client.close()
+
+
+def stop(executor: concurrent.futures.Executor, futures: Sequence[concurrent.futures.Future]) -> None:
+    """Cancels what has not started and stops what is running: local workers are terminated at once."""
+    for future in futures:
+        future.cancel()
+    if isinstance(executor, concurrent.futures.ProcessPoolExecutor):
+        processes = list((getattr(executor, "_processes", None) or {}).values())
+        for process in processes:
+            with contextlib.suppress(OSError, ValueError):
+                process.terminate()
+        executor.shutdown(wait=True, cancel_futures=True)
+        for process in processes:
+            process.join(timeout=5)
+    else:  # Dask: cancel the tasks on the scheduler; its workers stay up for the next job
+        executor.shutdown(wait=False)
+
+
+def run_cells(
+    executor: concurrent.futures.Executor,
+    jobs: Sequence[CellJob],
+    progress: Callable[[int, int], None] | None = None,
+    on_result: Callable[[CellResult], None] | None = None,
+) -> list[CellResult]:
+    """Runs every job on the executor; results come back in job order whatever order they finish in.
+
+    `on_result` sees each result as it arrives (e.g. to write its kept run folder). On any exception
+    in the caller's thread (Ctrl-C, SIGTERM) every worker is stopped before it propagates.
+
+    Raises:
+        WorkerFailed: if a worker could not run a cell at all (it died, or cannot import hexabot_sim).
+    """
+    from hexabot_sim.output import _signals_held
+
+    results: list[CellResult | None] = [None] * len(jobs)
+    futures: list[concurrent.futures.Future] = []
+    finished = False
+    try:
+        futures = [executor.submit(run_cell, job) for job in jobs]
+        if progress is not None:
+            progress(0, len(jobs))
+        for done, future in enumerate(concurrent.futures.as_completed(futures), start=1):
+            try:
+                result = future.result()
+            except concurrent.futures.CancelledError:
+                raise WorkerFailed("a cell was cancelled by the executor (cluster shut down?)") from None
+            except Exception as e:
+                text = " ".join(str(e).split())[:300]
+                hint = " (is the same hexabot-sim installed on every worker?)" if isinstance(e, ImportError) else ""
+                raise WorkerFailed(f"a worker failed: {type(e).__name__}: {text}{hint}") from None
+            if on_result is not None:
+                on_result(result)
+            result.files = None
+            results[result.index] = result
+            if progress is not None:
+                progress(done, len(jobs))
+        finished = True
+    finally:
+        with _signals_held():  # a second Ctrl-C must not leave workers behind
+            if finished:
+                executor.shutdown(wait=True)
+            else:
+                stop(executor, futures)
+    return results  # type: ignore[return-value]
+
+
+def jobs(p: Plan, keep_runs: bool = False, plots: bool = True) -> list[CellJob]:
+    """One job per cell of the plan (`plots`: kept run folders get their figures)."""
+    return [CellJob(i, p.scenario, cell, keep_runs, plots) for i, cell in enumerate(p.cells)]
+
+
+def cell_folder(index: int, count: int) -> str:
+    """The kept run folder of a row: cells/cell-0007 (zero-padded to the number of cells)."""
+    return f"{CELLS_DIR}/cell-{index:0{max(4, len(str(count - 1)))}d}"
+
+
+# ---------------------------------------------------------------------------------------------
+# The table: sweep.csv and sweep.json
+
+
+def _text(value: Any) -> str:
+    """A value as written in sweep.csv: floats exactly (shortest round-trip form), booleans true/false, None empty."""
+    if value is None:
+        return ""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        text = repr(value)  # the shortest text that reads back as exactly this float
+        return text[:-2] if text.endswith(".0") else text
+    return str(value)
+
+
+@dataclasses.dataclass(frozen=True)
+class Table:
+    """sweep.csv in memory: the swept columns, then the metric columns, then `error`."""
+
+    swept: tuple[str, ...]
+    metrics: tuple[str, ...]  # column names (a metric named like a swept parameter gets a 'metric_' prefix)
+    metric_names: tuple[str, ...]  # the metric each metric column holds
+    rows: tuple[tuple[Any, ...], ...]  # (n, len(swept) + len(metrics) + 1), Python values
+    units: dict[str, str]  # column -> unit
+    docs: dict[str, str]  # metric column -> meaning
+
+    @property
+    def header(self) -> tuple[str, ...]:
+        return (*self.swept, *self.metrics, ERROR_COLUMN)
+
+    def column(self, name: str) -> list[Any]:
+        k = self.header.index(name)
+        return [row[k] for row in self.rows]
+
+
+def table(p: Plan, results: Sequence[CellResult]) -> Table:
+    """Tabulates the results: metric columns are the union over cells, in order of first appearance."""
+    swept = tuple(a.name for a in p.axes)
+    names: dict[str, None] = {}
+    units: dict[str, str] = {}
+    docs: dict[str, str] = {}
+    for r in results:
+        for name in r.metrics:
+            names.setdefault(name, None)
+            units.setdefault(name, r.units.get(name, ""))
+            docs.setdefault(name, r.docs.get(name, ""))
+    metric_names = tuple(names)
+    columns = tuple(f"metric_{n}" if n in swept else n for n in metric_names)
+    rows = tuple((*p.cell_values(r.index), *(r.metrics.get(n) for n in metric_names), r.error or "") for r in results)
+    param_units = params_mod.units(type(p.base))
+    column_units = {a: param_units[a] for a in swept}
+    column_units |= {c: units[n] for c, n in zip(columns, metric_names, strict=True)}
+    column_docs = {c: docs[n] for c, n in zip(columns, metric_names, strict=True)}
+    return Table(swept, columns, metric_names, rows, column_units, column_docs)
+
+
+def write_csv(path: Path, t: Table) -> None:
+    """Writes sweep.csv: one row per cell in grid order, values exact, empty where a metric is missing."""
+    with open(path, "w", newline="") as stream:
+        writer = csv.writer(stream, lineterminator="\n")
+        writer.writerow(t.header)
+        for row in t.rows:
+            writer.writerow([_text(v) for v in row])
+
+
+def record(p: Plan, t: Table, results: Sequence[CellResult], executor: Mapping[str, Any], wall: float) -> dict:
+    """The content of sweep.json: grid, fixed parameters, units, executor, timing."""
+    swept = {a.name for a in p.axes}
+    fixed, derived = {}, []
+    for name in params_mod.as_dict(p.base):
+        if name in swept:
+            continue
+        values = {getattr(cell, name) for cell in p.cells}
+        if len(values) == 1:
+            fixed[name] = getattr(p.cells[0], name)
+        else:  # set per cell from a swept value (e.g. leg-step's duration 0 = two periods of omega)
+            derived.append(name)
+    seconds = [r.seconds for r in results]
+    failed = [r.index for r in results if r.error]
+    return {
+        "scenario": p.scenario,
+        "description": scenarios.get(p.scenario).summary,
+        "grid": [{"name": a.name, "spec": a.spec, "values": list(a.values), "log": a.log} for a in p.axes],
+        "cells": len(p.cells),
+        "order": "row-major: the first --grid varies slowest; row i of sweep.csv is cell i",
+        "failed_cells": failed,
+        "fixed": fixed,
+        "derived": derived,
+        "columns": list(t.header),
+        "units": {"params": params_mod.units(type(p.base)), "columns": t.units},
+        "metric_docs": t.docs,
+        "left_out": {"wall-clock metrics (differ from run to run)": sorted(WALL_CLOCK_METRICS)},
+        "executor": dict(executor),
+        "timing": {
+            "wall_time": wall,
+            "cell_time_sum": float(sum(seconds)),
+            "cell_time_mean": float(np.mean(seconds)) if seconds else 0.0,
+            "cell_time_max": float(max(seconds, default=0.0)),
+            "parallel_speedup": float(sum(seconds) / wall) if wall > 0 else None,
+        },
+    }
+
+
+# ---------------------------------------------------------------------------------------------
+# Figures: one swept parameter -> each metric against it; two -> a heatmap per metric
+
+
+def _numeric(values: Sequence[Any]) -> np.ndarray | None:
+    """Floats of a metric column (None -> nan, bools -> 0/1), or None if it holds text."""
+    out = []
+    for v in values:
+        if isinstance(v, str):
+            return None
+        out.append(np.nan if v is None else float(v))
+    return np.array(out, dtype=float)
+
+
+def _spans_decades(values: np.ndarray) -> bool:
+    finite = values[np.isfinite(values)]
+    return bool(len(finite) and (finite > 0).all() and math.log10(finite.max() / finite.min()) >= DECADES_FOR_LOG)
+
+
+def plotted_metrics(t: Table) -> dict[str, np.ndarray]:
+    """Metric column -> values, for the metrics that are numbers and not the same in every cell that ran.
+
+    A metric that is null in some cells that ran (e.g. a settling time never reached) is drawn too.
+    """
+    ran = np.array([not e for e in t.column(ERROR_COLUMN)], dtype=bool)
+    out = {}
+    for name in t.metrics:
+        values = _numeric(t.column(name))
+        if values is None:
+            continue
+        finite = values[ran & np.isfinite(values)]
+        if not len(finite):
+            continue
+        spread = np.ptp(finite) > CONSTANT_RTOL * np.abs(finite).max()
+        if spread or len(finite) < ran.sum():
+            out[name] = values
+    return out
+
+
+def _axis_label(name: str, unit: str) -> str:
+    return f"{name} [{unit}]" if unit and unit != "1" else name
+
+
+def figures(p: Plan, t: Table) -> dict[str, Figure]:
+    """One figure per plotted metric (file stem = metric): a curve over one axis, a heatmap over two.
+
+    Three or more swept parameters give no figures (plot sweep.csv as you need).
+    """
+    if len(p.axes) not in (1, 2):
+        return {}
+    metrics = plotted_metrics(t)
+    failed = np.array([bool(e) for e in t.column(ERROR_COLUMN)])
+    draw = _curve if len(p.axes) == 1 else _heatmap
+    return {name: draw(p, t, name, values, failed) for name, values in metrics.items()}
+
+
+def _title(p: Plan, t: Table, name: str) -> str:
+    import textwrap
+
+    doc = textwrap.shorten(t.docs.get(name, ""), 200, placeholder=" ...")
+    return f"{p.scenario}: {name}" + (f"\n{textwrap.fill(doc, 100)}" if doc else "")
+
+
+def _curve(p: Plan, t: Table, name: str, values: np.ndarray, failed: np.ndarray) -> Figure:
+    from hexabot_sim import plots
+
+    axis = p.axes[0]
+    fig, ax = plots.figure(figsize=(8, 5))
+    xs = _numeric(list(axis.values))
+    categorical = xs is None
+    x = np.arange(len(axis.values), dtype=float) if categorical else xs
+    ax.plot(x, values, "o-", color="tab:blue", label=name)
+    if failed.any():
+        for xf in x[failed]:
+            ax.axvline(xf, color="tab:red", alpha=0.3, lw=6)
+        ax.plot([], [], color="tab:red", alpha=0.3, lw=6, label="cell failed (see the error column)")
+        plots.legend_above(ax, ncol=2)
+    if categorical:
+        ax.set_xticks(x, [_text(v) for v in axis.values])
+    elif axis.log or _spans_decades(x):
+        ax.set_xscale("log")
+    if _spans_decades(values):
+        ax.set_yscale("log")
+    ax.set_xlabel(_axis_label(axis.name, t.units.get(axis.name, "")))
+    ax.set_ylabel(_axis_label(name, t.units.get(name, "")))
+    ax.grid(alpha=0.3, which="both")
+    ax.set_title(_title(p, t, name), fontsize=plots.TITLE_FONTSIZE)
+    return fig
+
+
+def _ticks(values: Sequence[Any]) -> tuple[list[int], list[str]]:
+    step = max(1, math.ceil(len(values) / HEATMAP_LABELS_MAX))
+    index = list(range(0, len(values), step))
+    return index, [f"{v:.4g}" if isinstance(v, float) else _text(v) for v in (values[i] for i in index)]
+
+
+def _heatmap(p: Plan, t: Table, name: str, values: np.ndarray, failed: np.ndarray) -> Figure:
+    """Rows: the first swept parameter; columns: the second; each cell drawn the same size (grid values labelled)."""
+    from matplotlib.colors import LogNorm, Normalize
+
+    from hexabot_sim import plots
+
+    rows, cols = p.axes
+    grid = values.reshape(p.shape)  # (len(rows), len(cols)), row-major like the cells
+    bad = failed.reshape(p.shape)
+    finite = grid[np.isfinite(grid)]
+    log = _spans_decades(finite)
+    low, high = (float(finite.min()), float(finite.max())) if len(finite) else (0.0, 1.0)
+    norm = LogNorm(low, high) if log else Normalize(low, high if high > low else low + 1)
+    fig, ax = plots.figure(figsize=(8.5, 6.5))
+    masked = np.ma.masked_invalid(grid)
+    mesh = ax.pcolormesh(np.arange(len(cols.values) + 1) - 0.5, np.arange(len(rows.values) + 1) - 0.5, masked,
+                         cmap="viridis", norm=norm)  # fmt: skip
+    ax.set_facecolor("0.85")  # cells without a value (failed or null) show grey
+    fig.colorbar(mesh, ax=ax, label=_axis_label(name, t.units.get(name, "")) + (" (log scale)" if log else ""))
+    if bad.any():
+        r, c = np.nonzero(bad)
+        ax.plot(c, r, "x", color="tab:red", ms=12, mew=2, label="cell failed (see the error column)")
+        plots.legend_above(ax, ncol=1)
+    if grid.size <= ANNOTATE_MAX_CELLS:
+        for (i, j), v in np.ndenumerate(grid):
+            if np.isfinite(v):
+                shade = norm(v)
+                ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=7,
+                        color="black" if shade > 0.6 else "white")  # fmt: skip
+            elif not bad[i, j]:
+                ax.text(j, i, "null", ha="center", va="center", fontsize=7, color="0.3")
+    for setter, axis in ((ax.set_xticks, cols), (ax.set_yticks, rows)):
+        index, labels = _ticks(axis.values)
+        setter(index, labels)
+    ax.set_xlabel(_axis_label(cols.name, t.units.get(cols.name, "")) + (" (log-spaced)" if cols.log else ""))
+    ax.set_ylabel(_axis_label(rows.name, t.units.get(rows.name, "")) + (" (log-spaced)" if rows.log else ""))
+    ax.set_title(_title(p, t, name), fontsize=plots.TITLE_FONTSIZE)
+    return fig
+
+
+def workers_default() -> int:
+    """All cores this process may use."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
