@@ -16,7 +16,15 @@ from typing import Any, NoReturn
 
 from hexabot_sim import params as params_mod
 from hexabot_sim import scenarios
-from hexabot_sim.errors import HexabotError, Interrupted, UsageError
+from hexabot_sim.errors import (
+    HOLD,
+    PENDING_SIGNALS,
+    RECEIVED_SIGNALS,
+    HexabotError,
+    Interrupted,
+    UsageError,
+    stop_request,
+)
 
 PROG = "hexabot-sim"
 
@@ -246,7 +254,7 @@ def cmd_kin(args: argparse.Namespace) -> int:
     sets = params_mod.parse_assignments(args.sets)
     report = kinreport.report(args.robot, sets, args.q, args.target, degrees=args.deg, symbolic=args.symbolic)
     for warning in report["warnings"]:
-        print(f"{PROG}: warning: {warning}", file=sys.stderr)
+        _eprint(f"{PROG}: warning: {warning}")
     print(json.dumps(report, indent=2, allow_nan=False) if args.json else kinreport.text(report))
     return 0
 
@@ -270,7 +278,7 @@ def _video_settings(args: argparse.Namespace) -> Any:
 def cmd_run(args: argparse.Namespace) -> int:
     scenario = scenarios.get(args.scenario)
     sets = params_mod.parse_assignments(args.sets)
-    config = params_mod.read_config(args.config) if args.config else {}
+    config = params_mod.read_config(args.config) if args.config is not None else {}
 
     from hexabot_sim import gl, output
 
@@ -279,7 +287,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.video:
         backend, no_video_reason, notice = gl.choose()
         if notice:
-            print(f"{PROG}: {notice}", file=sys.stderr)
+            _eprint(f"{PROG}: {notice}")
         if backend is not None:
             ffmpeg_problem = gl.ffmpeg_problem()
             if ffmpeg_problem is not None:
@@ -305,7 +313,7 @@ def _mujoco_warnings_to_stderr() -> Iterator[None]:
     finally:
         mujoco.set_mju_user_warning(previous)
         for message in dict.fromkeys(seen):
-            print(f"{PROG}: MuJoCo warning: {' '.join(message.split())}", file=sys.stderr)
+            _eprint(f"{PROG}: MuJoCo warning: {' '.join(message.split())}")
 
 
 def _execute(args: argparse.Namespace, scenario: Any, p: Any, backend: str | None, no_video_reason: str) -> int:
@@ -345,7 +353,7 @@ def _execute(args: argparse.Namespace, scenario: Any, p: Any, backend: str | Non
         timing += f", video in {video_seconds:.2f} s"
     timing += f", {total_seconds:.2f} s in all"
     if args.video and not video["written"]:
-        print(f"{PROG}: no video: {no_video_reason}", file=sys.stderr)
+        _eprint(f"{PROG}: no video: {no_video_reason}")
     _COMPLETED[:] = [f"the run folder {output.display_path(run.final)} is complete"]
     print(f"{scenario.name}: {timing} -> {output.display_path(run.final)}")
     for name in result.summary:
@@ -416,7 +424,7 @@ def cmd_view(args: argparse.Namespace) -> int:
     options = {"speed": args.speed, "paused": args.paused, "quit_after": args.quit_after}
 
     def announce(text: str) -> None:
-        print(f"{PROG}: {text}", file=sys.stderr, flush=True)
+        _eprint(f"{PROG}: {text}")
 
     with _mujoco_warnings_to_stderr():
         if recording is not None:
@@ -424,7 +432,7 @@ def cmd_view(args: argparse.Namespace) -> int:
         else:
             assert scenario is not None
             sets = params_mod.parse_assignments(args.sets)
-            config = params_mod.read_config(args.config) if args.config else {}
+            config = params_mod.read_config(args.config) if args.config is not None else {}
             p: Any = params_mod.resolve(scenario.params_type, scenario.defaults, config, sets)
             make = viewer.live_maker(scenario.name, p)  # a grid scenario is refused before the window opens
             summary = viewer.live(make, scenario.name, announce=announce, **options)
@@ -525,7 +533,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from hexabot_sim import output, sweep
 
     sets = params_mod.parse_assignments(args.sets)
-    config = params_mod.read_config(args.config) if args.config else {}
+    config = params_mod.read_config(args.config) if args.config is not None else {}
     plan = sweep.plan(args.scenario, args.grid, config, sets)  # every cell validated: nothing runs before
     if args.scheduler is not None and args.workers is not None:
         raise UsageError("--workers is for the local pool; with --scheduler the cluster's workers run the cells")
@@ -681,6 +689,9 @@ def _debug_requested(argv: Sequence[str]) -> bool:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Runs the CLI; returns the exit code (0 ok, 1 simulation or output failed, 2 bad input, 128+N signal N)."""
+    if argv is not None:  # called from Python (tests, scripts): no stop request carries over from before
+        RECEIVED_SIGNALS.clear()
+        PENDING_SIGNALS.clear()
     argv = list(sys.argv[1:] if argv is None else argv)
     stdout, sys.stdout = sys.stdout, _GuardedStdout(sys.stdout)
     _COMPLETED.clear()
@@ -690,7 +701,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return code
     except _StdoutError as e:
         done = f" ({_COMPLETED[0]})" if _COMPLETED else ""
-        print(f"{PROG}: error: cannot write to standard output: {e.error.strerror or e.error}{done}", file=sys.stderr)
+        _eprint(f"{PROG}: error: cannot write to standard output: {e.error.strerror or e.error}{done}")
         return 1
     finally:
         sys.stdout = stdout
@@ -718,33 +729,66 @@ def _main(argv: list[str]) -> int:
             return cmd_sweep(args) if args.command == "sweep" else cmd_compare(args)
         return cmd_run(args)
     except HexabotError as e:
-        print(f"{PROG}: error: {e}", file=sys.stderr)
+        _eprint(f"{PROG}: error: {e}")
         return e.exit_code
     except (_StdoutError, BrokenPipeError):
         raise
-    except Interrupted as e:
-        name = signal.Signals(e.signum).name
-        print(f"{PROG}: stopped by {name}; nothing written", file=sys.stderr)
-        return 128 + e.signum
-    except KeyboardInterrupt:
-        print(f"{PROG}: interrupted; nothing written", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as e:
+        return _interrupted(e)
     except SystemExit as e:  # argparse's --help / --version
         return e.code if isinstance(e.code, int) else 0
     except (Exception, RecursionError) as e:
+        cause = _interruption_in(e)
+        if cause is not None:  # e.g. Ctrl-C while a C extension was being imported (ImportError from it)
+            return _interrupted(cause)
         if _debug_requested(argv):
             raise
         text = " ".join(str(e).split())[:300]
-        print(
+        _eprint(
             f"{PROG}: internal error: {type(e).__name__}{': ' + text if text else ''} -- this is a bug in "
-            f"{PROG}, please report it with the output of the same command plus --debug",
-            file=sys.stderr,
+            f"{PROG}, please report it with the output of the same command plus --debug"
         )
         return 1
 
 
+def _eprint(text: str) -> None:
+    """One line on stderr; a closed or full stderr must not change the exit code (nothing else can be told)."""
+    try:
+        print(text, file=sys.stderr, flush=True)
+    except UnicodeEncodeError:  # e.g. a path in a non-UTF-8 locale
+        with contextlib.suppress(OSError, ValueError):
+            print(text.encode("ascii", "backslashreplace").decode(), file=sys.stderr, flush=True)
+    except (OSError, ValueError):
+        pass
+
+
+def _interruption_in(error: BaseException) -> KeyboardInterrupt | None:
+    """The Ctrl-C or signal behind an exception (a C extension may wrap it in its own error), if any."""
+    seen = set()
+    while error is not None and id(error) not in seen:
+        seen.add(id(error))
+        if isinstance(error, KeyboardInterrupt):
+            return error
+        error = error.__cause__ or error.__context__
+    return None
+
+
+def _interrupted(error: KeyboardInterrupt) -> int:
+    """The one line and exit code of a run stopped by Ctrl-C (130) or SIGTERM/SIGHUP (128 + N)."""
+    if isinstance(error, Interrupted):
+        _eprint(f"{PROG}: stopped by {signal.Signals(error.signum).name}; nothing written")
+        return 128 + error.signum
+    _eprint(f"{PROG}: interrupted; nothing written")
+    return 130
+
+
 def _raise_interrupted(signum: int, frame: Any) -> None:
-    raise Interrupted(signum)
+    """Ctrl-C, SIGTERM and SIGHUP stop the run; while a publish or clean-up is held, only after it."""
+    RECEIVED_SIGNALS.append(signum)
+    if HOLD[0] > 0:
+        PENDING_SIGNALS.append(signum)
+        return
+    raise stop_request(signum)
 
 
 def _ensure_std_streams() -> None:
@@ -763,9 +807,11 @@ def _ensure_std_streams() -> None:
 def console() -> NoReturn:
     """Entry point of the `hexabot-sim` console script."""
     _ensure_std_streams()
+    os.environ["MPLBACKEND"] = "Agg"  # the command line draws off-screen, whatever the environment says
     # SIGTERM and SIGHUP stop a run exactly like Ctrl-C: clean up, exit 128 + N.
-    for sig in (signal.SIGTERM, signal.SIGHUP):
-        signal.signal(sig, _raise_interrupted)
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        if signal.getsignal(sig) is not signal.SIG_IGN:  # e.g. Ctrl-C stays ignored in a background job
+            signal.signal(sig, _raise_interrupted)
     try:
         code = main()
         sys.stdout.flush()
@@ -773,7 +819,7 @@ def console() -> NoReturn:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         code = 0
     except OSError as e:  # stdout full at the final flush
-        print(f"{PROG}: error: cannot write to standard output: {e.strerror or e}", file=sys.stderr)
+        _eprint(f"{PROG}: error: cannot write to standard output: {e.strerror or e}")
         code = 1
     sys.exit(code)
 

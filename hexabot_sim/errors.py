@@ -28,6 +28,23 @@ class OutputError(HexabotError):
     exit_code = 1
 
 
+# Signals the command line received (Ctrl-C, SIGTERM, SIGHUP), newest last. A library may catch the
+# exception a signal raised in the middle of an import (and fall back silently): the run checks this
+# before it publishes anything, so a stop request is never lost.
+RECEIVED_SIGNALS: list[int] = []
+# While HOLD[0] > 0 (publishing, cleaning up) the command line's handler only records a signal in
+# PENDING_SIGNALS; the hold raises it when it ends (see output._signals_held).
+HOLD: list[int] = [0]
+PENDING_SIGNALS: list[int] = []
+
+
+def stop_request(signum: int) -> KeyboardInterrupt:
+    """The exception a stop signal raises: KeyboardInterrupt for Ctrl-C, Interrupted(N) for SIGTERM/SIGHUP."""
+    import signal
+
+    return KeyboardInterrupt() if signum == signal.SIGINT else Interrupted(signum)
+
+
 class Interrupted(KeyboardInterrupt):
     """Ctrl-C, SIGTERM or SIGHUP: the run stops, cleans up and exits with 128 + the signal number."""
 

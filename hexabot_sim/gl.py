@@ -85,7 +85,7 @@ def disable_if_unused() -> None:
         os.environ["MUJOCO_GL"] = "disable"
 
 
-FFMPEG_TIMEOUT: float = 30.0  # [s]
+FFMPEG_TIMEOUT: float = 10.0  # [s] `ffmpeg -version` answers in milliseconds; a stuck one costs at most this
 
 
 def ffmpeg_problem() -> str | None:

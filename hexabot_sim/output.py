@@ -2,17 +2,17 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import datetime as _dt
 import errno
+import functools
 import json
 import math
 import os
 import platform
+import secrets
 import shutil
-import signal
-import tempfile
-import threading
 import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
@@ -21,7 +21,15 @@ from typing import Any
 
 import numpy as np
 
-from hexabot_sim.errors import OutputError, SimulationError, UsageError
+from hexabot_sim.errors import (
+    HOLD,
+    PENDING_SIGNALS,
+    RECEIVED_SIGNALS,
+    OutputError,
+    SimulationError,
+    UsageError,
+    stop_request,
+)
 
 JSON_NAME = "run.json"
 MODEL_NAME = "model.xml"
@@ -37,8 +45,6 @@ NOT_REQUESTED = "not requested (add --video)"  # run.json's video reason when no
 STAGING_PREFIX = ".hexabot-sim-staging-"
 STAGING_SUFFIX = ".partial"
 _OLD_PREFIX = ".hexabot-sim-replaced-"
-# Signals that must not cut a publish or a clean-up in half (they are held until it is done).
-_HELD_SIGNALS = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP}
 
 
 def default_out(scenario: str, root: Path = Path("runs")) -> Path:
@@ -48,15 +54,20 @@ def default_out(scenario: str, root: Path = Path("runs")) -> Path:
 
 @contextmanager
 def _signals_held() -> Iterator[None]:
-    """Delays Ctrl-C, SIGTERM and SIGHUP until the block is done (main thread only)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
+    """Delays Ctrl-C, SIGTERM and SIGHUP until the block is done, then raises the stop request.
+
+    Works with the command line's handler (hexabot_sim.__main__), which only records a signal while
+    a hold is on: no handler is swapped, and the kernel may hand the signal to any thread.
+    """
+    HOLD[0] += 1
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        HOLD[0] -= 1
+        if HOLD[0] == 0 and PENDING_SIGNALS:
+            signum = PENDING_SIGNALS[-1]
+            PENDING_SIGNALS.clear()
+            raise stop_request(signum)
 
 
 def check_out(out: str | os.PathLike[str], force: bool = False) -> None:
@@ -89,8 +100,15 @@ def _check_existing(out: Path, text: str, force: bool) -> None:
         raise UsageError(f"output folder {text!r} cannot be used: {e}") from None
     if cwd.is_relative_to(resolved):
         raise UsageError(f"output folder {text!r} is the working folder or one of its parents; choose a new folder")
-    if resolved == Path.home().resolve():
-        raise UsageError(f"output folder {text!r} is the home folder; choose a new folder")
+    if Path.home().resolve().is_relative_to(resolved):
+        raise UsageError(f"output folder {text!r} is the home folder or one of its parents; choose a new folder")
+    for part in (*Path(os.path.abspath(out)).parts, *resolved.parts):
+        if part.startswith((STAGING_PREFIX, _OLD_PREFIX)):
+            raise UsageError(
+                f"output folder {text!r} is inside another run's staging folder {part!r}; choose a new folder"
+            )
+    if force and out.is_dir() and os.path.ismount(out):
+        raise UsageError(f"output folder {text!r} is a mount point; --force cannot replace it")
     if out.exists() and not out.is_dir():
         raise UsageError(f"output path {text!r} exists and is not a folder")
     try:
@@ -143,39 +161,80 @@ class RunFolder:
         self.final: Path | None = None
 
 
-def _publish(staging: Path, out: Path, auto_name: bool, force: bool) -> Path:
-    """Renames the finished staging folder to `out` (or the next free `out-N`); returns where it went."""
+def _snapshot(folder: Path) -> tuple | None:
+    """What a folder holds (every entry's path, kind, size and modification time), None if it does not exist."""
+    try:
+        top = os.stat(folder, follow_symlinks=False)
+    except FileNotFoundError:
+        return None
+    entries = []
+    for root, dirs, files in os.walk(folder):
+        for name in sorted(dirs) + sorted(files):
+            path = os.path.join(root, name)
+            st = os.stat(path, follow_symlinks=False)
+            entries.append((os.path.relpath(path, folder), st.st_mode, st.st_size, st.st_mtime_ns, st.st_ino))
+    return (top.st_ino, top.st_dev, tuple(sorted(entries)))
+
+
+_TAKEN = (errno.EEXIST, errno.ENOTEMPTY, errno.ENOTDIR, errno.EISDIR)
+
+
+def _mkdir_unique(parent_fd: int, prefix: str, suffix: str = "") -> str:
+    """Creates a new folder named prefix<random>suffix in the folder `parent_fd`; mode from the umask."""
+    for _ in range(100):
+        name = f"{prefix}{secrets.token_hex(4)}{suffix}"
+        try:
+            os.mkdir(name, 0o777, dir_fd=parent_fd)
+            return name
+        except FileExistsError:
+            continue
+    raise OSError(errno.EEXIST, "no free staging folder name")
+
+
+def _publish(parent_fd: int, staging: str, out: Path, auto_name: bool, force: bool, before: tuple | None) -> Path:
+    """Renames the finished staging folder (in `parent_fd`) to `out` (or the next free `out-N`); returns where."""
+    rename = functools.partial(os.rename, src_dir_fd=parent_fd, dst_dir_fd=parent_fd)
     if auto_name:
         for n in range(1, 10_000):
-            target = out if n == 1 else out.with_name(f"{out.name}-{n}")
+            name = out.name if n == 1 else f"{out.name}-{n}"
             try:
                 # rename() only ever replaces an empty folder: a taken name raises and we try the next.
-                os.rename(staging, target)
-                return target
+                rename(staging, name)
+                return out.with_name(name)
             except OSError as e:
-                if e.errno not in (errno.EEXIST, errno.ENOTEMPTY, errno.ENOTDIR, errno.EISDIR):
+                if e.errno not in _TAKEN:
                     raise
         raise OutputError(f"no free run folder name next to {str(out)!r}")
     if out.is_symlink():
         raise OutputError(f"{str(out)!r} became a symbolic link during the run; result not written")
+    now = _snapshot(out)
+    if force and now != before and not (before is None and now is not None and not now[2]):
+        raise OutputError(
+            f"output folder {str(out)!r} changed during the run; nothing replaced, the result is not written "
+            "(--force replaces only what was there when the run started)"
+        )
     old = None
-    if force and out.is_dir() and any(out.iterdir()):
-        old = Path(tempfile.mkdtemp(prefix=f"{_OLD_PREFIX}{os.getpid()}-", dir=out.parent))
-        os.rename(out, old / "previous")  # moved aside first, deleted only once the new run is in place
     try:
-        os.rename(staging, out)
+        if force and now is not None and now[2]:
+            old = _mkdir_unique(parent_fd, f"{_OLD_PREFIX}{os.getpid()}-")
+            rename(out.name, f"{old}/previous")  # moved aside first, deleted only once the new run is in place
+        rename(staging, out.name)
     except OSError as e:
         if old is not None:
-            os.rename(old / "previous", out)
-            old.rmdir()
-        if e.errno in (errno.EEXIST, errno.ENOTEMPTY, errno.ENOTDIR, errno.EISDIR):
+            try:
+                rename(f"{old}/previous", out.name)
+            except OSError:
+                pass
+            with contextlib.suppress(OSError):
+                os.rmdir(old, dir_fd=parent_fd)
+        if e.errno in _TAKEN:
             raise OutputError(
                 f"output folder {str(out)!r} was filled by someone else during the run; nothing replaced "
                 "(run again with another --out, or --force to replace it)"
             ) from None
         raise
     if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
+        shutil.rmtree(old, ignore_errors=True, dir_fd=parent_fd)
     return out
 
 
@@ -185,40 +244,53 @@ def run_folder(out: str | os.PathLike[str] | None, scenario: str = "run", force:
 
     With `out` None the run goes to a new runs/<scenario>-<timestamp>[-N] folder that no other run
     can take. On any error, Ctrl-C or termination the staging folder and the parent folders this
-    run created are removed: no half-written run is ever left behind, and nothing is replaced that
-    was not there (empty) when the run was published, unless `force`.
+    run created are removed: no half-written run is ever left behind. Nothing is replaced that was
+    not there (empty) when the run was published; with `force`, what was in `out` when the run
+    started is replaced, and a folder that changed during the run is left alone.
 
     Raises:
         UsageError: if `out` is refused by check_out.
-        OutputError: if the folder cannot be written or `out` was filled during the run.
+        OutputError: if the folder cannot be written or `out` was filled or changed during the run.
     """
     auto_name = out is None
     target = default_out(scenario) if out is None else Path(out)
     # A default name that is taken is not an error: the publish moves on to the next free -N.
     check_out(target if out is None else out, force=force or auto_name)
+    target = Path(os.path.abspath(target))  # a later chdir or a renamed working folder cannot redirect it
+    before = _snapshot(target) if force and not auto_name else None
     created: list[Path] = []
     folder = None
+    parent_fd = -1
+    staging = ""
     try:
         with _signals_held():
             created = _make_parents(target.parent)
-            staging = tempfile.mkdtemp(
-                prefix=f"{STAGING_PREFIX}{os.getpid()}-", suffix=STAGING_SUFFIX, dir=target.parent
-            )
-            folder = RunFolder(Path(staging))
+            # The staging folder is created, published and removed through a handle on its parent,
+            # so it is found again even if the parent is renamed meanwhile.
+            parent_fd = os.open(target.parent, os.O_RDONLY | os.O_DIRECTORY)
+            staging = _mkdir_unique(parent_fd, f"{STAGING_PREFIX}{os.getpid()}-", STAGING_SUFFIX)
+            folder = RunFolder(target.parent / staging)
         yield folder
         with _signals_held():
-            folder.final = _publish(folder.path, target, auto_name, force and not auto_name)
+            if RECEIVED_SIGNALS:  # a stop request some library swallowed on its way: honour it now
+                raise stop_request(RECEIVED_SIGNALS[-1])
+            if os.stat(target.parent).st_ino != os.fstat(parent_fd).st_ino:
+                raise OutputError(f"the folder {str(target.parent)!r} was moved or replaced during the run")
+            folder.final = _publish(parent_fd, staging, target, auto_name, force and not auto_name, before)
     except BaseException as e:
         # Ctrl-C, a signal, a failed simulation or write: remove everything this run made, then say why.
         with _signals_held():
-            if folder is not None:
-                shutil.rmtree(folder.path, ignore_errors=True)
+            if staging and parent_fd >= 0:
+                shutil.rmtree(staging, ignore_errors=True, dir_fd=parent_fd)
             _remove_created(created)
         if isinstance(e, OSError) and folder is None:
             raise UsageError(f"output folder {str(target)!r} cannot be written: {e.strerror or e}") from None
         if isinstance(e, OSError):
             raise OutputError(f"writing the run folder failed: {e.strerror or e}; nothing written") from None
         raise
+    finally:
+        if parent_fd >= 0:
+            os.close(parent_fd)
 
 
 def stale_staging(root: Path) -> list[Path]:

@@ -228,11 +228,13 @@ def read_config(path: str | Path) -> dict[str, Any]:
         UsageError: for a missing, unreadable, oversized or non-regular file, invalid TOML, another
             table than [params], or a name given both at the top level and in [params].
     """
+    if str(path) == "":
+        raise UsageError("--config needs a file name; got an empty one")
     path = Path(path)
     shown = repr(str(path))  # a path is shown whole: cut short, it would not name the file
     raw = _read_bounded(path)
     try:
-        data = tomllib.loads(raw.decode("utf-8"))
+        data = tomllib.loads(raw.decode("utf-8").removeprefix("\ufeff"))  # a BOM from a Windows editor
     except UnicodeDecodeError:
         raise UsageError(f"config file {shown} is not valid TOML: not UTF-8 text") from None
     except tomllib.TOMLDecodeError as e:

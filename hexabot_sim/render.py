@@ -13,6 +13,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from hexabot_sim.errors import RECEIVED_SIGNALS, stop_request
 from hexabot_sim.scenarios.base import Marker
 
 
@@ -287,7 +288,7 @@ def render_video(
         quality=preset.crf_quality,
         pixelformat="yuv420p",
         macro_block_size=2,  # never resized: the size was checked to be even above
-        ffmpeg_log_level="error",
+        ffmpeg_log_level="quiet",  # one line of ours on failure, not the encoder's chatter
         output_params=["-preset", preset.x264_preset],
     )
     try:
@@ -309,6 +310,8 @@ def render_video(
                 frame = renderer.render()  # (height, width, 3) uint8, a new array
                 draw_text(frame, [f"t = {t[row]:{digits}.2f} s", *(line(int(row)) for line in overlay)], atlas)
                 writer.append_data(frame)
+                if RECEIVED_SIGNALS:  # a stop request whose exception some library swallowed
+                    raise stop_request(RECEIVED_SIGNALS[-1])
                 if progress is not None:
                     progress(n + 1, len(indices))
     finally:

@@ -9,7 +9,7 @@ from collections.abc import Callable
 import mujoco
 import numpy as np
 
-from hexabot_sim.errors import SimulationError
+from hexabot_sim.errors import RECEIVED_SIGNALS, SimulationError, stop_request
 
 # Steps between two divergence checks (warning counters, finiteness of the recorded block).
 CHECK_EVERY: int = 100
@@ -108,6 +108,8 @@ def simulate(
                     step(model, data)
                     t[i], qpos[i], qvel[i], ctrl[i] = data.time, data_qpos, data_qvel, data_ctrl
             _check(data, warnings0, messages, t, qpos, qvel, first - 1, last)
+            if RECEIVED_SIGNALS:  # a stop request whose exception some library swallowed: stop now
+                raise stop_request(RECEIVED_SIGNALS[-1])
             if progress is not None and (last % PROGRESS_EVERY < CHECK_EVERY or last == n_steps):
                 progress(last, n_steps)
     finally:

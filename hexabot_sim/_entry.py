@@ -1,0 +1,34 @@
+"""The `hexabot-sim` console script: a Ctrl-C while the program is still loading ends quietly too."""
+
+import sys
+
+
+def console() -> None:
+    """Loads the command line (numpy, MuJoCo, ...) and runs it; Ctrl-C during the loading exits 130 in one line."""
+    import signal
+
+    from hexabot_sim.errors import RECEIVED_SIGNALS
+
+    def interrupted(signum: int, frame: object) -> None:
+        RECEIVED_SIGNALS.append(signum)  # remembered even if an import swallows the exception
+        raise KeyboardInterrupt
+
+    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
+        signal.signal(signal.SIGINT, interrupted)
+    try:
+        from hexabot_sim.__main__ import console as run
+
+        if RECEIVED_SIGNALS:
+            raise KeyboardInterrupt
+    except BaseException as error:  # KeyboardInterrupt, or an ImportError a C extension wrapped it in
+        cause: BaseException | None = error
+        while cause is not None and not isinstance(cause, KeyboardInterrupt):
+            cause = cause.__cause__ or cause.__context__
+        if cause is None:
+            raise
+        try:
+            sys.stderr.write("hexabot-sim: interrupted; nothing written\n")
+        except (OSError, ValueError):
+            pass
+        raise SystemExit(130) from None
+    run()
