@@ -578,7 +578,13 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         record = sweep.record(plan, table, results, executor_record, wall)
         record |= {"files": files, "kept_runs": f"{sweep.CELLS_DIR}/ ({kept} folders)" if args.keep_runs else None}
         record["versions"] = output.versions()
+        record["files"] = [*files, "report.html"]
         output.write_json(run.path / sweep.JSON_NAME, record)
+        from hexabot_sim import params as params_info
+        from hexabot_sim import report
+
+        docs = {name: info.doc for name, (info, _) in params_info.infos(type(plan.base)).items()}
+        (run.path / "report.html").write_text(report.sweep_page(record, docs, run.path))
     assert run.final is not None
     total = time.perf_counter() - started
     failed = [r for r in results if r.error]

@@ -17,6 +17,8 @@ FILE_DOCS: dict[str, str] = {
     "model.xml": "the exact MJCF that was simulated (loading it reproduces the run)",
     "trajectory.npz": "full recorded state: t, qpos, qvel, ctrl (numpy.load)",
     "video.mp4": "the video (H.264)",
+    "sweep.csv": "one row per grid cell: the swept parameters, every scalar metric, the error of a failed cell",
+    "sweep.json": "grid, fixed parameters, units, failed cells, executor, timing, versions",
 }
 
 STYLE = """
@@ -218,3 +220,40 @@ def html_page(
         facts.append(", ".join(f"{name} {version}" for name, version in versions.items() if name != "platform"))
     out += ["<footer>", *(f"<p>{_e(fact)}</p>" for fact in facts), "</footer>", "</body>", "</html>", ""]
     return "\n".join(out)
+
+
+def sweep_page(record: Mapping[str, Any], param_docs: Mapping[str, str], folder: Path) -> str:
+    """The report page of a sweep folder (sweep.json's record): the grid, the fixed parameters, the figures."""
+    grid = record["grid"]
+    shape = " x ".join(f"{len(axis['values'])} {axis['name']}" for axis in grid)
+    timing = record.get("timing") or {}
+    metrics = {
+        "cells": record["cells"],
+        "failed_cells": len(record.get("failed_cells") or []),
+        "wall_time": timing.get("wall_time"),
+        "parallel_speedup": timing.get("parallel_speedup"),
+    }
+    units = {"cells": "1", "failed_cells": "1", "wall_time": "s", "parallel_speedup": "1"}
+    docs = {
+        "cells": f"grid cells ({shape}); row i of sweep.csv is cell i",
+        "failed_cells": "cells whose run failed (a row with its error in sweep.csv)",
+        "wall_time": "wall time of the whole sweep",
+        "parallel_speedup": "summed cell time / wall time",
+    }
+    param_units = dict(record["units"]["params"])
+    params: dict[str, Any] = {}
+    for axis in grid:
+        values = ", ".join(format_value(v) for v in axis["values"])
+        params[axis["name"]] = f"swept: {values}"
+    params |= record.get("fixed", {})
+    page_record = {
+        "scenario": f"sweep of {record['scenario']}",
+        "description": f"{record.get('description', '')} ({shape} grid)",
+        "files": list(record.get("files", [])),
+        "metrics": metrics,
+        "params": params,
+        "units": {"metrics": units, "params": param_units},
+        "metric_docs": docs,
+        "versions": record.get("versions") or {},
+    }
+    return html_page(page_record, param_docs, ["cells", "failed_cells", "wall_time"], folder)

@@ -96,7 +96,7 @@ def test_same_bytes_on_one_or_two_workers_and_a_divergent_cell_is_a_row(tmp_path
     assert {"hexabot_sim", "mujoco"} <= set(record["versions"]) and record["timing"]["wall_time"] > 0
     pngs = {p.name for p in (tmp_path / "one").glob("*.png")}
     assert "final_theta_deg.png" in pngs and "target_deg.png" not in pngs  # constant metrics are not drawn
-    assert set(record["files"]) == {"sweep.csv", "sweep.json", *pngs}
+    assert set(record["files"]) == {"sweep.csv", "sweep.json", "report.html", *pngs}
     assert not list((tmp_path / "two").glob("*.png"))
 
 
@@ -177,3 +177,16 @@ def test_sigterm_stops_the_workers_and_leaves_nothing(tmp_path):
     for pid in children:
         assert not Path(f"/proc/{pid}").exists() or "zombie" in Path(f"/proc/{pid}/status").read_text()
     assert list(tmp_path.iterdir()) == []
+
+
+def test_sweep_folder_has_a_report_page(tmp_path, capsys):
+    out = tmp_path / "sweep"
+    code = main(["sweep", "pendulum", "--grid", "damping=0.01,0.02", "--set", "duration=0.5", "--out", str(out)])
+    assert code == 0, capsys.readouterr().err
+    page = (out / "report.html").read_text()
+    record = json.loads((out / "sweep.json").read_text())
+    assert "report.html" in record["files"]
+    for name in record["files"]:
+        if name != "report.html":
+            assert f'href="{name}"' in page and (out / name).exists()
+    assert "swept: 0.01, 0.02" in page and "<script" not in page

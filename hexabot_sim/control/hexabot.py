@@ -28,7 +28,7 @@ from hexabot_sim.control.resolved_rate import ResolvedRateGains, rate_steps, ste
 from hexabot_sim.kinematics import hexabot as hx
 
 MAX_HEADING_CORRECTION: float = 0.3  # [rad/s] largest yaw-rate correction heading hold adds
-RAMP_CHUNK_TIME: float = 0.02  # [s] planning chunk while the command ramps up
+RAMP_CHUNK_TIME: float = 0.05  # [s] planning chunk while the command ramps up (steps of 5 % of it)
 
 
 @dataclasses.dataclass(frozen=True)
