@@ -10,7 +10,7 @@ import shutil
 import signal
 import sys
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -300,20 +300,11 @@ def cmd_run(args: argparse.Namespace) -> int:
         return _execute(args, scenario, p, backend, no_video_reason)
 
 
-@contextlib.contextmanager
-def _mujoco_warnings_to_stderr() -> Iterator[None]:
-    """MuJoCo's default handler appends warnings to MUJOCO_LOG.TXT in the working folder: show them instead."""
-    import mujoco
+def _mujoco_warnings_to_stderr() -> contextlib.AbstractContextManager[None]:
+    """MuJoCo's warnings as one line each on stderr (never appended to MUJOCO_LOG.TXT in the user's folder)."""
+    from hexabot_sim.simulate import mujoco_warnings
 
-    seen: list[str] = []
-    previous = mujoco.get_mju_user_warning()
-    mujoco.set_mju_user_warning(seen.append)
-    try:
-        yield
-    finally:
-        mujoco.set_mju_user_warning(previous)
-        for message in dict.fromkeys(seen):
-            _eprint(f"{PROG}: MuJoCo warning: {' '.join(message.split())}")
+    return mujoco_warnings(lambda message: _eprint(f"{PROG}: MuJoCo warning: {message}"))
 
 
 def _execute(args: argparse.Namespace, scenario: Any, p: Any, backend: str | None, no_video_reason: str) -> int:

@@ -7,7 +7,7 @@ import dataclasses
 import os
 import time
 import warnings
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -98,20 +98,11 @@ def _plain(value: Any) -> Any:
     return value
 
 
-@contextlib.contextmanager
-def _mujoco_warnings() -> Iterator[None]:
+def _mujoco_warnings() -> contextlib.AbstractContextManager[None]:
     """MuJoCo's warnings become Python RuntimeWarnings (its default handler writes MUJOCO_LOG.TXT to the cwd)."""
-    import mujoco
+    from hexabot_sim.simulate import mujoco_warnings
 
-    seen: list[str] = []
-    previous = mujoco.get_mju_user_warning()
-    mujoco.set_mju_user_warning(seen.append)
-    try:
-        yield
-    finally:
-        mujoco.set_mju_user_warning(previous)
-        for message in dict.fromkeys(seen):
-            warnings.warn(f"MuJoCo warning: {' '.join(message.split())}", RuntimeWarning, stacklevel=3)
+    return mujoco_warnings(lambda message: warnings.warn(f"MuJoCo warning: {message}", RuntimeWarning, stacklevel=4))
 
 
 def run(

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import mujoco
 import numpy as np
@@ -275,3 +276,20 @@ def site_trajectory(model: mujoco.MjModel, traj: Trajectory, site: str) -> SiteT
         xmat[i] = data.site_xmat[site_id].reshape(3, 3)
         vel[i] = jacp @ traj.qvel[i]
     return SiteTrajectory(pos=pos, xmat=xmat, vel=vel)
+
+
+@contextlib.contextmanager
+def mujoco_warnings(report: Callable[[str], None]) -> Iterator[None]:
+    """Collects MuJoCo's warnings during the block and hands each distinct one to `report` (one line) after it.
+
+    MuJoCo's default handler prints them and appends them to MUJOCO_LOG.TXT in the working folder.
+    """
+    seen: list[str] = []
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(seen.append)
+    try:
+        yield
+    finally:
+        mujoco.set_mju_user_warning(previous)
+        for message in dict.fromkeys(seen):
+            report(" ".join(message.split()))

@@ -73,3 +73,12 @@ class Live:
     markers: list[Marker] = dataclasses.field(default_factory=list)
     trail: Callable[[mujoco.MjData], np.ndarray] | None = None  # (3,) world point whose path is drawn
     overlay: list[Callable[[mujoco.MjData], str]] = dataclasses.field(default_factory=list)  # ASCII text lines
+
+
+def at_home(xml: str) -> tuple[mujoco.MjModel, mujoco.MjData]:
+    """Compiles `xml` and returns the model with its state at the "home" keyframe, forward-computed."""
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    return model, data

@@ -17,7 +17,7 @@ from hexabot_sim.control.resolved_rate import ResolvedRateGains
 from hexabot_sim.kinematics import hexabot as hx
 from hexabot_sim.kinematics.hexabot_terrain import HFIELD_CELL, HFIELD_MARGIN, HFIELD_MAX_POINTS, Terrain
 from hexabot_sim.params import param
-from hexabot_sim.scenarios.base import Live, Metric, Progress, ScenarioResult
+from hexabot_sim.scenarios.base import Live, Metric, Progress, ScenarioResult, at_home
 from hexabot_sim.simulate import simulate, step_count
 
 INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")
@@ -382,10 +382,7 @@ def make_controller(p: HexabotParams, model: mujoco.MjModel, data: mujoco.MjData
 def run(name: str, p: HexabotParams, progress: Progress | None = None) -> ScenarioResult:
     """Stands the robot on its neutral stance, then walks with the command and records everything."""
     xml = build_xml(p)
-    model = mujoco.MjModel.from_xml_string(xml)
-    data = mujoco.MjData(model)
-    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
-    mujoco.mj_forward(model, data)
+    model, data = at_home(xml)
     controller = make_controller(p, model, data)
     n_steps = step_count(p.duration, p.timestep)
     started = time.perf_counter()
@@ -898,10 +895,7 @@ def _terrain_figure(result: ScenarioResult, ground: Terrain) -> Any:
 
 def live(p: HexabotParams) -> Live:
     """The hexabot on its neutral stance with its walking controller, for the interactive viewer."""
-    model = mujoco.MjModel.from_xml_string(build_xml(p))
-    data = mujoco.MjData(model)
-    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
-    mujoco.mj_forward(model, data)
+    model, data = at_home(build_xml(p))
     controller = make_controller(p, model, data)  # the same controller a run uses (terrain, levelling)
 
     def step() -> None:

@@ -12,7 +12,7 @@ import numpy as np
 
 from hexabot_sim import models, render
 from hexabot_sim.params import check_duration, check_run_cost, param
-from hexabot_sim.scenarios.base import Live, Marker, Metric, Progress, ScenarioResult
+from hexabot_sim.scenarios.base import Live, Marker, Metric, Progress, ScenarioResult, at_home
 from hexabot_sim.simulate import simulate, step_count
 
 if TYPE_CHECKING:
@@ -229,10 +229,7 @@ def run(name: str, p: PendulumParams, progress: Progress | None = None) -> Scena
     from scipy.integrate import cumulative_simpson
 
     xml = build_xml(p)
-    model = mujoco.MjModel.from_xml_string(xml)
-    data = mujoco.MjData(model)
-    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
-    mujoco.mj_forward(model, data)
+    model, data = at_home(xml)
     traj = simulate(model, data, step_count(p.duration, p.timestep), progress=progress)
 
     # Constants read back from the compiled model: I about the hinge (mass matrix) and m g c.
@@ -493,10 +490,7 @@ def figures(result: ScenarioResult) -> dict[str, Figure]:
 
 def live(p: PendulumParams) -> Live:
     """The pendulum released from theta0, for the interactive viewer (no controller: it swings freely)."""
-    model = mujoco.MjModel.from_xml_string(build_xml(p))
-    data = mujoco.MjData(model)
-    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
-    mujoco.mj_forward(model, data)
+    model, data = at_home(build_xml(p))
     hinge = model.joint("hinge")
     qadr, dadr = int(hinge.qposadr[0]), int(hinge.dofadr[0])
     link = model.body("link").id
