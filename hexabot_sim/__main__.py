@@ -805,6 +805,9 @@ def console() -> NoReturn:
     """Entry point of the `hexabot-sim` console script."""
     _ensure_std_streams()
     os.environ["MPLBACKEND"] = "Agg"  # the command line draws off-screen, whatever the environment says
+    from hexabot_sim._entry import quiet_interruptions
+
+    quiet_interruptions()
     # SIGTERM and SIGHUP stop a run exactly like Ctrl-C: clean up, exit 128 + N.
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         if signal.getsignal(sig) is not signal.SIG_IGN:  # e.g. Ctrl-C stays ignored in a background job

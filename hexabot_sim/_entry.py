@@ -3,6 +3,18 @@
 import sys
 
 
+def quiet_interruptions() -> None:
+    """A stop request raised where Python cannot propagate it (a weakref callback of the import system, a
+    __del__) is recorded and acted on later: do not print it as "Exception ignored ... Traceback"."""
+    default = sys.unraisablehook
+
+    def hook(unraisable: "sys.UnraisableHookArgs") -> None:
+        if not isinstance(unraisable.exc_value, KeyboardInterrupt):
+            default(unraisable)
+
+    sys.unraisablehook = hook
+
+
 def console() -> None:
     """Loads the command line (numpy, MuJoCo, ...) and runs it; Ctrl-C during the loading exits 130 in one line."""
     import signal
@@ -15,6 +27,7 @@ def console() -> None:
 
     if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
         signal.signal(signal.SIGINT, interrupted)
+    quiet_interruptions()
     try:
         from hexabot_sim.__main__ import console as run
 
