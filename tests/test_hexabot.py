@@ -293,6 +293,7 @@ def test_cli_run_folder_and_metrics_recomputed_from_the_trajectory(tmp_path, cap
     assert {"velocity.png", "body.png", "slip.png"} <= names
     header = (out / "timeseries.csv").read_text().splitlines()[0].split(",")
     assert header[:7] == ["t", "x", "y", "z", "roll", "pitch", "yaw"]
+    assert len(header) == scenario.CSV_COLUMNS  # the run-cost estimate counts these
     assert {f"contact_{leg}" for leg in LEGS} <= set(header)
     assert {f"q_{leg}_{j}" for leg in LEGS for j in hx.JOINTS} <= set(header)
 
@@ -360,3 +361,8 @@ def test_rolling_feet_correction_is_what_makes_the_speed_right(monkeypatch):
     assert abs(corrected["vx_error"].value) < 0.005
     assert uncorrected["vx_error"].value > 0.015  # r = 8 mm times the foot's pitch change per stance
     assert uncorrected["slip_per_stance"].value > 2 * corrected["slip_per_stance"].value
+
+
+def test_an_hour_long_walk_is_refused_with_the_estimate():
+    with pytest.raises(UsageError, match="GB in memory"):
+        params.resolve(scenario.HexabotParams, {}, {"duration": 3600})

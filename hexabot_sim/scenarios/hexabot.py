@@ -16,7 +16,7 @@ from hexabot_sim.control.hexabot import GroundController, GroundSettings, Hexabo
 from hexabot_sim.control.resolved_rate import ResolvedRateGains
 from hexabot_sim.kinematics import hexabot as hx
 from hexabot_sim.kinematics.hexabot_terrain import HFIELD_CELL, HFIELD_MARGIN, HFIELD_MAX_POINTS, Terrain
-from hexabot_sim.params import param
+from hexabot_sim.params import check_run_cost, param
 from hexabot_sim.scenarios.base import Live, Metric, Progress, ScenarioResult, at_home
 from hexabot_sim.simulate import simulate, step_count
 
@@ -26,6 +26,11 @@ SETTLE_TIME: float = 0.5  # [s] standing on the neutral stance before the gait c
 SPEED_MARGIN: float = 0.9  # planned joint speeds must stay below this fraction of max_joint_speed
 LOADED_FRACTION: float = 0.05  # a foot counts as loaded above this fraction of the robot's weight
 TORQUE_LIMIT: float = 1.5  # [N m] the joints' actuatorfrcrange (models/hexabot.xml)
+CSV_COLUMNS: int = 37  # columns of timeseries.csv
+# Cost of a run for params.check_run_cost, measured on the 2-core development machine (10 s vs 60 s
+# walks): seconds per physics step (controller + mj_step), seconds per recorded row (contact replay,
+# derived columns; the CSV is counted apart), peak bytes per recorded row.
+RUN_COST: tuple[float, float, float] = (45e-6, 40e-6, 2000.0)
 FALL_TILT_DEG: float = 45.0  # body tilt beyond which the robot has fallen over
 # Friction-to-normal impedance ratio on uneven ground. MuJoCo's soft friction lets a foot under a
 # steady tangential load creep: on a 10 deg slope the standing robot slid down at 1.8 mm/s with the
@@ -96,6 +101,8 @@ class HexabotParams:
                 f"({SETTLE_TIME + self.period:g} s); "
                 f"got {self.duration}"
             )
+        n = step_count(self.duration, self.timestep)
+        check_run_cost(n, n + 1, CSV_COLUMNS, *RUN_COST, "lower 'duration' or raise 'timestep'")
         problem = feasibility(self)
         if problem:
             raise ValueError(problem)
