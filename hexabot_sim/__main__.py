@@ -68,6 +68,12 @@ def _fps(text: str) -> int:
     return fps
 
 
+def _add_folder_options(parser: argparse.ArgumentParser, what: str) -> None:
+    """--out and --force, the same for every command that writes a folder (run, sweep, compare)."""
+    parser.add_argument("--out", metavar="DIR", help=what)
+    parser.add_argument("--force", action="store_true", help="replace --out if it already holds files")
+
+
 def build_parser() -> argparse.ArgumentParser:
     from hexabot_sim import __version__
 
@@ -91,8 +97,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="override a parameter (repeatable)",
     )
     run.add_argument("--config", metavar="FILE", help="TOML file of 'name = value' parameter lines")
-    run.add_argument("--out", metavar="DIR", help="run folder (default: runs/<scenario>-<timestamp>)")
-    run.add_argument("--force", action="store_true", help="replace --out if it already holds files")
+    _add_folder_options(run, "run folder (default: runs/<scenario>-<timestamp>)")
     run.add_argument("--video", action="store_true", help="also render video.mp4 (headless)")
     run.add_argument(
         "--quality", choices=("preview", "high"), default="preview", help="video preset (default: preview)"
@@ -462,8 +467,7 @@ def _add_study_parsers(sub: Any) -> None:
     )
     sweep.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE", help="fixed value")
     sweep.add_argument("--config", metavar="FILE", help="TOML file of 'name = value' parameter lines (fixed)")
-    sweep.add_argument("--out", metavar="DIR", help="sweep folder (default: runs/sweep-<scenario>-<timestamp>)")
-    sweep.add_argument("--force", action="store_true", help="replace --out if it already holds files")
+    _add_folder_options(sweep, "sweep folder (default: runs/sweep-<scenario>-<timestamp>)")
     sweep.add_argument("--workers", type=_workers, help="local worker processes (default: all cores)")
     sweep.add_argument(
         "--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://10.0.0.5:8786 (extra 'cluster')"
@@ -478,8 +482,7 @@ def _add_study_parsers(sub: Any) -> None:
         "columns their CSVs share into a new compare folder.",
     )
     compare.add_argument("runs", nargs="+", metavar="RUN_DIR", help="run folders written by 'run' (two or more)")
-    compare.add_argument("--out", metavar="DIR", help="compare folder (default: runs/compare-<timestamp>)")
-    compare.add_argument("--force", action="store_true", help="replace --out if it already holds files")
+    _add_folder_options(compare, "compare folder (default: runs/compare-<timestamp>)")
     compare.add_argument("--no-plots", action="store_true", help="skip the overlay figures")
 
 

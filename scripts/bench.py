@@ -33,10 +33,8 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 import mujoco
 
 from hexabot_sim import gl, params, render, scenarios
-from hexabot_sim.control.gait import GaitPlanner
-from hexabot_sim.control.hexabot import HexabotController, WalkSettings
-from hexabot_sim.control.resolved_rate import ResolvedRateGains
 from hexabot_sim.scenarios import hexabot, leg, pendulum
+from hexabot_sim.scenarios.base import at_home
 from hexabot_sim.simulate import simulate, step_count
 
 
@@ -101,28 +99,18 @@ def bench_hexabot(repeat: int, duration: float = 10.0) -> dict[str, float]:
     """The walking loop vs bare mj_step replaying its recorded controls (the walking robot, not a standing one)."""
     scenario = scenarios.get("hexabot-walk")
     p = params.resolve(scenario.params_type, scenario.defaults, {"duration": duration})
-    model = mujoco.MjModel.from_xml_string(hexabot.build_xml(p))
+    xml = hexabot.build_xml(p)
     n = step_count(p.duration, p.timestep)
     loop_s, bare_s = [], []
     for _ in range(repeat):
         # The whole loop: controller (gait targets, 6 resolved-rate steps), mj_step, recording, checks.
-        data = mujoco.MjData(model)
-        mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
-        mujoco.mj_forward(model, data)
-        planner = GaitPlanner(
-            p.the_gait(), p.period, p.step_height, hexabot.neutral(p), p.timestep, hexabot.SETTLE_TIME
-        )
-        settings = WalkSettings(p.command(), settle_time=hexabot.SETTLE_TIME, ramp_time=p.period)
-        gains = ResolvedRateGains(p.task_gain, 0.01, 0.01, p.max_joint_speed, 200.0)
-        q0 = model.key("home").qpos[7:].reshape(6, 3)
-        controller = HexabotController(model, data, hexabot.LAYOUT, planner, gains, settings, q0)
+        model, data = at_home(xml)
+        controller = hexabot.make_controller(p, model, data)  # what a run uses
         start = time.perf_counter()
         traj = simulate(model, data, n, controller=controller, record_ctrl=True)
         loop_s.append(time.perf_counter() - start)
         # Bare physics on the same walk: the recorded controls, replayed step by step.
-        data = mujoco.MjData(model)
-        mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
-        mujoco.mj_forward(model, data)
+        model, data = at_home(xml)
         ctrl = traj.ctrl
         start = time.perf_counter()
         for i in range(1, n + 1):

@@ -25,18 +25,24 @@ def run(scenario: str, *extra: str) -> Path:
     return out
 
 
-def main_() -> int:
+def save_frame(video: Path, index: int, png: Path) -> None:
+    """Writes frame `index` of an MP4 as a PNG."""
     import imageio.v2 as imageio
+
+    reader = imageio.get_reader(str(video))
+    try:
+        imageio.imwrite(png, reader.get_data(index))
+    finally:
+        reader.close()
+
+
+def main_() -> int:
 
     DOCS.mkdir(exist_ok=True)
     spring = run("pendulum", "--video")
     for name in ("angle_velocity", "phase", "energy"):
         (DOCS / f"pendulum_{name}.png").write_bytes((spring / f"{name}.png").read_bytes())
-    reader = imageio.get_reader(str(spring / "video.mp4"))
-    try:
-        imageio.imwrite(DOCS / "pendulum_frame.png", reader.get_data(12))  # t = 0.4 s
-    finally:
-        reader.close()
+    save_frame(spring / "video.mp4", 12, DOCS / "pendulum_frame.png")  # t = 0.4 s
     undamped = run("pendulum-undamped")
     (DOCS / "pendulum_undamped_angle_velocity.png").write_bytes((undamped / "angle_velocity.png").read_bytes())
 
@@ -46,11 +52,7 @@ def main_() -> int:
     outside = run("leg-step", "--set", "amplitude=0.1", "--set", "omega=0.5236", "--video")
     for name in ("foot_position", "singularity"):
         (DOCS / f"leg_outside_{name}.png").write_bytes((outside / f"{name}.png").read_bytes())
-    reader = imageio.get_reader(str(outside / "video.mp4"))
-    try:
-        imageio.imwrite(DOCS / "leg_outside_frame.png", reader.get_data(150))  # t = 5 s: stretched, off the line
-    finally:
-        reader.close()
+    save_frame(outside / "video.mp4", 150, DOCS / "leg_outside_frame.png")  # t = 5 s: stretched, off the line
     sweep = run("leg-sweep")
     (DOCS / "leg_sweep.png").write_bytes((sweep / "sweep.png").read_bytes())
     hexabot_figures()
@@ -60,16 +62,11 @@ def main_() -> int:
 
 def hexabot_figures() -> None:
     """The walking hexabot: the default walk with its video, and an imperfect robot without/with heading hold."""
-    import imageio.v2 as imageio
 
     walk = run("hexabot-walk", "--video")
     for name in ("path", "gait_diagram", "velocity", "body", "slip"):
         (DOCS / f"hexabot_{name}.png").write_bytes((walk / f"{name}.png").read_bytes())
-    reader = imageio.get_reader(str(walk / "video.mp4"))
-    try:
-        imageio.imwrite(DOCS / "hexabot_frame.png", reader.get_data(300))  # t = 10 s
-    finally:
-        reader.close()
+    save_frame(walk / "video.mp4", 300, DOCS / "hexabot_frame.png")  # t = 10 s
     imperfect = ["--set", "vx=0.15", "--set", "trim_error_deg=1", "--set", "com_offset=0.01"]
     imperfect += ["--set", "friction_spread=0.2", "--set", "duration=25", "--no-plots"]
     for hold in ("off", "on"):
