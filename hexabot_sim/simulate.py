@@ -47,7 +47,7 @@ def step_count(duration: float, timestep: float) -> int:
 
 def warning_counts(data: mujoco.MjData) -> np.ndarray:
     """Number of times each MuJoCo warning fired."""
-    return np.array([w.number for w in data.warning])
+    return data.warning.number.copy()
 
 
 def simulate(

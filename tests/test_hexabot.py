@@ -9,7 +9,7 @@ import pytest
 
 from hexabot_sim import models, params
 from hexabot_sim.__main__ import main
-from hexabot_sim.control.gait import GAITS
+from hexabot_sim.control.gait import GAITS, Command, GaitPlanner
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import hexabot as hx
 from hexabot_sim.kinematics import hexabot_mjcf
@@ -156,7 +156,60 @@ def test_gait_tables_keep_the_robot_supported():
         assert down[:, :3].any(axis=1).all() and down[:, 3:].any(axis=1).all()
 
 
+def test_foot_pitch_is_q2_plus_q3_of_the_inverse_kinematics():
+    layout = hx.Layout()
+    rng = np.random.default_rng(1)
+    points = rng.uniform([-0.05, -0.2, -0.17], [0.25, 0.2, -0.03], size=(5000, 3))
+    q, ok = hx.ik_hip_batch(layout, points)
+    assert ok.sum() > 1000
+    np.testing.assert_allclose(hx.foot_pitch(layout, points)[ok], (q[:, 1] + q[:, 2])[ok], atol=1e-12)
+
+
+@pytest.mark.parametrize("cmd", [Command(0.1, 0.0, 0.0), Command(0.05, -0.05, 0.3)])
+def test_planned_stance_moves_with_the_ramped_command_and_targets_stay_smooth(cmd):
+    """Chunk by chunk, with the command ramping inside the chunks: every stance target moves at the
+    ground-fixed velocity -s(t) (v + w x p) (the body twist scaled by the ramp, by finite differences),
+    and chunk boundaries leave no mark (the same walk planned in other chunks is the same)."""
+    dt, settle, ramp_time = 0.002, 0.5, 1.0
+    planner = GaitPlanner(GAITS["tripod"], 1.0, 0.03, scenario.neutral(params.resolve(scenario.HexabotParams, {}, {})),
+                          dt, start_time=settle)  # fmt: skip
+
+    def scale(t):
+        return np.clip((np.asarray(t) - settle) / ramp_time, 0.0, 1.0)
+
+    chunks = [planner.plan(cmd, planner.max_chunk, scale) for _ in range(8)]  # 2 s: settle, ramp, walk
+    rows = np.concatenate([chunks[0]] + [c[1:] for c in chunks[1:]])  # (n + 1, 6, 3)
+    t = dt * np.arange(len(rows))
+    stance = planner.in_stance(t)
+    # Mean velocity over each step vs the analytic one at the step's midpoint, where the foot is in
+    # stance at both ends (and the ramp's factor, which enters linearly).
+    mid = 0.5 * (rows[1:] + rows[:-1])
+    s_mid = scale(t[:-1] + 0.5 * dt)[:, None]
+    expected = (
+        np.stack([-cmd.vx + cmd.yaw_rate * mid[..., 1], -cmd.vy - cmd.yaw_rate * mid[..., 0]], -1) * s_mid[..., None]
+    )
+    measured = np.diff(rows[..., :2], axis=0) / dt
+    both = stance[1:] & stance[:-1]
+    assert both.mean() > 0.5
+    np.testing.assert_allclose(measured[both], expected[both], atol=1e-6)  # [m/s]
+    # Chunking changes nothing: the same 2 s planned in chunks of 100 steps (boundaries elsewhere).
+    again = GaitPlanner(planner.gait, 1.0, 0.03, planner.neutral, dt, start_time=settle)
+    small = [again.plan(cmd, 100, scale) for _ in range(20)]
+    np.testing.assert_allclose(np.concatenate([small[0]] + [c[1:] for c in small[1:]]), rows, atol=1e-12)
+    # No jumps: the targets' acceleration stays that of the swing arcs (~6 stride / swing time^2).
+    assert np.abs(np.diff(measured, axis=0)).max() / dt < 3.0  # [m/s^2]
+
+
 # --- walking --------------------------------------------------------------------------------------
+
+
+def test_command_columns_show_the_settle_and_the_ramp():
+    result = walk(vx=0.1, vy=0.05, duration=2.0, period=1.0)
+    t = result.columns["t"]
+    factor = np.clip((t - scenario.SETTLE_TIME) / 1.0, 0.0, 1.0)  # the ramp lasts one gait period
+    np.testing.assert_allclose(result.columns["cmd_vx"], 0.1 * factor, atol=1e-12)
+    np.testing.assert_allclose(result.columns["cmd_vy"], 0.05 * factor, atol=1e-12)
+    assert not result.columns["cmd_yaw_rate"].any()
 
 
 @pytest.fixture(scope="module")

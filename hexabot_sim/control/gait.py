@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -89,11 +90,18 @@ def touchdown_point(cmd: Command, neutral: np.ndarray, stance_time: float) -> np
 
 
 def hermite(p0, v0, p1, v1, duration: float, s: np.ndarray) -> np.ndarray:
-    """Cubic Hermite (n, 2) from (p0, v0) to (p1, v1) over `duration` [s] at fractions s (n,)."""
+    """Cubic Hermite (n, 2) from (p0, v0) to (p1, v1) over `duration` [s] at fractions s (n,).
+
+    h00 p0 + h10 T v0 + h01 p1 + h11 T v1 with h00 = 1 - h01, h01 = 3 s^2 - 2 s^3, h10 = s^3 - 2 s^2 + s,
+    h11 = s^3 - s^2 (written with few array operations: this runs for every swing of every chunk).
+    """
+    p0, v0, p1, v1 = (np.asarray(v, dtype=float) for v in (p0, v0, p1, v1))
     s = s[:, None]
-    h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
-    h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
-    return h00 * p0 + h10 * duration * v0 + h01 * p1 + h11 * duration * v1
+    s2 = s * s
+    h11 = s2 * (s - 1.0)
+    h01 = s2 - 2.0 * h11  # 3 s^2 - 2 s^3
+    h10 = h11 - s2 + s  # s^3 - 2 s^2 + s
+    return p0 + h01 * (p1 - p0) + (duration * h10) * v0 + (duration * h11) * v1
 
 
 def hermite_velocity(p0, v0, p1, v1, duration: float, s: np.ndarray) -> np.ndarray:
@@ -102,6 +110,37 @@ def hermite_velocity(p0, v0, p1, v1, duration: float, s: np.ndarray) -> np.ndarr
     d00, d10 = 6 * s**2 - 6 * s, 3 * s**2 - 4 * s + 1
     d01, d11 = -6 * s**2 + 6 * s, 3 * s**2 - 2 * s
     return (d00 * p0 + d01 * p1) / duration + d10 * v0 + d11 * v1
+
+
+Scale = Callable[[np.ndarray], np.ndarray]  # t [s] (array) -> fraction of the command in force
+
+
+class _Warp:
+    """Warped time tau(t) = integral of s dt over a chunk (trapezoids on its rows: exact for s linear between rows)."""
+
+    def __init__(self, times: np.ndarray, scale: Scale | None) -> None:
+        self.t0, self.dt = float(times[0]), float(times[1] - times[0]) if len(times) > 1 else 1.0
+        self._scale = scale
+        if scale is None:
+            self.rows = times - times[0]
+            self._s = None
+        else:
+            s = np.asarray(scale(times), dtype=float)
+            self.rows = np.concatenate([[0.0], np.cumsum(0.5 * (s[1:] + s[:-1]) * self.dt)])
+            self._s = s
+
+    def factor(self, t: float) -> float:
+        """s(t): the fraction of the command in force at t (any t, also beyond the chunk)."""
+        return 1.0 if self._scale is None else float(self._scale(np.asarray(t, dtype=float)))
+
+    def __call__(self, t: float) -> float:
+        """tau(t) for t inside the chunk, relative to its first row."""
+        if self._s is None:
+            return t - self.t0
+        k = min(max(int((t - self.t0) / self.dt), 0), len(self.rows) - 2)
+        f = t - (self.t0 + k * self.dt)
+        s_t = self._s[k] + (self._s[k + 1] - self._s[k]) * f / self.dt
+        return float(self.rows[k] + 0.5 * f * (self._s[k] + s_t))
 
 
 @dataclasses.dataclass
@@ -137,6 +176,7 @@ class GaitPlanner:
         # Steps planned at once: planning costs ~0.5 ms a chunk whatever its length, and the command
         # (heading hold) changes between chunks, so a quarter second balances the two.
         self.max_chunk = max(1, round(CHUNK_TIME / self.dt))
+        self._warp = _Warp(np.zeros(1), None)
 
     def phase(self, t: np.ndarray | float) -> np.ndarray:
         """Gait phase in [0, 1) of each leg (..., 6); stance while phase < duty. Before start_time: stance."""
@@ -155,22 +195,30 @@ class GaitPlanner:
         swing = (frac >= self.gait.duty) & (lift_time >= self.start_time - 1e-9)
         return ~swing
 
-    def plan(self, cmd: Command, n_steps: int) -> np.ndarray:
+    def plan(self, cmd: Command, n_steps: int, scale: Scale | None = None) -> np.ndarray:
         """Targets (n_steps + 1, 6, 3) at time, time + dt, ..., time + n_steps dt; advances the planner by n_steps dt.
 
         Row 0 equals the last row of the previous chunk (continuity); n_steps <= max_chunk.
+
+        Args:
+            cmd: Body twist of the chunk.
+            n_steps: Steps to plan.
+            scale: Fraction of `cmd` in force at time t (vectorised over t; default 1): a command that ramps
+                inside the chunk. The body twist s(t) cmd moves ground-fixed points along the same paths as
+                cmd does, in the warped time tau = integral of s dt, so stances are exact for any s(t).
         """
         if not 1 <= n_steps <= self.max_chunk:
             raise ValueError(f"a chunk must have 1 to {self.max_chunk} steps; got {n_steps}")
         before = round((self.start_time - self.time) / self.dt)
         if 0 < before < n_steps:  # the gait clock starts inside: stand still up to it, then walk
             standing = self.plan(Command(), before)
-            return np.concatenate([standing, self.plan(cmd, n_steps - before)[1:]])
+            return np.concatenate([standing, self.plan(cmd, n_steps - before, scale)[1:]])
         times = self.time + self.dt * np.arange(n_steps + 1)  # (n+1,)
         out = np.repeat(self.pos[None], n_steps + 1, axis=0)  # (n+1, 6, 3)
         if times[-1] <= self.start_time:  # standing still before the gait starts
             self.time = float(times[-1])
             return out
+        self._warp = _Warp(times, scale)
         new_vel = np.zeros((6, 2))
         stance_all = self.in_stance(times)  # (n+1, 6)
         for leg in range(6):
@@ -184,16 +232,14 @@ class GaitPlanner:
             xy[0] = p0
             t_state, p_state, v_state = times[0], p0, v0
             mode = bool(stance[0])
-            while k <= n_steps:
-                end = k
-                while end <= n_steps and bool(stance[end]) == mode:
-                    end += 1
+            # Segments of one mode: rows k .. end - 1, end being the next row whose mode differs (or n + 1).
+            for end in [*(np.flatnonzero(stance[1:] != stance[:-1]) + 1).tolist(), n_steps + 1]:
                 rows = slice(k, end)
                 if mode:  # stance: ground-fixed point, from the state at t_state
-                    xy[rows] = stance_path(cmd, p_state, times[rows] - t_state)
+                    xy[rows] = stance_path(cmd, p_state, self._warp.rows[rows] - self._warp(t_state))
                 else:  # swing: Hermite from the current state to the touchdown point
                     touchdown_t = self._next_touchdown(leg, t_state)
-                    target, target_v = self._swing_target(cmd, leg, lifting=t_state > times[0])
+                    target, target_v = self._swing_target(cmd, leg, touchdown_t, lifting=t_state > times[0])
                     duration = touchdown_t - t_state
                     s = (times[rows] - t_state) / duration
                     xy[rows] = hermite(p_state, v_state, target, target_v, duration, s)
@@ -215,16 +261,20 @@ class GaitPlanner:
         self.time = float(times[-1])
         return out
 
-    def _swing_target(self, cmd: Command, leg: int, lifting: bool) -> tuple[np.ndarray, np.ndarray]:
+    def _swing_target(self, cmd: Command, leg: int, touchdown_t: float, lifting: bool) -> tuple[np.ndarray, np.ndarray]:
         """Touchdown point of a swing and the stance velocity there.
 
         Chosen from the command at lift-off and kept for the whole swing (re-aiming a foot late in its
         swing, when the command changes, would take a jolt); the landing velocity follows the command.
+        The point is where the stance that follows is centred on the neutral point: half a stance of
+        warped time before it, s(t) being linear over the first half (s at its midpoint times T/2).
         """
+        factor = self._warp.factor
         if lifting or self.swing_targets[leg] is None:
-            self.swing_targets[leg] = touchdown_point(cmd, self.neutral[leg, :2], self.stance_time)
+            half = factor(touchdown_t + 0.25 * self.stance_time) * self.stance_time
+            self.swing_targets[leg] = touchdown_point(cmd, self.neutral[leg, :2], half)
         target = self.swing_targets[leg]
-        return target, stance_velocity(cmd, target)
+        return target, stance_velocity(cmd.scaled(factor(touchdown_t)), target)
 
     def _next_touchdown(self, leg: int, t: float) -> float:
         """First time > t at which the leg's phase wraps to 0 (touchdown)."""
@@ -249,17 +299,18 @@ class GaitPlanner:
         px, py = float(p_state[0]), float(p_state[1])
         vx, vy, w = cmd.vx, cmd.vy, cmd.yaw_rate
         if stance:
-            tau = t - t_state
+            tau = self._warp(t) - self._warp(t_state)
             if w == 0.0:
                 x, y = px - vx * tau, py - vy * tau
             else:
                 cx, cy = -vy / w, vx / w
                 c, s = math.cos(-w * tau), math.sin(-w * tau)
                 x, y = cx + c * (px - cx) - s * (py - cy), cy + s * (px - cx) + c * (py - cy)
-            return np.array([x, y]), np.array([-vx + w * y, -vy - w * x])
+            f = self._warp.factor(t)
+            return np.array([x, y]), np.array([f * (-vx + w * y), f * (-vy - w * x)])
         touchdown_t = self._next_touchdown(leg, t_state)
         duration = touchdown_t - t_state
-        target, target_v = self._swing_target(cmd, leg, lifting=False)
+        target, target_v = self._swing_target(cmd, leg, touchdown_t, lifting=False)
         u = (t - t_state) / duration
         h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
         d00, d10, d01, d11 = 6 * u**2 - 6 * u, 3 * u**2 - 4 * u + 1, -6 * u**2 + 6 * u, 3 * u**2 - 2 * u

@@ -24,11 +24,10 @@ import mujoco
 import numpy as np
 
 from hexabot_sim.control.gait import Command, GaitPlanner
-from hexabot_sim.control.resolved_rate import ResolvedRateGains, rate_steps, step_constants
+from hexabot_sim.control.resolved_rate import ResolvedRateGains, feed, rate_steps, step_constants
 from hexabot_sim.kinematics import hexabot as hx
 
 MAX_HEADING_CORRECTION: float = 0.3  # [rad/s] largest yaw-rate correction heading hold adds
-RAMP_CHUNK_TIME: float = 0.05  # [s] planning chunk while the command ramps up (steps of 5 % of it)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -97,8 +96,7 @@ class HexabotController:
         self.rot = layout.hip_rotations()  # (6, 3, 3) hip -> body
         self.hips = layout.hip_positions()  # (6, 3)
         # Targets of the current chunk in each hip frame, one flat row of 18 floats per step, and stance flags.
-        self._rows: list[list[float]] = []
-        self._stance: list[list[bool]] = []
+        self._feed: list[list[float]] = []  # per step: the rate_steps feed (v_des + K x_des), 18 floats
         self._k = 0
         # Rolling state carried between chunks: last row's offset (6, 2), offset at lift-off (6, 2), in stance.
         self._rolling = (np.zeros((6, 2)), np.zeros((6, 2)), np.ones(6, dtype=bool))
@@ -112,22 +110,24 @@ class HexabotController:
         self._ctrl = data.ctrl
         self._sensordata = data.sensordata
 
-    def scale(self, t: float) -> float:
-        """Fraction of the command in force at t: 0 while settling, then a linear ramp to 1."""
+    def scale(self, t: np.ndarray | float) -> np.ndarray | float:
+        """Fraction of the command in force at t (vectorised): 0 while settling, then a linear ramp to 1."""
         s = self.settings
-        if t <= s.settle_time:
-            return 0.0
-        return 1.0 if s.ramp_time <= 0 else min(1.0, (t - s.settle_time) / s.ramp_time)
+        if s.ramp_time <= 0:
+            return np.where(np.asarray(t) <= s.settle_time, 0.0, 1.0)
+        return np.clip((np.asarray(t) - s.settle_time) / s.ramp_time, 0.0, 1.0)
 
     def _replan(self, t: float) -> None:
-        """Plans the next chunk of targets with the command in force now (and the heading correction)."""
+        """Plans the next chunk of targets with the command in force now (and the heading correction).
+
+        The ramp is planned inside the chunk (the planner's scale), so the command grows smoothly
+        without short chunks; `commands` records the command before the ramp's factor.
+        """
         s = self.settings
         n = self.planner.max_chunk
-        if self.scale(t) < 1.0:
-            # Ramping: short chunks, so the command grows in steps too small to jolt the servos.
-            n = max(1, min(n, round(RAMP_CHUNK_TIME / self.dt)))
-        scale = self.scale(t + 0.5 * n * self.dt)
-        cmd = s.command.scaled(scale)
+        cmd = s.command
+        times = t + self.dt * np.arange(n + 1)
+        ramp = self.scale(times)
         if s.heading_hold:
             # Unwrap the IMU yaw next to the last one, compare with the commanded heading.
             quat = self._sensordata[self.quat_adr : self.quat_adr + 4]
@@ -135,11 +135,11 @@ class HexabotController:
             self._yaw_meas += math.remainder(yaw - self._yaw_meas, 2 * math.pi)
             error = self._yaw_des - self._yaw_meas
             correction = max(-MAX_HEADING_CORRECTION, min(MAX_HEADING_CORRECTION, s.heading_gain * error))
-            if scale > 0:
-                cmd = Command(cmd.vx, cmd.vy, cmd.yaw_rate + correction)
-            self._yaw_des += s.command.yaw_rate * scale * n * self.dt
+            cmd = Command(cmd.vx, cmd.vy, cmd.yaw_rate + correction)
+            # The commanded heading advances by the yaw rate times the integral of the ramp over the chunk.
+            self._yaw_des += s.command.yaw_rate * float(np.sum(0.5 * (ramp[1:] + ramp[:-1]))) * self.dt
         self.commands.append((t, cmd.vx, cmd.vy, cmd.yaw_rate))
-        targets = self.planner.plan(cmd, n)  # (n + 1, 6, 3) body frame
+        targets = self.planner.plan(cmd, n, None if ramp[0] >= 1.0 else self.scale)  # (n + 1, 6, 3) body frame
         times = self.planner.time - self.dt * np.arange(n, -1, -1)  # (n + 1,)
         stance = self.planner.in_stance(times)  # (n + 1, 6)
         duty = self.planner.gait.duty
@@ -147,59 +147,58 @@ class HexabotController:
         # Body -> hip frame of each leg: R^T (p - hip).
         hip = np.einsum("lji,klj->kli", self.rot, targets - self.hips)  # (n + 1, 6, 3)
         hip += self._rolling_offsets(hip, stance, swing_s)
-        self._rows = hip.reshape(n + 1, 18).tolist()
-        self._stance = stance.tolist()
+        self._publish(hip.reshape(n + 1, 18), stance)
         self._chunk = n
         self._k = 0
+
+    def _publish(self, rows: np.ndarray, stance: np.ndarray) -> None:
+        """Keeps what the steps of the chunk need from its targets rows (n + 1, 18) (hip frames) and stance flags."""
+        self._feed = ((rows[1:] - rows[:-1]) / self.dt + self.consts[3] * rows[:-1]).tolist()
 
     def _rolling_offsets(self, hip: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
         """Offsets (n + 1, 6, 3) of the foot-centre targets for feet that roll without slipping.
 
         A sphere foot rolling without slip moves its centre over the ground by r dtheta along the leg's
         radial direction e_r, theta = q2 + q3 its pitch. So in stance the centre target is shifted by
-        the sum of r dtheta e_r since touchdown (theta from the target's IK, iterated once since the
+        the sum of r dtheta e_r since touchdown (theta of the shifted target, iterated once since the
         shift changes theta a little; summed step by step because e_r turns with the coxa); in the
         swing, the shift reached at lift-off fades out over the first half. The state at the end of a
         chunk carries over to the next one, whose row 0 repeats the previous chunk's last row.
         """
+        n = hip.shape[0] - 1
+        offset0, lift0, was0 = self._rolling
+        # Which rows roll, and the latest touchdown / lift-off row at every row (0: none in this chunk).
+        st = stance[1:]  # (n, 6); row 0 is the previous chunk's last row
+        before = np.vstack([was0[None], st[:-1]])
+        rows = np.arange(1, n + 1)[:, None]  # (n, 1)
+        last_td = np.maximum.accumulate(np.where(st & ~before, rows, 0), axis=0)  # (n, 6)
+        last_lo = np.maximum.accumulate(np.where(~st & before, rows, 0), axis=0)
+        legs = np.arange(6)
+        td_row, lo_row = np.maximum(last_td - 1, 0) * 6 + legs, np.maximum(last_lo - 1, 0) * 6 + legs  # flat (row, leg)
+        after_td, after_lo = (last_td > 0)[..., None], (last_lo > 0)[..., None]
+        # r e_r at the middle of every rolling step (0 elsewhere), and the swing's fade (smoothstep 1 -> 0).
         radial = hip[..., :2] / np.hypot(hip[..., 0], hip[..., 1])[..., None]  # (n + 1, 6, 2)
+        e_mid = radial[1:] + radial[:-1]
+        e_mid *= (self.foot_radius / np.hypot(e_mid[..., 0], e_mid[..., 1]))[..., None]
+        r_e = np.where((st & before)[..., None], e_mid, 0.0)  # (n, 6, 2)
         fade = 1.0 - np.clip(2.0 * swing_s[1:], 0.0, 1.0)
-        fade = fade * fade * (3.0 - 2.0 * fade)  # (n, 6) smoothstep from 1 to 0
-        offset = np.repeat(self._rolling[1][None], hip.shape[0], axis=0)  # (n + 1, 6, 2) [m]
+        fade = (fade * fade * (3.0 - 2.0 * fade))[..., None]  # (n, 6, 1)
+        offset = np.repeat(lift0[None], n + 1, axis=0)  # (n + 1, 6, 2) [m] first guess
+        stance3 = st[..., None]
+        shifted = hip.copy()
         for _ in range(2):
-            shifted = hip.copy()
-            shifted[..., :2] += offset
-            q, _ = hx.ik_hip_batch(self.layout, shifted)
-            offset, state = self._offsets(q[..., 1] + q[..., 2], stance, fade, radial)
-        self._rolling = state
+            shifted[..., :2] = hip[..., :2] + offset
+            theta = hx.foot_pitch(self.layout, shifted)  # (n + 1, 6)
+            total = np.cumsum(r_e * np.diff(theta, axis=0)[..., None], axis=0)  # (n, 6, 2)
+            at_td = total.reshape(-1, 2)[td_row]  # total at each leg's latest touchdown
+            stance_offset = np.where(after_td, total - at_td, offset0 + total)
+            full = np.concatenate([offset0[None], np.where(stance3, stance_offset, 0.0)])  # (n + 1, 6, 2)
+            lift = np.where(after_lo, full.reshape(-1, 2)[lo_row], lift0)
+            offset = np.concatenate([offset0[None], np.where(stance3, stance_offset, lift * fade)])
+        self._rolling = (offset[-1], lift[-1], st[-1])
         out = np.zeros_like(hip)
         out[..., :2] = offset
         return out
-
-    def _offsets(self, theta, stance, fade, radial):
-        """Rolling offsets (n + 1, 6, 2) from the foot pitch theta (n + 1, 6), and the state to carry over."""
-        n = theta.shape[0] - 1
-        rows = np.arange(1, n + 1)[:, None]  # (n, 1)
-        offset0, lift0, was0 = self._rolling
-        st = stance[1:]  # (n, 6); row 0 is the previous chunk's last row
-        before = np.vstack([was0[None], st[:-1]])
-        touchdown, liftoff = st & ~before, ~st & before
-        # Stance: r dtheta e_r step by step, summed since the latest touchdown (else from the carried offset).
-        rolling = (st & before)[..., None]
-        e_mid = radial[1:] + radial[:-1]
-        e_mid /= np.linalg.norm(e_mid, axis=-1, keepdims=True)
-        increment = np.where(rolling, self.foot_radius * np.diff(theta, axis=0)[..., None] * e_mid, 0.0)
-        total = np.cumsum(increment, axis=0)  # (n, 6, 2)
-        last_td = np.maximum.accumulate(np.where(touchdown, rows, 0), axis=0)  # (n, 6) row, 0 = none yet
-        at_td = np.take_along_axis(total, np.maximum(last_td - 1, 0)[..., None], axis=0)
-        stance_offset = np.where((last_td > 0)[..., None], total - at_td, offset0 + total)
-        # Swing: the offset of the last stance row, faded out.
-        full = np.concatenate([offset0[None], np.where(st[..., None], stance_offset, 0.0)])  # (n + 1, 6, 2)
-        last_lo = np.maximum.accumulate(np.where(liftoff, rows, 0), axis=0)
-        at_lo = np.take_along_axis(full, np.maximum(last_lo - 1, 0)[..., None], axis=0)
-        lift = np.where((last_lo > 0)[..., None], at_lo, lift0)
-        offset = np.concatenate([offset0[None], np.where(st[..., None], stance_offset, lift * fade[..., None])])
-        return offset, (offset[-1], lift[-1], st[-1])
 
     def __call__(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
         """Sets data.ctrl for the step from data.time to data.time + dt."""
@@ -211,10 +210,10 @@ class HexabotController:
         if self._trimmed:
             trims = self.trims
             q = [a - b for a, b in zip(self._qpos[7:25].tolist(), trims, strict=True)]  # what the encoders read
-            rate_steps(self.consts, q, q_cmd, dq, self._rows[k], self._rows[k + 1], self.dt)
+            rate_steps(self.consts, q, q_cmd, dq, self._feed[k], self.dt)
             self._ctrl[:] = [a + b for a, b in zip(q_cmd, trims, strict=True)] + dq
         else:
-            rate_steps(self.consts, self._qpos[7:25].tolist(), q_cmd, dq, self._rows[k], self._rows[k + 1], self.dt)
+            rate_steps(self.consts, self._qpos[7:25].tolist(), q_cmd, dq, self._feed[k], self.dt)
             self._ctrl[:] = q_cmd + dq  # position servos: q_cmd; velocity servos: dq
         self._k = k + 1
 
@@ -304,6 +303,11 @@ class GroundController(HexabotController):
         self._cmd = Command()
         swing_time = planner.swing_time
         self.seek_speed = math.pi * planner.step_height / (2 * swing_time)  # [m/s] half the swing's peak
+
+    def _publish(self, rows: np.ndarray, stance: np.ndarray) -> None:
+        """Keeps the rows and stance flags themselves: the heights are set step by step (`_targets`)."""
+        self._rows: list[list[float]] = rows.tolist()
+        self._stance: list[list[bool]] = stance.tolist()
 
     def _rolling_offsets(self, hip: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
         """The rolling offsets of the feet at the heights they stand at now (not the planned flat-ground height)."""
@@ -407,7 +411,7 @@ class GroundController(HexabotController):
                     continue
             if mode == EARLY:
                 # Ground-fixed from the touch on: the target moves at the stance velocity, not along the swing.
-                cmd = self._cmd
+                cmd = self._cmd.scaled(float(self.scale(t)))  # the command in force (ramp included)
                 bx, by = self._body_xy(row_prev, i)
                 bx += self.offset[i][0] * self._cos[i] - self.offset[i][1] * self._sin[i]
                 by += self.offset[i][0] * self._sin[i] + self.offset[i][1] * self._cos[i]
@@ -449,10 +453,11 @@ class GroundController(HexabotController):
         if self._trimmed:
             trims = self.trims
             q = [a - b for a, b in zip(self._qpos[7:25].tolist(), trims, strict=True)]
-            rate_steps(self.consts, q, q_cmd, dq, row0, row1, self.dt)
+            rate_steps(self.consts, q, q_cmd, dq, feed(self.consts[3], row0, row1, self.dt), self.dt)
             self._ctrl[:] = [a + b for a, b in zip(q_cmd, trims, strict=True)] + dq
         else:
-            rate_steps(self.consts, self._qpos[7:25].tolist(), q_cmd, dq, row0, row1, self.dt)
+            rate = feed(self.consts[3], row0, row1, self.dt)
+            rate_steps(self.consts, self._qpos[7:25].tolist(), q_cmd, dq, rate, self.dt)
             self._ctrl[:] = q_cmd + dq
         self._row_prev = row1
         self._k = k + 1

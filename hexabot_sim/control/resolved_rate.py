@@ -143,7 +143,8 @@ class ResolvedRateController:
         self._next_t = t + dt
         self._next_ref = xd1, yd1, zd1 = self.reference(self._next_t)
         dq = list(self.dq)
-        rate_steps(self._k, list(q), self.q_cmd, dq, [xd0, yd0, zd0], [xd1, yd1, zd1], dt)
+        rate = feed(self.gains.task_gain, [xd0, yd0, zd0], [xd1, yd1, zd1], dt)
+        rate_steps(self._k, list(q), self.q_cmd, dq, rate, dt)
         self.dq = (dq[0], dq[1], dq[2])
         return (*self.q_cmd, *dq)
 
@@ -153,12 +154,19 @@ StepConstants = tuple[float, ...]
 
 
 def step_constants(geometry: LegGeometry, gains: ResolvedRateGains, q_lower: Vec3, q_upper: Vec3) -> StepConstants:
-    """(l1, l2, l3, K, sigma threshold, lambda max, speed limit, acceleration limit, braking zone, lower, upper)."""
+    """(l1, l2, l3, K, sigma threshold, lambda max, speed limit, acceleration limit, braking zone, lower, upper,
+    lower + zone, upper - zone)."""
     zone = gains.max_joint_speed**2 / (2 * gains.max_joint_acceleration)  # [rad]
     return (
         geometry.l1, geometry.l2, geometry.l3, gains.task_gain, gains.sigma_threshold, gains.max_damping,
         gains.max_joint_speed, gains.max_joint_acceleration, zone, *q_lower, *q_upper,
+        *(lo + zone for lo in q_lower), *(hi - zone for hi in q_upper),
     )  # fmt: skip
+
+
+def feed(gain: float, target0: list[float], target1: list[float], dt: float) -> list[float]:
+    """The target part of the task-space rate, (x_des(t + dt) - x_des(t)) / dt + K x_des(t), for rate_steps."""
+    return [(b - a) / dt + gain * a for a, b in zip(target0, target1, strict=True)]
 
 
 def rate_steps(
@@ -166,8 +174,7 @@ def rate_steps(
     q: list[float],
     cmd: list[float],
     dq: list[float],
-    target0: list[float],
-    target1: list[float],
+    feed: list[float],
     dt: float,
 ) -> None:
     """One resolved-rate step of each of len(q) // 3 legs: dq = J^+ (v_des + K (x_des - x)), limited, integrated.
@@ -186,24 +193,27 @@ def rate_steps(
         q: Measured joint angles [rad] at t, 3 per leg (coxa, femur, tibia).
         cmd: Joint command q_cmd [rad] at t; replaced by q_cmd at t + dt (in place).
         dq: Joint rates of the previous step [rad/s]; replaced by the rates q_cmd moved at (in place).
-        target0: Desired foot positions [m] at t, 3 per leg, each in its leg's hip frame.
-        target1: Desired foot positions [m] at t + dt.
+        feed: v_des + K x_des [m/s], 3 per leg, each in its leg's hip frame: the reference's mean velocity
+            over the step plus K times the desired foot position at t (see `feed`); the task-space rate
+            is feed - K x(q).
         dt: Control period [s].
     """
-    l1, l2, l3, gain, threshold, max_damping, max_speed, max_acc, zone, lo1, lo2, lo3, hi1, hi2, hi3 = k
+    l1, l2, l3, gain, threshold, max_damping, max_speed, max_acc, zone, lo1, lo2, lo3, hi1, hi2, hi3 = k[:15]
+    lz1, lz2, lz3, hz1, hz2, hz3 = k[15:]
     thr2, limit, sin, cos, sqrt = threshold * threshold, max_acc * dt, math.sin, math.cos, math.sqrt
     for j in range(0, len(q), 3):
         q1, q2, q3 = q[j], q[j + 1], q[j + 2]
         s1, co1 = sin(q1), cos(q1)
         s2, co2 = sin(q2), cos(q2)
-        s23, c23 = sin(q2 + q3), cos(q2 + q3)
+        q23 = q2 + q3
+        s23, c23 = sin(q23), cos(q23)
         rho = l1 + l2 * co2 + l3 * c23  # horizontal distance of the foot from the coxa axis
         h = l2 * s2 + l3 * s23  # depth of the foot below the hip
         # Task-space rate: the reference's mean velocity over the step plus K times the position error.
-        xd0, yd0, zd0 = target0[j], target0[j + 1], target0[j + 2]
-        ux = (target1[j] - xd0) / dt + gain * (xd0 - co1 * rho)
-        uy = (target1[j + 1] - yd0) / dt + gain * (yd0 - s1 * rho)
-        uz = (target1[j + 2] - zd0) / dt + gain * (zd0 + h)
+        grho = gain * rho
+        ux = feed[j] - co1 * grho
+        uy = feed[j + 1] - s1 * grho
+        uz = feed[j + 2] + gain * h
         # Tangential part (coxa column) and the leg plane (radial, vertical).
         ut = co1 * uy - s1 * ux
         ur = co1 * ux + s1 * uy
@@ -231,12 +241,13 @@ def rate_steps(
             d1, d2, d3 = d1 * scale, d2 * scale, d3 * scale
         # Joint ranges: never faster toward a limit than braking at max_acc allows.
         c1, c2, c3 = cmd[j], cmd[j + 1], cmd[j + 2]
-        if c1 - lo1 < zone or hi1 - c1 < zone:
-            d1 = _brake(d1, c1 - lo1, hi1 - c1, max_acc)
-        if c2 - lo2 < zone or hi2 - c2 < zone:
-            d2 = _brake(d2, c2 - lo2, hi2 - c2, max_acc)
-        if c3 - lo3 < zone or hi3 - c3 < zone:
-            d3 = _brake(d3, c3 - lo3, hi3 - c3, max_acc)
+        if not (lz1 <= c1 <= hz1 and lz2 <= c2 <= hz2 and lz3 <= c3 <= hz3):
+            if c1 - lo1 < zone or hi1 - c1 < zone:
+                d1 = _brake(d1, c1 - lo1, hi1 - c1, max_acc)
+            if c2 - lo2 < zone or hi2 - c2 < zone:
+                d2 = _brake(d2, c2 - lo2, hi2 - c2, max_acc)
+            if c3 - lo3 < zone or hi3 - c3 < zone:
+                d3 = _brake(d3, c3 - lo3, hi3 - c3, max_acc)
         # Joint acceleration limit on the change of the command, as a whole.
         p1, p2, p3 = dq[j], dq[j + 1], dq[j + 2]
         e1, e2, e3 = d1 - p1, d2 - p2, d3 - p3

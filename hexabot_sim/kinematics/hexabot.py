@@ -150,3 +150,19 @@ def ik_hip_batch(layout: Layout, points: ArrayLike) -> tuple[np.ndarray, np.ndar
     lower, upper = np.array(JOINT_LOWER), np.array(JOINT_UPPER)
     ok = reach & np.all((q >= lower - 1e-12) & (q <= upper + 1e-12), axis=-1)
     return q, ok
+
+
+def foot_pitch(layout: Layout, points: ArrayLike) -> np.ndarray:
+    """Pitch q2 + q3 [rad] of the tibia at foot centres (..., 3) in a hip frame, on ik_hip_batch's branch (q3 >= 0).
+
+    Cheaper than the whole IK (no coxa angle, two arctangents): q2 = atan2(h, r) - atan2(l3 s3, l2 + l3 c3)
+    and q3 - atan2(l3 s3, l2 + l3 c3) = atan2(l2 s3, l3 + l2 c3) (the argument of e^{i q3} conj(l2 + l3 e^{i q3})).
+    Points out of reach get the pitch of the nearest reachable stretch (c3 clipped to [-1, 1]).
+    """
+    p = np.asarray(points, dtype=float)
+    g = layout.geometry
+    r = np.hypot(p[..., 0], p[..., 1]) - g.l1
+    h = -p[..., 2]
+    c3 = np.clip((r * r + h * h - g.l2 * g.l2 - g.l3 * g.l3) / (2 * g.l2 * g.l3), -1.0, 1.0)
+    s3 = np.sqrt(1.0 - c3 * c3)
+    return np.arctan2(h, r) + np.arctan2(g.l2 * s3, g.l3 + g.l2 * c3)

@@ -659,17 +659,17 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     if not ground.flat or p.on_ground():  # flat runs with the planned controller keep their metrics as they were
         metrics |= terrain_metrics(p, ground, t, qpos, controller)
     rpy = rpy_from_quat(qpos[:, 3:7])
-    # Command in force at every row (the controller re-plans it every chunk).
+    # Command in force at every row: the chunk's command (re-planned every chunk) times the ramp's factor.
     plan_t = np.array([c[0] for c in controller.commands])
-    plan = np.array([c[1:] for c in controller.commands])
     idx = np.clip(np.searchsorted(plan_t, t, side="right") - 1, 0, len(plan_t) - 1)
+    plan = np.array([c[1:] for c in controller.commands])[idx] * np.asarray(controller.scale(t))[:, None]
     c, s = np.cos(rpy[:, 2]), np.sin(rpy[:, 2])
     vx_b = c * qvel[:, 0] + s * qvel[:, 1]
     vy_b = -s * qvel[:, 0] + c * qvel[:, 1]
     columns: dict[str, np.ndarray] = {"t": t, "x": qpos[:, 0], "y": qpos[:, 1], "z": qpos[:, 2]}
     columns |= {"roll": rpy[:, 0], "pitch": rpy[:, 1], "yaw": np.unwrap(rpy[:, 2])}
     columns |= {"vx_body": vx_b, "vy_body": vy_b, "yaw_rate": qvel[:, 5]}
-    columns |= {"cmd_vx": plan[idx, 0], "cmd_vy": plan[idx, 1], "cmd_yaw_rate": plan[idx, 2]}
+    columns |= {"cmd_vx": plan[:, 0], "cmd_vy": plan[:, 1], "cmd_yaw_rate": plan[:, 2]}
     loaded = contacts.load > LOADED_FRACTION * total_mass * 9.81 / 6
     for i, leg in enumerate(hx.LEGS):
         columns[f"contact_{leg}"] = loaded[:, i].astype(float)
@@ -685,9 +685,7 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     period_rows = max(1, round(p.period / p.timestep))
     speed = np.hypot(_moving_mean(vx_b, period_rows), _moving_mean(vy_b, period_rows))
     overlay = [
-        lambda k: (
-            f"{p.gait} gait, speed {speed[k] * 1000:.0f} mm/s (command {math.hypot(*plan[idx[k], :2]) * 1000:.0f})"
-        ),
+        lambda k: f"{p.gait} gait, speed {speed[k] * 1000:.0f} mm/s (command {math.hypot(*plan[k, :2]) * 1000:.0f})",
         lambda k: "feet down: " + " ".join(leg for i, leg in enumerate(hx.LEGS) if loaded[k, i]),
     ]
     return ScenarioResult(
