@@ -180,10 +180,20 @@ def feasibility(p: HexabotParams) -> str:
     best = cmd.scaled(lo)
     named = (("vx", best.vx, "m/s"), ("vy", best.vy, "m/s"), ("yaw_rate", best.yaw_rate, "rad/s"))
     parts = [f"{name} = {value:.3g} {unit}" for name, value, unit in named if value]
-    stride = math.hypot(p.vx, p.vy) * p.the_gait().duty * p.period
+    duty = p.the_gait().duty
+    stride = math.hypot(p.vx, p.vy) * duty * p.period
+    if problem.startswith("joints would turn"):
+        # The swing covers the stance's stride in (1 - duty) / duty of its time, whatever the period.
+        advice = (
+            f"the {p.gait} gait's swing must move the foot {duty / (1 - duty):.2g}x as fast as the body at any "
+            "period: a gait with less stance is faster"
+            + (" (ripple, tripod)" if p.gait == "wave" else " (tripod)" if p.gait == "ripple" else "")
+        )
+    else:
+        advice = "a shorter 'period' shortens the stride"
     return (
         f"the legs cannot deliver this command at period {p.period:g} s (stride {stride:.3g} m): {problem}; "
-        f"the largest feasible in this direction is {', '.join(parts) or 'standing still'} (or shorten 'period')"
+        f"the largest feasible in this direction is {', '.join(parts) or 'standing still'}; {advice}"
     )
 
 
