@@ -200,6 +200,19 @@ def test_planned_stance_moves_with_the_ramped_command_and_targets_stay_smooth(cm
     assert np.abs(np.diff(measured, axis=0)).max() / dt < 3.0  # [m/s^2]
 
 
+def test_stance_plane_fit_is_least_squares_and_refuses_collinear_feet():
+    from hexabot_sim.control.hexabot import fit_plane
+
+    rng = np.random.default_rng(3)
+    for n in (3, 4, 5, 6):
+        xy = rng.uniform(-0.2, 0.2, (n, 2))
+        z = rng.uniform(-0.12, -0.06, n)
+        expected = np.linalg.lstsq(np.c_[np.ones(n), xy], z, rcond=None)[0]
+        np.testing.assert_allclose(fit_plane([tuple(p) for p in xy], list(z)), expected, atol=1e-12)
+    assert fit_plane([(0.0, 0.0), (0.1, 0.1), (0.2, 0.2)], [-0.1, -0.1, -0.1]) is None
+    assert fit_plane([(0.0, 0.0), (0.1, 0.0)], [-0.1, -0.1]) is None
+
+
 # --- walking --------------------------------------------------------------------------------------
 
 

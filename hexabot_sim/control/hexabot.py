@@ -218,6 +218,37 @@ class HexabotController:
         self._k = k + 1
 
 
+def fit_plane(xy: list[tuple[float, float]], z: list[float]) -> list[float] | None:
+    """Least-squares plane z = a + b x + c y through the points, [a, b, c]; None if they do not span one.
+
+    The 3x3 normal equations solved by Cramer's rule in plain floats (a handful of feet, every few
+    control steps: numpy's lstsq would cost more than the whole control step).
+    """
+    n = len(xy)
+    if n < 3:
+        return None
+    sx = sy = sxx = sxy = syy = sz = sxz = syz = 0.0
+    for (x, y), h in zip(xy, z, strict=True):
+        sx += x
+        sy += y
+        sxx += x * x
+        sxy += x * y
+        syy += y * y
+        sz += h
+        sxz += x * h
+        syz += y * h
+    # Centred sums: the plane's slope from the covariance of the points, its height at their centroid.
+    mx, my, mz = sx / n, sy / n, sz / n
+    cxx, cxy, cyy = sxx - sx * mx, sxy - sx * my, syy - sy * my
+    cxz, cyz = sxz - sx * mz, syz - sy * mz
+    det = cxx * cyy - cxy * cxy
+    if det <= 1e-12 * (cxx + cyy) ** 2 or det <= 0.0:  # collinear feet: no plane through them
+        return None
+    b = (cyy * cxz - cxy * cyz) / det
+    c = (cxx * cyz - cxy * cxz) / det
+    return [mz - b * mx - c * my, b, c]
+
+
 # Swing state machine of GroundController, per leg.
 STANCE, SWING, EARLY, SEEKING = 0, 1, 2, 3
 
@@ -326,12 +357,7 @@ class GroundController(HexabotController):
         g = self.ground
         legs = [i for i in range(6) if self.mode[i] in (STANCE, EARLY) and self.grounded[i]]
         xy = [self._body_xy(row, i) for i in legs]
-        if len(legs) >= 3:
-            a_mat = np.array([[1.0, x, y] for x, y in xy])
-            sol, *_ = np.linalg.lstsq(a_mat, np.array([self.z[i] for i in legs]), rcond=None)
-            plane = [float(v) for v in sol]
-        else:
-            plane = list(self._plane)
+        plane = fit_plane(xy, [self.z[i] for i in legs]) or list(self._plane)
         step = g.update_every * self.dt
         da = -g.height_gain * (plane[0] + g.stand_height) * step
         if g.level:
@@ -357,11 +383,18 @@ class GroundController(HexabotController):
         g = self.ground
         out = list(row)
         sensed = g.sensed
+        modes, was_stance, heights, offsets = self.mode, self._was_stance, self.z, self.offset
         for i in range(6):
             planned = stance[i]
-            mode = self.mode[i]
-            was = self._was_stance[i]
-            self._was_stance[i] = planned
+            mode = modes[i]
+            was = was_stance[i]
+            was_stance[i] = planned
+            if mode == STANCE and planned:  # most legs, most steps: a stance goes on unchanged
+                offset, j = offsets[i], 3 * i
+                out[j] += offset[0]
+                out[j + 1] += offset[1]
+                out[j + 2] = heights[i]
+                continue
             if mode in (STANCE, SEEKING) and was and not planned:  # planned lift-off
                 if mode == SEEKING:
                     self.events.append(Touchdown(i, self.t_lift[i] + self.planner.swing_time, math.nan))
@@ -381,13 +414,17 @@ class GroundController(HexabotController):
                 u = s * s * (3 - 2 * s)
                 x, y = self._landing[i]
                 a, b, c = self._plane
-                z_land = a + b * x + c * y
-                base = self.z_lift[i] + (z_land - self.z_lift[i]) * u
+                z_lift = self.z_lift[i]
+                base = z_lift + (a + b * x + c * y - z_lift) * u  # toward the stance plane under the landing point
                 z = base + row[3 * i + 2] - self._neutral_z[i]  # + the planner's lift
-                fade = 1.0 - min(1.0, 2.0 * s)
-                fade = fade * fade * (3 - 2 * fade)
-                self.offset[i][0] = self.offset_lift[i][0] * fade
-                self.offset[i][1] = self.offset_lift[i][1] * fade
+                offset = offsets[i]
+                if s < 0.5:
+                    fade = 1.0 - 2.0 * s
+                    fade = fade * fade * (3 - 2 * fade)
+                    offset[0] = self.offset_lift[i][0] * fade
+                    offset[1] = self.offset_lift[i][1] * fade
+                else:
+                    offset[0] = offset[1] = 0.0
                 if sensed and s >= 0.5 and self._sensordata[self.touch_adr[i]] > g.touch_threshold:
                     self.events.append(Touchdown(i, self.t_lift[i] + swing_time, t))
                     self.z[i] = z
