@@ -310,6 +310,39 @@ def test_heading_hold_removes_the_drift_of_an_imperfect_robot():
     assert abs(free["heading_drift"].value) > 5 * abs(held["heading_drift"].value)  # why heading hold exists
 
 
+@pytest.mark.parametrize("overrides", [{"vy": 0.1}, {"vx": 0.0, "vy": -0.1}, {"vx": 0.1, "yaw_rate": 0.1}])
+def test_heading_hold_on_a_symmetric_robot_walks_every_direction(overrides):
+    """Heading hold asks for yaw-rate corrections as small as 1e-19 rad/s at the start: the plan stays sane."""
+    m = walk(heading_hold="on", duration=12.0, **overrides).metrics
+    assert m["fell"].value is False
+    for axis in ("vx", "vy"):
+        if overrides.get(axis, 0.1 if axis == "vx" else 0.0):
+            assert abs(m[f"{axis}_error"].value) <= 0.02
+    if "yaw_rate" in overrides:
+        assert abs(m["yaw_rate_error"].value) <= 0.02
+    else:
+        assert abs(m["lateral_drift"].value) <= 2.0 and abs(m["heading_drift"].value) <= 0.1
+
+
+@pytest.mark.parametrize("w", [0.3, -1.2, 1e-19, 0.0])
+def test_stance_path_solves_the_ground_fixed_point_ode(w):
+    """p' = -v - w x p against a high-accuracy ODE solve, including yaw rates far below rounding."""
+    from scipy.integrate import solve_ivp
+
+    from hexabot_sim.control.gait import stance_path
+
+    cmd = Command(0.1, -0.07, w)
+    start = np.array([[0.12, 0.2], [-0.1, -0.15]])
+    tau = np.array([-0.5, -0.1, 0.25, 1.0])
+    got = stance_path(cmd, start, tau)  # (2, 4, 2)
+    for i, p0 in enumerate(start):
+        for k, end in enumerate(tau):
+            sol = solve_ivp(
+                lambda _t, p: [-cmd.vx + w * p[1], -cmd.vy - w * p[0]], (0.0, end), p0, rtol=1e-12, atol=1e-14
+            )
+            np.testing.assert_allclose(got[i, k], sol.y[:, -1], atol=1e-10)
+
+
 def test_perturbations_are_seeded():
     a = scenario._perturbations(params.resolve(scenario.HexabotParams, {}, {"trim_error_deg": 1, "seed": 3}))
     b = scenario._perturbations(params.resolve(scenario.HexabotParams, {}, {"trim_error_deg": 1, "seed": 3}))

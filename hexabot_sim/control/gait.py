@@ -73,15 +73,24 @@ def stance_velocity(cmd: Command, p: np.ndarray) -> np.ndarray:
 
 
 def stance_path(cmd: Command, start: np.ndarray, tau: np.ndarray) -> np.ndarray:
-    """Body-frame positions (..., n, 2) of ground-fixed points that are at `start` (..., 2), tau [s] (n,) later."""
+    """Body-frame positions (..., n, 2) of ground-fixed points that are at `start` (..., 2), tau [s] (n,) later.
+
+    p(tau) = R(-w tau) p0 - [[S, C], [-C, S]] v with S = sin(w tau) / w and C = (1 - cos(w tau)) / w: the
+    solution of dp/dtau = -v - w x p written without the centre of rotation (-vy / w, vx / w), which is
+    ill-conditioned for the tiny yaw rates heading hold can ask for (w = 1e-19 put it 1e18 m away).
+    """
     start = np.asarray(start, dtype=float)[..., None, :]  # (..., 1, 2)
-    if cmd.yaw_rate == 0.0:
-        return start - np.stack([cmd.vx * tau, cmd.vy * tau], axis=-1)
-    w = cmd.yaw_rate
-    centre = np.array([-cmd.vy / w, cmd.vx / w])  # instantaneous centre of rotation, body frame
-    c, s = np.cos(-w * tau)[:, None], np.sin(-w * tau)[:, None]  # (n, 1)
-    rel = start - centre
-    return centre + np.concatenate([c * rel[..., :1] - s * rel[..., 1:], s * rel[..., :1] + c * rel[..., 1:]], -1)
+    vx, vy, w = cmd.vx, cmd.vy, cmd.yaw_rate
+    if w == 0.0:
+        return start - np.stack([vx * tau, vy * tau], axis=-1)
+    angle = w * tau
+    c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]  # (n, 1)
+    big_s = (np.sin(angle) / w)[:, None]
+    big_c = (2.0 * np.sin(0.5 * angle) ** 2 / w)[:, None]
+    x0, y0 = start[..., :1], start[..., 1:]
+    x = c * x0 + s * y0 - (big_s * vx + big_c * vy)
+    y = -s * x0 + c * y0 + (big_c * vx - big_s * vy)
+    return np.concatenate([x, y], -1)
 
 
 def touchdown_point(cmd: Command, neutral: np.ndarray, stance_time: float) -> np.ndarray:
@@ -302,10 +311,11 @@ class GaitPlanner:
             tau = self._warp(t) - self._warp(t_state)
             if w == 0.0:
                 x, y = px - vx * tau, py - vy * tau
-            else:
-                cx, cy = -vy / w, vx / w
-                c, s = math.cos(-w * tau), math.sin(-w * tau)
-                x, y = cx + c * (px - cx) - s * (py - cy), cy + s * (px - cx) + c * (py - cy)
+            else:  # as stance_path, without the centre of rotation
+                c, s = math.cos(w * tau), math.sin(w * tau)
+                big_s, big_c = s / w, 2.0 * math.sin(0.5 * w * tau) ** 2 / w
+                x = c * px + s * py - (big_s * vx + big_c * vy)
+                y = -s * px + c * py + (big_c * vx - big_s * vy)
             f = self._warp.factor(t)
             return np.array([x, y]), np.array([f * (-vx + w * y), f * (-vy - w * x)])
         touchdown_t = self._next_touchdown(leg, t_state)
