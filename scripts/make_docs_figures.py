@@ -1,6 +1,6 @@
 """Regenerates the figures and the video frame shown in README.md (docs/*.png).
 
-Usage: python scripts/make_docs_figures.py [--hexabot]   (--hexabot: only the walking hexabot's)
+Usage: python scripts/make_docs_figures.py [--hexabot | --terrain]   (only the walking hexabot's / the terrain's)
 """
 
 from __future__ import annotations
@@ -56,6 +56,7 @@ def main_() -> int:
     sweep = run("leg-sweep")
     (DOCS / "leg_sweep.png").write_bytes((sweep / "sweep.png").read_bytes())
     hexabot_figures()
+    terrain_figures()
     print(f"wrote figures to {DOCS}")
     return 0
 
@@ -74,8 +75,25 @@ def hexabot_figures() -> None:
         (DOCS / f"hexabot_imperfect_hold_{hold}_path.png").write_bytes((folder / "path.png").read_bytes())
 
 
+def terrain_figures() -> None:
+    """The hexabot on real ground: the terrain presets with their videos, and the slope with levelling off."""
+    for name, frame in (("slope", 240), ("rough", 300), ("kerb", 210)):  # t = 8, 10, 7 s (astride the kerb)
+        folder = run(f"hexabot-{name}", "--video")
+        stem = "terrain_slope_level_on" if name == "slope" else f"terrain_{name}"
+        (DOCS / f"{stem}.png").write_bytes((folder / "terrain.png").read_bytes())
+        save_frame(folder / "video.mp4", frame, DOCS / f"terrain_{name}_frame.png")
+        if name == "slope":
+            (DOCS / f"{stem}_body.png").write_bytes((folder / "body.png").read_bytes())
+    off = run("hexabot-slope", "--set", "level_body=off")
+    for name, suffix in (("terrain", ""), ("body", "_body")):
+        (DOCS / f"terrain_slope_level_off{suffix}.png").write_bytes((off / f"{name}.png").read_bytes())
+
+
 if __name__ == "__main__":
     if "--hexabot" in sys.argv[1:]:
         hexabot_figures()
+        sys.exit(0)
+    if "--terrain" in sys.argv[1:]:
+        terrain_figures()
         sys.exit(0)
     sys.exit(main_())

@@ -24,6 +24,9 @@ SHORT: dict[str, dict] = {
     "hexabot-walk": {"duration": 1.6},
     "hexabot-turn": {"duration": 1.6},
     "hexabot-crab": {"duration": 1.6},
+    "hexabot-slope": {"duration": 1.6},
+    "hexabot-rough": {"duration": 1.6},
+    "hexabot-kerb": {"duration": 1.6},
     "rrp-velocity": {"duration": 1.0},
 }
 

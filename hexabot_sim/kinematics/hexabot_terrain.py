@@ -37,10 +37,19 @@ HFIELD_MAX_POINTS: int = 2_000_000  # larger fields make the model files and com
 HFIELD_DECIMALS: int = 6  # digits of the normalised elevation written into the MJCF
 KERB_LENGTH: float = 20.0  # [m] the pavement after the kerb (beyond any walk)
 KERB_WIDTH: float = 20.0  # [m] across the path
-# Checker texture drawn on every terrain geom (the video must show the ground's shape).
+# Checker drawn on every terrain geom, so the video shows the ground's shape: the squares' edges bend
+# over the bumps. MuJoCo maps a 2d texture onto a heightfield or box by the geom's x and y (object-linear
+# texture coordinates, no explicit ones): with texuniform="true" the texture repeats texrepeat / 2 times per
+# metre whatever the geom's size (with "false", texrepeat times across the whole geom: a field several
+# metres long got 1 m squares), and the builtin checker is 2 x 2 squares, so a square is 1 / texrepeat.
+TERRAIN_SQUARE: float = 0.05  # [m] checker square: about one bump (HFIELD_SIGMA), a third of the plate's width
 TERRAIN_TEXTURE = (
-    '<texture name="terrain_grid" type="2d" builtin="checker" rgb1="0.86 0.80 0.66" rgb2="0.62 0.55 0.42" '
-    'width="512" height="512" mark="edge" markrgb="0.35 0.3 0.25"/>'
+    '<texture name="terrain_grid" type="2d" builtin="checker" rgb1="0.86 0.80 0.66" rgb2="0.70 0.63 0.50" '
+    'width="256" height="256" mark="edge" markrgb="0.45 0.38 0.30"/>'
+)
+TERRAIN_MATERIAL = (
+    f'<material name="terrain" texture="terrain_grid" texrepeat="{1 / TERRAIN_SQUARE:g} {1 / TERRAIN_SQUARE:g}" '
+    'texuniform="true"/>'
 )
 
 
@@ -154,7 +163,7 @@ class Terrain:
         """(asset elements, worldbody geoms) of the terrain features, as MJCF text."""
         assets = [TERRAIN_TEXTURE]
         geoms: list[str] = []
-        assets.append('<material name="terrain" texture="terrain_grid" texrepeat="1 1" texuniform="true"/>')
+        assets.append(TERRAIN_MATERIAL)
         if self.roughness:
             norm, base, size = self._levels_cached()
             x0, x1, y0, y1 = self.extent
@@ -190,4 +199,4 @@ class Terrain:
         return np.array([math.cos(a / 2), math.sin(a / 2) * uy, -math.sin(a / 2) * ux, 0.0])
 
 
-__all__ = ["HFIELD_CELL", "HFIELD_SIGMA", "Terrain"]
+__all__ = ["HFIELD_CELL", "HFIELD_SIGMA", "TERRAIN_SQUARE", "Terrain"]

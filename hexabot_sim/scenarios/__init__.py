@@ -108,6 +108,27 @@ SCENARIOS: dict[str, Scenario] = {
             {"vx": 0.0, "vy": 0.1},
         ),
         Scenario(
+            "hexabot-slope",
+            "the hexabot walks up a 10 deg slope at 0.1 m/s, its body kept level from the IMU (sensed touchdown)",
+            "hexabot",
+            "HexabotParams",
+            {"slope_deg": 10.0, "touchdown": "sensed", "level_body": "on", "duration": 10.0},
+        ),
+        Scenario(
+            "hexabot-rough",
+            "the hexabot walks over 1 cm rough ground (seeded heightfield) at 0.1 m/s, its feet finding the ground",
+            "hexabot",
+            "HexabotParams",
+            {"roughness": 0.01, "touchdown": "sensed"},
+        ),
+        Scenario(
+            "hexabot-kerb",
+            "the hexabot climbs a 3 cm kerb 0.5 m ahead (feet lifted 4 cm, sensed touchdown, level body)",
+            "hexabot",
+            "HexabotParams",
+            {"kerb_height": 0.03, "step_height": 0.04, "touchdown": "sensed", "level_body": "on", "duration": 14.0},
+        ),
+        Scenario(
             "rrp-velocity",
             "RRP arm (report 001): tool linear and angular velocity for q(t) = (sin t, cos 2t, sin 3t), t = 0..20 s",
             "rrp_velocity",

@@ -32,11 +32,25 @@ CSV_COLUMNS: int = 37  # columns of timeseries.csv
 # derived columns; the CSV is counted apart), peak bytes per recorded row.
 RUN_COST: tuple[float, float, float] = (45e-6, 40e-6, 2000.0)
 FALL_TILT_DEG: float = 45.0  # body tilt beyond which the robot has fallen over
-# Friction-to-normal impedance ratio on uneven ground. MuJoCo's soft friction lets a foot under a
-# steady tangential load creep: on a 10 deg slope the standing robot slid down at 1.8 mm/s with the
-# default 1, 0.19 mm/s with 10 and 0.02 mm/s with 100 (measured). The flat floor keeps the default
-# (its published results were measured with it; there is no steady tangential load there).
-TERRAIN_IMPRATIO: float = 100.0
+# NoSlip iterations on uneven ground. MuJoCo's soft friction lets a foot under a steady tangential
+# load creep: the standing robot slid down a 10 deg slope at 0.9-1.8 mm/s with the defaults. Two
+# NoSlip passes (MuJoCo's remedy for slow slippage, run after the main solve) bring that to 0.005 mm/s
+# and 0.001-0.004 mm/s on 1 cm rough ground; impratio=100 did it too (0.009 mm/s) but its elliptic
+# cones took 6.7 Newton iterations and 73 line searches a step: bare mj_step 69 us on rough ground
+# against 31.5 us with NoSlip (median of 15 walks, 3 gaits x 5 seeds). The flat floor keeps the
+# defaults (its published results were measured with them; there is no steady tangential load there).
+TERRAIN_NOSLIP_ITERATIONS: int = 2
+SLOPE_CAMERA_DISTANCE: float = 0.9  # [m] the slope video's camera: beside the body, across the slope
+SLOPE_CAMERA_HEIGHT: float = 0.08  # [m] above the body's centre of mass (low: the ground's tilt shows)
+# Limit on the commanded joint acceleration (resolved-rate step). It smooths what the position feedback
+# asks when a foot is stopped short (a kerb's edge, a bump): with 400 rad/s^2 the 3 cm kerb walk stumbled
+# (16 deg of roll), with 200 it climbs. But it must never clip the gait's own plan: the wave gait's 1/6-period
+# swing needs 266 rad/s^2 at 0.05 m/s and 364 at 0.095 m/s (period 1 s). Clipped at 200, the wave at
+# 0.095 m/s lost 5.0 % of its speed on flat ground (-0.6 % unclipped), and 6.8..8.5 % with up to 2.8 deg of
+# pitch on 1 cm rough ground (-2.0..-3.6 %, <= 1.2 deg unclipped; measured). A servo's 1.5 N*m gives a swinging leg
+# 336, 414 and 479 rad/s^2 (coxa, femur, tibia: torque over the mass-matrix diagonal, armature included).
+ACCELERATION_LIMIT: float = 200.0  # [rad/s^2] the limit, unless the planned cycle needs more
+ACCELERATION_HEADROOM: float = 1.2  # the limit is at least this times the planned cycle's peak joint acceleration
 
 
 @dataclasses.dataclass(frozen=True)
@@ -76,7 +90,7 @@ class HexabotParams:
         "uphill", "", "the walking direction relative to the slope", choices=("uphill", "downhill", "across")
     )
     roughness: float = param(
-        0.0, "m", "peak height of a seeded heightfield of ~4 cm bumps (0: none)", ge=0.0, le=0.05, typo=("mm", 1e-3)
+        0.0, "m", "peak height of a seeded heightfield of ~5 cm bumps (0: none)", ge=0.0, le=0.05, typo=("mm", 1e-3)
     )
     kerb_height: float = param(
         0.0, "m", "a step up across the path (0: none)", ge=0.0, le=0.1, typo=("mm", 1e-3)
@@ -355,9 +369,20 @@ def _add_terrain(root, p: HexabotParams, ground: Terrain, feet: np.ndarray, q0: 
     for text in geoms:
         world.append(ET.fromstring(text))
     floor = models.find(root, "geom", "floor")
-    models.find(root, "option").set("impratio", models.fmt(TERRAIN_IMPRATIO))
+    models.find(root, "option").set("noslip_iterations", str(TERRAIN_NOSLIP_ITERATIONS))
     if ground.slope_deg:
         floor.set("quat", models.fmt(ground.floor_quat()))
+        # From the chase camera a 10 deg tilt hardly shows: the video looks along the slope's contour lines
+        # instead, low, with the uphill to the right, so the ground's line rises across the frame.
+        uphill = np.array([*ground.uphill, 0.0])
+        eye = SLOPE_CAMERA_DISTANCE * np.array([uphill[1], -uphill[0], 0.0]) + np.array([0.0, 0.0, SLOPE_CAMERA_HEIGHT])
+        forward = -eye / np.linalg.norm(eye)  # toward the body
+        right = np.cross(forward, [0.0, 0.0, 1.0])
+        right /= np.linalg.norm(right)
+        xyaxes = np.r_[right, np.cross(right, forward)]
+        models.find(root, "body", "torso").append(
+            ET.Element("camera", name="slope", mode="trackcom", pos=models.fmt(eye), xyaxes=models.fmt(xyaxes))
+        )
     if ground.roughness:  # the heightfield replaces the floor under the walk; the plane stays as scenery below
         floor.attrib.update(conaffinity="0", pos=models.fmt([0.0, 0.0, -ground.roughness - 0.002]))
     r = LAYOUT.foot_radius
@@ -377,6 +402,14 @@ def _add_terrain(root, p: HexabotParams, ground: Terrain, feet: np.ndarray, q0: 
     return [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0], q0
 
 
+def acceleration_limit(p: HexabotParams) -> float:
+    """Commanded joint-acceleration limit [rad/s^2]: ACCELERATION_LIMIT, or more where the steady cycle needs it."""
+    hip, dt = _plan_cycle(p, p.command())
+    q, _ = hx.ik_hip_batch(LAYOUT, hip)  # (n, 6, 3)
+    peak = float(np.abs(np.diff(q, 2, axis=0)).max()) / dt**2
+    return max(ACCELERATION_LIMIT, ACCELERATION_HEADROOM * peak)
+
+
 def make_controller(p: HexabotParams, model: mujoco.MjModel, data: mujoco.MjData) -> HexabotController:
     """The walking controller of a run (the ground-finding one for sensed touchdown or a levelled body)."""
     trims, _, _ = _perturbations(p)
@@ -385,7 +418,7 @@ def make_controller(p: HexabotParams, model: mujoco.MjModel, data: mujoco.MjData
         p.command(), settle_time=SETTLE_TIME, ramp_time=p.period, heading_hold=p.heading_hold == "on",
         trims=tuple(trims.tolist()),
     )  # fmt: skip
-    gains = ResolvedRateGains(p.task_gain, 0.01, 0.01, p.max_joint_speed, 200.0)
+    gains = ResolvedRateGains(p.task_gain, 0.01, 0.01, p.max_joint_speed, acceleration_limit(p))
     q0 = model.key("home").qpos[7:].reshape(6, 3)
     if not p.on_ground():
         return HexabotController(model, data, LAYOUT, planner, gains, settings, q0)
@@ -691,7 +724,7 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     units |= {"cmd_yaw_rate": "rad/s"}
     units |= {k: ("1" if k.startswith("contact_") else "rad") for k in columns if k not in units}
     trail = qpos[:, :3].copy()
-    trail[:, 2] = 0.002  # the body's path drawn on the floor
+    trail[:, 2] = ground.height(trail[:, 0], trail[:, 1]) + 0.002  # the body's path drawn on the ground
     period_rows = max(1, round(p.period / p.timestep))
     speed = np.hypot(_moving_mean(vx_b, period_rows), _moving_mean(vy_b, period_rows))
     overlay = [
@@ -708,7 +741,7 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
         column_units=units,
         metrics=metrics,
         summary=["mean_vx", "mean_vy", "mean_yaw_rate", "lateral_drift", "heading_drift", "slip_per_stance", "fell"],
-        camera="track",
+        camera="slope" if p.slope_deg else "track",
         trail=trail,
         overlay=overlay,
         extras={
@@ -869,32 +902,71 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     return out
 
 
+def _foot_centres(result: ScenarioResult, every: int) -> tuple[np.ndarray, np.ndarray]:
+    """Rows (k,) of the recording, one in `every`, and the world position of each foot centre there (k, 6, 3)."""
+    model, traj = result.model, result.trajectory
+    data = mujoco.MjData(model)
+    sites = [model.site(f"{leg}_foot").id for leg in hx.LEGS]
+    rows = np.arange(0, len(traj.t), every)
+    feet = np.empty((len(rows), 6, 3))
+    for k, row in enumerate(rows):
+        data.qpos[:] = traj.qpos[row]
+        mujoco.mj_kinematics(model, data)
+        feet[k] = data.site_xpos[sites]
+    return rows, feet
+
+
 def _terrain_figure(result: ScenarioResult, ground: Terrain) -> Any:
-    """Ground profile under the body's path, the body height and the feet's touchdown points (side view)."""
+    """Side view: the ground under the body and the body's height; per leg, the ground along that foot's own track,
+    the sole's path over it and the touchdowns (contact points), so every point is drawn over the ground under it."""
     from hexabot_sim import plots
 
     p, c = result.params, result.columns
     contacts: Contacts = result.extras["contacts"]
+    t = c["t"]
+    # Horizontal axis: distance along the commanded direction for a straight walk, else time.
+    straight = math.hypot(p.vx, p.vy) > 0 and p.yaw_rate == 0
     along = walking_direction(p)
-    s_body = np.c_[c["x"], c["y"]] @ along  # distance along the commanded direction [m]
-    s_line = np.linspace(s_body.min() - 0.3, s_body.max() + 0.3, 2000)
-    offset = np.c_[c["x"], c["y"]][0] - s_body[0] * along  # the start's sideways offset
-    line = offset + s_line[:, None] * along
-    fig, ax = plots.figure(figsize=(10, 4.8))
-    ax.fill_between(
-        s_line, ground.height(line[:, 0], line[:, 1]) * 1000, -60, color="0.8", label="ground under the path"
+
+    def axis(xy: np.ndarray, times: np.ndarray) -> np.ndarray:
+        return xy @ along if straight else times
+
+    rows, feet = _foot_centres(result, max(1, round(0.01 / p.timestep)))  # every 10 ms
+    r = LAYOUT.foot_radius
+    fig, axes = plots.figure(
+        1 + len(hx.LEGS), 1, figsize=(10, 11), sharex=True, gridspec_kw={"height_ratios": [1.6] + [1.0] * 6}
     )
-    ax.plot(s_body, c["z"] * 1000, color="k", lw=1.2, label="body origin")
+    ax = axes[0]
+    s_body = axis(np.c_[c["x"], c["y"]], t)
+    under = ground.height(c["x"], c["y"]) * 1000
+    floor = float(min(under.min(), (feet[..., 2].min() - r) * 1000)) - 15.0  # [mm] bottom of the ground fill
+    ax.fill_between(s_body, under, floor, color="0.82", label="ground under the body")
+    ax.plot(s_body, c["z"] * 1000, color="k", lw=1.2, label="body origin (plate centre)")
+    ax.set_ylabel("height [mm]")
+    plots.legend_above(ax, ncol=2)
     loaded = np.stack([c[f"contact_{leg}"] for leg in hx.LEGS], axis=1) > 0.5
+    low, high = np.inf, -np.inf
     for i, leg in enumerate(hx.LEGS):
+        ax = axes[1 + i]
+        s_foot = axis(feet[:, i, :2], t[rows])
+        g = ground.height(feet[:, i, 0], feet[:, i, 1]) * 1000
+        sole = (feet[:, i, 2] - r) * 1000
+        ax.plot(s_foot, g, color="0.35", lw=1.6, label="ground under the foot (along its own track)")
+        ax.plot(s_foot, sole, color=LEG_COLOURS[leg], lw=0.8, label="sole (foot centre - radius)")
         down = np.flatnonzero(np.diff(loaded[:, i].astype(int)) == 1) + 1
         pts = contacts.point[down, i]
-        ax.plot(pts[:, :2] @ along, pts[:, 2] * 1000, "o", ms=3.5, mfc="none", color=LEG_COLOURS[leg],
-                label=f"{leg} touchdowns")  # fmt: skip
-    ax.set_xlabel("distance along the commanded direction [m]")
-    ax.set_ylabel("height [mm]")
-    ax.grid(True, alpha=0.3)
-    plots.legend_right(ax)
+        ok = np.isfinite(pts).all(axis=1)
+        ax.plot(axis(pts[ok, :2], t[down][ok]), pts[ok, 2] * 1000, "o", ms=4, mfc=LEG_COLOURS[leg], mec="k", mew=0.5,
+                label="touchdown (contact point)")  # fmt: skip
+        ax.set_ylabel(f"{leg} [mm]")
+        low, high = min(low, g.min(), sole.min()), max(high, g.max(), sole.max())
+        ax.grid(True, alpha=0.3)
+    margin = 0.05 * (high - low) + 2.0
+    for ax in axes[1:]:
+        ax.set_ylim(low - margin, high + margin)
+    axes[0].grid(True, alpha=0.3)
+    plots.legend_above(axes[1], ncol=3)
+    axes[-1].set_xlabel("distance along the commanded direction [m]" if straight else "t [s]")
     if p.slope_deg:
         kind = f"{p.slope_deg:g} deg slope ({p.slope_heading})"
     elif p.roughness:
@@ -902,7 +974,7 @@ def _terrain_figure(result: ScenarioResult, ground: Terrain) -> Any:
     else:
         kind = f"{p.kerb_height * 1000:g} mm kerb at {p.kerb_distance:g} m"
     fig.suptitle(
-        _title(result, f"terrain under the path: {kind}, touchdown {p.touchdown}, level_body {p.level_body}"),
+        _title(result, f"terrain: {kind}, touchdown {p.touchdown}, level_body {p.level_body}"),
         fontsize=plots.TITLE_FONTSIZE,
     )
     return fig
@@ -920,7 +992,12 @@ def live(p: HexabotParams) -> Live:
     def speed_text(d: mujoco.MjData) -> str:
         return f"{p.gait} gait, speed {math.hypot(d.qvel[0], d.qvel[1]) * 1000:4.0f} mm/s, x = {d.qpos[0]:6.3f} m"
 
+    ground = terrain(p)
+
+    def trail(d: mujoco.MjData) -> np.ndarray:
+        return np.array([d.qpos[0], d.qpos[1], float(ground.height(d.qpos[0], d.qpos[1])) + 0.002])
+
     return Live(
-        model, data, step, p.timestep, p.duration, camera="track", track_body="torso",
-        trail=lambda d: np.array([d.qpos[0], d.qpos[1], 0.002]), overlay=[speed_text],
+        model, data, step, p.timestep, p.duration, camera="slope" if p.slope_deg else "track", track_body="torso",
+        trail=trail, overlay=[speed_text],
     )  # fmt: skip
