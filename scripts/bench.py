@@ -95,10 +95,10 @@ def bench_leg_loop(repeat: int) -> dict[str, float]:
     return paired_loops(prepare, loop, repeat)
 
 
-def bench_hexabot(repeat: int, duration: float = 10.0) -> dict[str, float]:
+def bench_hexabot(repeat: int, duration: float = 10.0, name: str = "hexabot-walk", **overrides) -> dict[str, float]:
     """The walking loop vs bare mj_step replaying its recorded controls (the walking robot, not a standing one)."""
-    scenario = scenarios.get("hexabot-walk")
-    p = params.resolve(scenario.params_type, scenario.defaults, {"duration": duration})
+    scenario = scenarios.get(name)
+    p = params.resolve(scenario.params_type, scenario.defaults, {"duration": duration, **overrides})
     xml = hexabot.build_xml(p)
     n = step_count(p.duration, p.timestep)
     loop_s, bare_s = [], []
@@ -224,6 +224,18 @@ def main() -> int:
         f"{walk['bare_us_per_step']:.1f} us/step ({walk['bare_real_time_factor']:.0f}x); ratio {walk['ratio']:.2f}x "
         f"(target <= 2.5x) {'ok' if ok else 'MISSED'}"
     )
+
+    # Rough ground: the hexabot-rough preset (1 cm heightfield, feet that find the ground), every gait.
+    for gait, vx in (("tripod", 0.1), ("ripple", 0.1), ("wave", 0.05)):
+        rough = bench_hexabot(max(1, args.repeat // 2), name="hexabot-rough", gait=gait, vx=vx)
+        ok = rough["real_time_factor"] >= 40
+        failures += [] if ok else [f"hexabot-rough {gait}"]
+        print(
+            f"rough     hexabot-rough --set gait={gait} --set vx={vx:g}: "
+            f"loop {rough['loop_us_per_step']:.1f} us/step = {rough['real_time_factor']:.0f}x real time "
+            f"(target >= 40x) {'ok' if ok else 'MISSED'}; bare mj_step "
+            f"{rough['bare_us_per_step']:.1f} us/step (heightfield contacts), ratio {rough['ratio']:.2f}x"
+        )
 
     video = bench_video(max(1, args.repeat // 2))
     if isinstance(video, str):

@@ -117,6 +117,13 @@ class HexabotController:
             return np.where(np.asarray(t) <= s.settle_time, 0.0, 1.0)
         return np.clip((np.asarray(t) - s.settle_time) / s.ramp_time, 0.0, 1.0)
 
+    def _factor(self, t: float) -> float:
+        """scale(t) for one time, in plain floats."""
+        s = self.settings
+        if t <= s.settle_time:
+            return 0.0
+        return 1.0 if s.ramp_time <= 0 else min(1.0, (t - s.settle_time) / s.ramp_time)
+
     def _replan(self, t: float) -> None:
         """Plans the next chunk of targets with the command in force now (and the heading correction).
 
@@ -384,6 +391,8 @@ class GroundController(HexabotController):
         out = list(row)
         sensed = g.sensed
         modes, was_stance, heights, offsets = self.mode, self._was_stance, self.z, self.offset
+        t_lift, z_lifts, offset_lift, landings = self.t_lift, self.z_lift, self.offset_lift, self._landing
+        swing_time = self.planner.swing_time
         for i in range(6):
             planned = stance[i]
             mode = modes[i]
@@ -409,20 +418,21 @@ class GroundController(HexabotController):
             elif mode == EARLY and planned:
                 self.mode[i] = mode = STANCE
             if mode == SWING:
-                swing_time = self.planner.swing_time
-                s = min(1.0, (t - self.t_lift[i]) / swing_time)
+                s = (t - t_lift[i]) / swing_time
+                if s > 1.0:
+                    s = 1.0
                 u = s * s * (3 - 2 * s)
-                x, y = self._landing[i]
+                x, y = landings[i]
                 a, b, c = self._plane
-                z_lift = self.z_lift[i]
+                z_lift = z_lifts[i]
                 base = z_lift + (a + b * x + c * y - z_lift) * u  # toward the stance plane under the landing point
                 z = base + row[3 * i + 2] - self._neutral_z[i]  # + the planner's lift
                 offset = offsets[i]
                 if s < 0.5:
                     fade = 1.0 - 2.0 * s
                     fade = fade * fade * (3 - 2 * fade)
-                    offset[0] = self.offset_lift[i][0] * fade
-                    offset[1] = self.offset_lift[i][1] * fade
+                    offset[0] = offset_lift[i][0] * fade
+                    offset[1] = offset_lift[i][1] * fade
                 else:
                     offset[0] = offset[1] = 0.0
                 if sensed and s >= 0.5 and self._sensordata[self.touch_adr[i]] > g.touch_threshold:
@@ -442,13 +452,14 @@ class GroundController(HexabotController):
                         self.mode[i] = mode = STANCE
                         self.events.append(Touchdown(i, t, t))
                 else:
-                    out[3 * i + 2] = z
-                    out[3 * i] += self.offset[i][0]
-                    out[3 * i + 1] += self.offset[i][1]
+                    j = 3 * i
+                    out[j] += offset[0]
+                    out[j + 1] += offset[1]
+                    out[j + 2] = z
                     continue
             if mode == EARLY:
                 # Ground-fixed from the touch on: the target moves at the stance velocity, not along the swing.
-                cmd = self._cmd.scaled(float(self.scale(t)))  # the command in force (ramp included)
+                cmd = self._cmd.scaled(self._factor(t))  # the command in force (ramp included)
                 bx, by = self._body_xy(row_prev, i)
                 bx += self.offset[i][0] * self._cos[i] - self.offset[i][1] * self._sin[i]
                 by += self.offset[i][0] * self._sin[i] + self.offset[i][1] * self._cos[i]

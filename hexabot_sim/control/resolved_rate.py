@@ -166,7 +166,8 @@ def step_constants(geometry: LegGeometry, gains: ResolvedRateGains, q_lower: Vec
 
 def feed(gain: float, target0: list[float], target1: list[float], dt: float) -> list[float]:
     """The target part of the task-space rate, (x_des(t + dt) - x_des(t)) / dt + K x_des(t), for rate_steps."""
-    return [(b - a) / dt + gain * a for a, b in zip(target0, target1, strict=True)]
+    inv = 1.0 / dt
+    return [(b - a) * inv + gain * a for a, b in zip(target0, target1, strict=True)]
 
 
 def rate_steps(
