@@ -177,7 +177,7 @@ def test_planned_stance_moves_with_the_ramped_command_and_targets_stay_smooth(cm
     def scale(t):
         return np.clip((np.asarray(t) - settle) / ramp_time, 0.0, 1.0)
 
-    chunks = [planner.plan(cmd, planner.max_chunk, scale) for _ in range(8)]  # 2 s: settle, ramp, walk
+    chunks = [planner.plan(cmd, 250, scale) for _ in range(8)]  # 2 s: settle, ramp, walk
     rows = np.concatenate([chunks[0]] + [c[1:] for c in chunks[1:]])  # (n + 1, 6, 3)
     t = dt * np.arange(len(rows))
     stance = planner.in_stance(t)
