@@ -362,7 +362,7 @@ def test_perturbations_are_seeded():
         ({"vx": 0.6}, "workspace or joint ranges; the largest feasible in this direction is vx = 0.399 m/s; a shorter"),
         ({"gait": "wave", "vx": 0.25}, "the largest feasible in this direction is vx = "),
         # The swing's speed limit does not depend on the period: the advice is another gait, not a shorter period.
-        ({"gait": "ripple", "vx": 0.25}, "swing must move the foot 2x as fast as the body at any period"),
+        ({"gait": "ripple", "vx": 0.25}, "swing moves the foot over the ground 2x as fast as the body at any period"),
         ({"vx": 100}, "did you mean 100 mm/s = 0.1 m/s"),
         ({"gait": "wave", "period": 0.5}, "even stepping in place is infeasible"),
         ({"timestep": 0.005}, "timestep"),

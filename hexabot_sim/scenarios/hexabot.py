@@ -199,8 +199,8 @@ def feasibility(p: HexabotParams) -> str:
     if problem.startswith("joints would turn"):
         # The swing covers the stance's stride in (1 - duty) / duty of its time, whatever the period.
         advice = (
-            f"the {p.gait} gait's swing must move the foot {duty / (1 - duty):.2g}x as fast as the body at any "
-            "period: a gait with less stance is faster"
+            f"the {p.gait} gait's swing moves the foot over the ground {duty / (1 - duty):.2g}x as fast as the body at "
+            "any period (a longer one only slows the lift): a gait with less stance is faster"
             + (" (ripple, tripod)" if p.gait == "wave" else " (tripod)" if p.gait == "ripple" else "")
         )
     else:
