@@ -86,7 +86,11 @@ def param(
 
 
 def _number(value: float) -> str:
-    return f"{value:.6g}"
+    """A bound in words: 6 significant digits, or in full an integer they would round (a seed's 4294967295)."""
+    text = f"{value:.6g}"
+    if math.isfinite(value) and float(value).is_integer() and float(text) != value:
+        return str(int(value))
+    return text
 
 
 def describe_range(info: ParamInfo, name: str = "value") -> str:

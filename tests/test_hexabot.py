@@ -364,6 +364,7 @@ def test_perturbations_are_seeded():
         # The swing's speed limit does not depend on the period: the advice is another gait, not a shorter period.
         ({"gait": "ripple", "vx": 0.25}, "swing moves the foot over the ground 2x as fast as the body at any period"),
         ({"vx": 100}, "did you mean 100 mm/s = 0.1 m/s"),
+        ({"seed": "abc"}, "must be a number with 0 <= seed <= 4294967295; got 'abc'"),  # not 4.29497e+09
         ({"gait": "wave", "period": 0.5}, "even stepping in place is infeasible"),
         ({"timestep": 0.005}, "timestep"),
     ],
