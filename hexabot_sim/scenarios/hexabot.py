@@ -31,6 +31,8 @@ CSV_COLUMNS: int = 37  # columns of timeseries.csv
 # walks): seconds per physics step (controller + mj_step), seconds per recorded row (contact replay,
 # derived columns; the CSV is counted apart), peak bytes per recorded row.
 RUN_COST: tuple[float, float, float] = (45e-6, 40e-6, 2000.0)
+# Seconds per physics step with terrain or the ground-finding controller (rough ground: 61-73 us in bench.py).
+TERRAIN_STEP_SECONDS: float = 80e-6
 FALL_TILT_DEG: float = 45.0  # body tilt beyond which the robot has fallen over
 # NoSlip iterations on uneven ground. MuJoCo's soft friction lets a foot under a steady tangential
 # load creep: the standing robot slid down a 10 deg slope at 0.9-1.8 mm/s with the defaults. Two
@@ -116,7 +118,10 @@ class HexabotParams:
                 f"got {self.duration}"
             )
         n = step_count(self.duration, self.timestep)
-        check_run_cost(n, n + 1, CSV_COLUMNS, *RUN_COST, "lower 'duration' or raise 'timestep'")
+        step_s, row_s, row_bytes = RUN_COST
+        if self.on_ground() or self.slope_deg or self.roughness or self.kerb_height:
+            step_s = TERRAIN_STEP_SECONDS
+        check_run_cost(n, n + 1, CSV_COLUMNS, step_s, row_s, row_bytes, "lower 'duration' or raise 'timestep'")
         problem = feasibility(self)
         if problem:
             raise ValueError(problem)
