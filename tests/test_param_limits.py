@@ -76,6 +76,11 @@ def test_bad_values_exit_2_with_one_line(capsys, tmp_path, argv, fragments):
         ),
         (["leg-sweep", "--set", "amplitudes=" + ",".join(["0.01"] * 21), "--set", "omegas=" + ",".join(["1"] * 20)],
          ["at most 400 cells", "21 x 20 = 420"]),
+        # A video is estimated too (rendering is software OpenGL here): 4.5 h of 4K frames at 240 fps.
+        (["pendulum", "--set", "duration=600", "--video", "--size", "3840x2160", "--fps", "240"],
+         ["the video would take ~4.5 h to render (144001 frames of 3840x2160 at the preview preset)", "lower --fps"]),
+        (["hexabot-walk", "--set", "duration=600", "--video", "--quality", "high", "--size", "1920x1080",
+          "--fps", "60"], ["~1.4 h to render", "or use --quality preview"]),
     ],
 )  # fmt: skip
 def test_runs_too_large_are_refused_with_the_numbers(capsys, tmp_path, argv, fragments):
