@@ -19,7 +19,9 @@ from hexabot_sim.__main__ import main
 
 SCREEN = (1024, 640)  # [px] Xvfb screen; the viewer's window takes part of it
 OPEN_TIMEOUT: float = 60.0  # [s] until the viewer says it is showing (imports + window on a loaded machine)
-SETTLE: float = 1.5  # [s] drawing before the capture
+SETTLE: float = 1.0  # [s] drawing before the first capture
+CAPTURE_EVERY: float = 0.3  # [s] captures are retried until the window shows a drawn frame (a loaded machine
+# with software OpenGL can take seconds for the first frames), while the viewer runs
 
 
 # ---------------------------------------------------------------------------------------------
@@ -163,7 +165,12 @@ def read_xwd(data: bytes) -> np.ndarray:
     return np.ascontiguousarray(pixels[:, :, 2::-1] if byte_order == 0 else pixels[:, :, k - 3 :])
 
 
-def watch(display: str, argv: list[str], shot: Path, quit_after: float = 3.5) -> tuple[np.ndarray, str]:
+def drawn(image: np.ndarray) -> bool:
+    """The screen shows a rendered frame (not the black root window or a window not yet drawn)."""
+    return bool(image.std() > 20 and (image.max(axis=2) > 20).mean() > 0.2)
+
+
+def watch(display: str, argv: list[str], shot: Path, quit_after: float = 6.0) -> tuple[np.ndarray, str]:
     """Runs `hexabot-sim view ...` on the display, captures the screen once it draws, returns (RGB, stdout)."""
     env = dict(os.environ, DISPLAY=display)
     env.pop("WAYLAND_DISPLAY", None)
@@ -178,14 +185,20 @@ def watch(display: str, argv: list[str], shot: Path, quit_after: float = 3.5) ->
             line = proc.stderr.readline()
             assert line or proc.poll() is None, f"the viewer exited: {proc.stderr.read()}"
         time.sleep(SETTLE)
-        dump = subprocess.run(["xwd", "-root", "-silent", "-display", display], capture_output=True, check=True)
+        image = np.zeros((1, 1, 3), np.uint8)
+        while proc.poll() is None:  # capture until a drawn frame shows, while the viewer runs
+            dump = subprocess.run(["xwd", "-root", "-silent", "-display", display], capture_output=True)
+            if dump.returncode == 0:
+                image = read_xwd(dump.stdout)
+                if drawn(image):
+                    break
+            time.sleep(CAPTURE_EVERY)
         out, err = proc.communicate(timeout=OPEN_TIMEOUT)
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
     assert proc.returncode == 0, err
-    image = read_xwd(dump.stdout)
     from PIL import Image
 
     Image.fromarray(image).save(shot)  # for a person to look at
