@@ -362,6 +362,41 @@ def test_missing_ffmpeg_still_gives_csv_and_plots(tmp_path):
     assert not (tmp_path / "r" / "video.mp4").exists()
 
 
+def test_an_encoder_that_stops_reading_does_not_hang_the_run(tmp_path, monkeypatch, capsys):
+    """An 'ffmpeg' that answers -version and then never reads its frames: the stuck write is stopped after
+    FRAME_TIMEOUT, the run keeps its CSV and says why there is no video, and the encoder is gone."""
+    from hexabot_sim import render
+
+    fake = tmp_path / "stuck-ffmpeg"
+    fake.write_text(
+        f"#!{sys.executable}\nimport sys, time\n"
+        "if sys.argv[1:] == ['-version']:\n    print('ffmpeg version 6.0 (a stuck fake)')\n    sys.exit(0)\n"
+        "time.sleep(600)\n"
+    )
+    fake.chmod(0o755)
+    monkeypatch.setenv("IMAGEIO_FFMPEG_EXE", str(fake))
+    monkeypatch.setattr(render, "FRAME_TIMEOUT", 1.0)
+    started = time.monotonic()
+    out = str(tmp_path / "r")
+    assert main(["run", "pendulum", "--set", "duration=0.5", "--video", "--out", out, "--no-plots"]) == 0
+    assert time.monotonic() - started < 60
+    record = json.loads((tmp_path / "r" / "run.json").read_text())
+    assert record["video"] == {
+        "written": False,
+        "reason": "rendering failed: RuntimeError: the video encoder took no frame for 1 s and was stopped",
+    }
+    assert (tmp_path / "r" / "timeseries.csv").exists() and not (tmp_path / "r" / "video.mp4").exists()
+    assert "no video: rendering failed" in capsys.readouterr().err
+    assert not [p for p in Path("/proc").glob("[0-9]*") if str(fake).encode() in _cmdline(p)]  # killed, not left
+
+
+def _cmdline(proc: Path) -> bytes:
+    try:
+        return (proc / "cmdline").read_bytes()
+    except OSError:
+        return b""
+
+
 def test_no_mujoco_log_dropped_on_divergence(tmp_path):
     proc = _run_cli(tmp_path, "run", "pendulum", "--set", "stiffness=1e4", "--set", "timestep=0.05", "--out", "r")
     assert proc.returncode == 1 and "diverged" in one_line_error(proc.stderr)
