@@ -293,7 +293,9 @@ def _check_video_cost(args: argparse.Namespace, p: Any) -> None:
     if not isinstance(duration, (int, float)) or not math.isfinite(duration):
         return
     width, height = args.size
-    frames = math.floor(duration * args.fps + 1e-9) + 1
+    from hexabot_sim import render  # after gl.choose(): it imports MuJoCo
+
+    frames = render.frame_count(duration, args.fps)
     fixed, per_megapixel = VIDEO_FRAME_SECONDS[args.quality]
     seconds = frames * (fixed + per_megapixel * width * height / 1e6)
     if seconds > params_mod.MAX_SECONDS:

@@ -113,9 +113,14 @@ Progress = Callable[[int, int], None]
 OverlayLine = Callable[[int], str]
 
 
+def frame_count(duration: float, fps: float) -> int:
+    """Frames of a real-time video of `duration` seconds: one at t = 0, then one every 1 / fps."""
+    return math.floor(duration * fps + 1e-9) + 1
+
+
 def frame_indices(t: np.ndarray, fps: float) -> np.ndarray:
     """Row of the recording nearest to each frame time t0 + i / fps: video duration = simulated duration."""
-    n_frames = int(np.floor((t[-1] - t[0]) * fps + 1e-9)) + 1
+    n_frames = frame_count(float(t[-1] - t[0]), fps)
     times = t[0] + np.arange(n_frames) / fps
     idx = np.clip(np.searchsorted(t, times), 1, len(t) - 1)
     nearer_left = (times - t[idx - 1]) <= (t[idx] - times)

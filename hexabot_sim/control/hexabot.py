@@ -213,16 +213,20 @@ class HexabotController:
         if k >= self._chunk:
             self._replan(data.time)
             k = 0
+        self._servo(self._feed[k])
+        self._k = k + 1
+
+    def _servo(self, rate: list[float]) -> None:
+        """One resolved-rate step of the six legs toward `rate` (see `feed`), written to the 36 servos."""
         q_cmd, dq = self.q_cmd, self.dq
         if self._trimmed:
             trims = self.trims
             q = [a - b for a, b in zip(self._qpos[7:25].tolist(), trims, strict=True)]  # what the encoders read
-            rate_steps(self.consts, q, q_cmd, dq, self._feed[k], self.dt)
+            rate_steps(self.consts, q, q_cmd, dq, rate, self.dt)
             self._ctrl[:] = [a + b for a, b in zip(q_cmd, trims, strict=True)] + dq
         else:
-            rate_steps(self.consts, self._qpos[7:25].tolist(), q_cmd, dq, self._feed[k], self.dt)
+            rate_steps(self.consts, self._qpos[7:25].tolist(), q_cmd, dq, rate, self.dt)
             self._ctrl[:] = q_cmd + dq  # position servos: q_cmd; velocity servos: dq
-        self._k = k + 1
 
 
 def fit_plane(xy: list[tuple[float, float]], z: list[float]) -> list[float] | None:
@@ -497,15 +501,6 @@ class GroundController(HexabotController):
             self._update_plane(row0)
         self._count += 1
         row1 = self._targets(self._rows[k + 1], self._stance[k + 1], data.time + self.dt, self._rows[k])
-        q_cmd, dq = self.q_cmd, self.dq
-        if self._trimmed:
-            trims = self.trims
-            q = [a - b for a, b in zip(self._qpos[7:25].tolist(), trims, strict=True)]
-            rate_steps(self.consts, q, q_cmd, dq, feed(self.consts[3], row0, row1, self.dt), self.dt)
-            self._ctrl[:] = [a + b for a, b in zip(q_cmd, trims, strict=True)] + dq
-        else:
-            rate = feed(self.consts[3], row0, row1, self.dt)
-            rate_steps(self.consts, self._qpos[7:25].tolist(), q_cmd, dq, rate, self.dt)
-            self._ctrl[:] = q_cmd + dq
+        self._servo(feed(self.consts[3], row0, row1, self.dt))
         self._row_prev = row1
         self._k = k + 1
