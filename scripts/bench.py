@@ -10,6 +10,8 @@ Usage: python scripts/bench.py [--repeat N] [--check]
   hexabot    the walking hexabot's loop (mj_step + 18-joint controller + recording) at its 2 ms
              implicitfast step: real-time factor                                 target >= 50x
              vs bare `mj_step` replaying the recorded controls on the same walk  target <= 2.5x
+  rough      the same on 1 cm rough ground (the hexabot-rough preset: heightfield, feet that find
+             the ground), tripod, ripple and wave: real-time factor              target >= 40x
   sweep      a 64-cell pendulum sweep on 2 local workers vs 1 (pool start included) target >= 1.7x
              and the per-cell overhead of the Dask path (LocalCluster) vs the local pool
   list       wall time of `hexabot-sim list` (python -m hexabot_sim list)        target <= 0.5 s
@@ -102,6 +104,8 @@ def bench_hexabot(repeat: int, duration: float = 10.0, name: str = "hexabot-walk
     xml = hexabot.build_xml(p)
     n = step_count(p.duration, p.timestep)
     loop_s, bare_s = [], []
+    model, data = at_home(xml)
+    hexabot.make_controller(p, model, data)(model, data)  # compiles the numba kernels (or loads them) untimed
     for _ in range(repeat):
         # The whole loop: controller (gait targets, 6 resolved-rate steps), mj_step, recording, checks.
         model, data = at_home(xml)

@@ -2,7 +2,8 @@
 
 Per control period: read the 18 joint angles (the servos' encoders), take each foot's target at t
 and t + dt from the gait planner (planned a chunk ahead, in the leg's hip frame), and advance each
-leg's joint command with `resolved_rate.rate_steps` — the same step leg-step uses. The servos get
+leg's joint command with `resolved_rate.rate_steps` — the same step leg-step uses, compiled (the
+per-step work runs in control/kernels.py; planning, once a chunk, stays here). The servos get
 q_cmd (position) and dq (velocity feedforward).
 
 Two corrections make the body go where it is told:
@@ -24,8 +25,17 @@ import mujoco
 import numpy as np
 
 from hexabot_sim.control.gait import Command, GaitPlanner
-from hexabot_sim.control.resolved_rate import ResolvedRateGains, feed, rate_steps, step_constants
+from hexabot_sim.control.resolved_rate import ResolvedRateGains, step_constants
 from hexabot_sim.kinematics import hexabot as hx
+
+
+def kernels():
+    """control/kernels.py, imported on first use: importing numba takes ~0.15 s, which `hexabot-sim list`
+    (it imports this module for the parameter tables) should not pay."""
+    from hexabot_sim.control import kernels
+
+    return kernels
+
 
 MAX_HEADING_CORRECTION: float = 0.3  # [rad/s] largest yaw-rate correction heading hold adds
 
@@ -88,15 +98,15 @@ class HexabotController:
             raise ValueError("hexabot.xml must list the 18 position then the 18 velocity actuators in LEGS order")
         self.quat_adr = int(model.sensor_adr[model.sensor("imu_quat").id])
         lower, upper = hx.JOINT_LOWER, hx.JOINT_UPPER
-        self.consts = step_constants(layout.geometry, gains, lower, upper)
-        self.trims = [float(v) for v in settings.trims]
-        self._trimmed = any(self.trims)
-        self.q_cmd = [float(v) for v in np.asarray(q_start).ravel()]
-        self.dq = [0.0] * 18
+        self.kernels = kernels()
+        self.consts = np.array(step_constants(layout.geometry, gains, lower, upper))
+        self.trims = np.array(settings.trims, dtype=float)
+        self.q_cmd = np.array(q_start, dtype=float).ravel()  # the position servos' command [rad]
+        self.dq = np.zeros(18)  # the rate it moved at over the last step [rad/s]
         self.rot = layout.hip_rotations()  # (6, 3, 3) hip -> body
         self.hips = layout.hip_positions()  # (6, 3)
         # Targets of the current chunk in each hip frame, one flat row of 18 floats per step, and stance flags.
-        self._feed: list[list[float]] = []  # per step: the rate_steps feed (v_des + K x_des), 18 floats
+        self._feed = np.zeros((0, 18))  # per step: the rate_steps feed (v_des + K x_des)
         self._k = 0
         # Rolling state carried between chunks: last row's offset (6, 2), offset at lift-off (6, 2), in stance.
         self._rolling = (np.zeros((6, 2)), np.zeros((6, 2)), np.ones(6, dtype=bool))
@@ -116,13 +126,6 @@ class HexabotController:
         if s.ramp_time <= 0:
             return np.where(np.asarray(t) <= s.settle_time, 0.0, 1.0)
         return np.clip((np.asarray(t) - s.settle_time) / s.ramp_time, 0.0, 1.0)
-
-    def _factor(self, t: float) -> float:
-        """scale(t) for one time, in plain floats."""
-        s = self.settings
-        if t <= s.settle_time:
-            return 0.0
-        return 1.0 if s.ramp_time <= 0 else min(1.0, (t - s.settle_time) / s.ramp_time)
 
     def _replan(self, t: float) -> None:
         """Plans the next chunk of targets with the command in force now (and the heading correction).
@@ -160,7 +163,7 @@ class HexabotController:
 
     def _publish(self, rows: np.ndarray, stance: np.ndarray) -> None:
         """Keeps what the steps of the chunk need from its targets rows (n + 1, 18) (hip frames) and stance flags."""
-        self._feed = ((rows[1:] - rows[:-1]) / self.dt + self.consts[3] * rows[:-1]).tolist()
+        self._feed = (rows[1:] - rows[:-1]) / self.dt + self.consts[3] * rows[:-1]
 
     def _rolling_offsets(self, hip: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
         """Offsets (n + 1, 6, 3) of the foot-centre targets for feet that roll without slipping.
@@ -213,55 +216,16 @@ class HexabotController:
         if k >= self._chunk:
             self._replan(data.time)
             k = 0
-        self._servo(self._feed[k])
+        self.kernels.servo(self.consts, self._qpos, self.trims, self.q_cmd, self.dq, self._feed[k], self.dt, self._ctrl)
         self._k = k + 1
-
-    def _servo(self, rate: list[float]) -> None:
-        """One resolved-rate step of the six legs toward `rate` (see `feed`), written to the 36 servos."""
-        q_cmd, dq = self.q_cmd, self.dq
-        if self._trimmed:
-            trims = self.trims
-            q = [a - b for a, b in zip(self._qpos[7:25].tolist(), trims, strict=True)]  # what the encoders read
-            rate_steps(self.consts, q, q_cmd, dq, rate, self.dt)
-            self._ctrl[:] = [a + b for a, b in zip(q_cmd, trims, strict=True)] + dq
-        else:
-            rate_steps(self.consts, self._qpos[7:25].tolist(), q_cmd, dq, rate, self.dt)
-            self._ctrl[:] = q_cmd + dq  # position servos: q_cmd; velocity servos: dq
 
 
 def fit_plane(xy: list[tuple[float, float]], z: list[float]) -> list[float] | None:
-    """Least-squares plane z = a + b x + c y through the points, [a, b, c]; None if they do not span one.
-
-    The 3x3 normal equations solved by Cramer's rule in plain floats (a handful of feet, every few
-    control steps: numpy's lstsq would cost more than the whole control step).
-    """
-    n = len(xy)
-    if n < 3:
-        return None
-    sx = sy = sxx = sxy = syy = sz = sxz = syz = 0.0
-    for (x, y), h in zip(xy, z, strict=True):
-        sx += x
-        sy += y
-        sxx += x * x
-        sxy += x * y
-        syy += y * y
-        sz += h
-        sxz += x * h
-        syz += y * h
-    # Centred sums: the plane's slope from the covariance of the points, its height at their centroid.
-    mx, my, mz = sx / n, sy / n, sz / n
-    cxx, cxy, cyy = sxx - sx * mx, sxy - sx * my, syy - sy * my
-    cxz, cyz = sxz - sx * mz, syz - sy * mz
-    det = cxx * cyy - cxy * cxy
-    if det <= 1e-12 * (cxx + cyy) ** 2 or det <= 0.0:  # collinear feet: no plane through them
-        return None
-    b = (cyy * cxz - cxy * cyz) / det
-    c = (cxx * cyz - cxy * cxz) / det
-    return [mz - b * mx - c * my, b, c]
-
-
-# Swing state machine of GroundController, per leg.
-STANCE, SWING, EARLY, SEEKING = 0, 1, 2, 3
+    """Least-squares plane z = a + b x + c y through the points, [a, b, c]; None if they do not span one."""
+    x, y = np.array(xy, dtype=float).reshape(-1, 2).T
+    out = np.zeros(3)
+    ok = kernels().plane_fit(np.ascontiguousarray(x), np.ascontiguousarray(y), np.asarray(z, dtype=float), len(z), out)
+    return out.tolist() if ok else None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -314,193 +278,97 @@ class GroundController(HexabotController):
       the planner's lift h sin^2(pi s);
     - sensed touchdown: early, the leg is in stance from the touch on (its horizontal target becomes
       ground-fixed, the offset to the plan fading out over its next swing); late, the target keeps
-      descending at SEEK_SPEED until it touches or leaves the workspace.
+      descending at half the swing's peak vertical speed until it touches or leaves the workspace.
+    The per-step part (this state machine, the plane, the servo step) is kernels.ground_step; the
+    legs' state lives in the arrays `legs` and `flags` (layout in the kernels module).
     """
 
     def __init__(self, model, data, layout, planner, gains, settings, q_start, ground: GroundSettings) -> None:
         super().__init__(model, data, layout, planner, gains, settings, q_start)
+        K = self.kernels
         self.ground = ground
-        self.touch_adr = [int(model.sensor_adr[model.sensor(f"{leg}_touch").id]) for leg in hx.LEGS]
+        touch_adr = [int(model.sensor_adr[model.sensor(f"{leg}_touch").id]) for leg in hx.LEGS]
         feet = hx.feet_body(layout, np.asarray(q_start).reshape(6, 3))  # (6, 3)
-        self.z = [float(v) for v in feet[:, 2]]  # stance height of each foot target (body frame) [m]
-        self.mode = [STANCE] * 6
-        self.grounded = [True] * 6  # in stance on something (False: no ground was found)
-        self.offset = [[0.0, 0.0] for _ in range(6)]  # horizontal target offset (hip frame) [m]
-        self.offset_lift = [[0.0, 0.0] for _ in range(6)]
-        self.z_lift = list(self.z)
-        self.t_lift = [0.0] * 6
+        neutral = np.asarray(planner.neutral, dtype=float)
+        # The legs' state (kernels module docstring): every foot in stance where it stands now.
+        self.legs = np.zeros((6, K.NLEG))
+        self.legs[:, K.Z] = self.legs[:, K.Z_LIFT] = feet[:, 2]
+        self.legs[:, K.LANDING : K.LANDING + 2] = self.legs[:, K.NEXT_LANDING : K.NEXT_LANDING + 2] = neutral[:, :2]
+        self.flags = np.zeros((6, 3), dtype=np.int64)
+        self.flags[:, K.MODE] = K.STANCE
+        self.flags[:, K.WAS_STANCE] = self.flags[:, K.GROUNDED] = 1
+        self.plane = np.array([-ground.stand_height, 0.0, 0.0])  # stance plane z = a + b x + c y (body frame)
+        self.counts = np.zeros(3, dtype=np.int64)
+        self.cmd = np.zeros(3)  # the chunk's command (vx, vy, yaw rate), heading correction included
+        self.geo = np.zeros((6, 6))
+        self.geo[:, K.COS], self.geo[:, K.SIN] = np.cos(layout.yaws), np.sin(layout.yaws)
+        self.geo[:, K.HIP_X : K.HIP_Y + 1] = self.hips[:, :2]
+        self.geo[:, K.NEUTRAL_Z] = neutral[:, 2]
+        self.geo[:, K.TOUCH_ADR] = touch_adr
+        self.par = np.zeros(K.NPAR)
+        self.par[[K.SENSED, K.LEVEL]] = ground.sensed, ground.level
+        self.par[K.STAND_HEIGHT] = ground.stand_height
+        self.par[[K.DEPTH_MIN, K.DEPTH_MAX]] = ground.depth_range
+        self.par[[K.ATTITUDE_GAIN, K.HEIGHT_GAIN]] = ground.attitude_gain, ground.height_gain
+        self.par[[K.TOUCH_THRESHOLD, K.UPDATE_EVERY]] = ground.touch_threshold, ground.update_every
+        self.par[K.SWING_TIME] = planner.swing_time
+        self.par[K.SEEK_SPEED] = math.pi * planner.step_height / (2 * planner.swing_time)  # [m/s] half the swing's peak
+        self.par[[K.DT, K.SETTLE_TIME, K.RAMP_TIME]] = self.dt, settings.settle_time, settings.ramp_time
+        self.par[K.QUAT_ADR] = self.quat_adr
         self.events: list[Touchdown] = []
-        self.clipped_updates = 0
-        self.updates = 0
-        self._cos = [math.cos(y) for y in layout.yaws]
-        self._sin = [math.sin(y) for y in layout.yaws]
-        self._hips_xy = [(float(h[0]), float(h[1])) for h in self.hips]
-        self._neutral = [(float(p[0]), float(p[1])) for p in planner.neutral]
-        self._neutral_z = [float(p[2]) for p in planner.neutral]
-        self._landing = list(self._neutral)
-        self._plane = [-ground.stand_height, 0.0, 0.0]  # stance plane z = a + b x + c y (body frame)
-        self._was_stance = [True] * 6
-        self._row_prev: list[float] | None = None
-        self._count = 0
-        self._cmd = Command()
-        swing_time = planner.swing_time
-        self.seek_speed = math.pi * planner.step_height / (2 * swing_time)  # [m/s] half the swing's peak
+        self._events = np.zeros((6, 3))  # swings that ended in one step (kernels.targets)
+        self._row_prev = np.zeros(18)  # the targets at the current time (hip frames)
+        self._started = False
+
+    @property
+    def updates(self) -> int:
+        """Stance-plane updates so far."""
+        K = self.kernels
+        return int(self.counts[K.UPDATES])
+
+    @property
+    def clipped_updates(self) -> int:
+        """Stance-plane updates whose heights were clipped to the legs' workspace."""
+        K = self.kernels
+        return int(self.counts[K.CLIPPED])
 
     def _publish(self, rows: np.ndarray, stance: np.ndarray) -> None:
-        """Keeps the rows and stance flags themselves: the heights are set step by step (`_targets`)."""
-        self._rows: list[list[float]] = rows.tolist()
-        self._stance: list[list[bool]] = stance.tolist()
+        """Keeps the rows and stance flags themselves (the heights are set step by step) and the next landings."""
+        K = self.kernels
+        self._rows = np.ascontiguousarray(rows)
+        self._stance = np.ascontiguousarray(stance)
+        for i, landing in enumerate(self.planner.swing_targets):
+            if landing is not None:
+                self.legs[i, K.NEXT_LANDING : K.NEXT_LANDING + 2] = landing[:2]
 
     def _rolling_offsets(self, hip: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
         """The rolling offsets of the feet at the heights they stand at now (not the planned flat-ground height)."""
+        K = self.kernels
         shifted = hip.copy()
-        shifted[..., 2] += np.array(self.z) - np.array(self._neutral_z)
+        shifted[..., 2] += self.legs[:, K.Z] - self.geo[:, K.NEUTRAL_Z]
         return super()._rolling_offsets(shifted, stance, swing_s)
 
-    def _body_xy(self, row: list[float], i: int) -> tuple[float, float]:
-        """Body-frame horizontal position of leg i's target in a hip-frame row."""
-        c, s = self._cos[i], self._sin[i]
-        x, y = row[3 * i], row[3 * i + 1]
-        return c * x - s * y + self._hips_xy[i][0], s * x + c * y + self._hips_xy[i][1]
-
-    def _update_plane(self, row: list[float]) -> None:
-        """Refits the stance plane and moves every grounded stance target by the levelling/height correction."""
-        g = self.ground
-        legs = [i for i in range(6) if self.mode[i] in (STANCE, EARLY) and self.grounded[i]]
-        xy = [self._body_xy(row, i) for i in legs]
-        plane = fit_plane(xy, [self.z[i] for i in legs]) or list(self._plane)
-        step = g.update_every * self.dt
-        da = -g.height_gain * (plane[0] + g.stand_height) * step
-        if g.level:
-            w, x, y, z = (float(v) for v in self._sensordata[self.quat_adr : self.quat_adr + 4])
-            roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
-            pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
-            db, dc = -g.attitude_gain * math.tan(pitch) * step, g.attitude_gain * math.tan(roll) * step
-        else:
-            db, dc = -g.attitude_gain * plane[1] * step, -g.attitude_gain * plane[2] * step
-        lo, hi = -g.depth_range[1], -g.depth_range[0]
-        clipped = False
-        for i, (x, y) in zip(legs, xy, strict=True):
-            z = self.z[i] + da + db * x + dc * y
-            if not lo <= z <= hi:
-                z, clipped = min(hi, max(lo, z)), True
-            self.z[i] = z
-        self.updates += 1
-        self.clipped_updates += clipped
-        self._plane = [plane[0] + da, plane[1] + db, plane[2] + dc]
-
-    def _targets(self, row: list[float], stance: list[bool], t: float, row_prev: list[float]) -> list[float]:
-        """The planner's hip-frame row at time t with the heights and offsets of uneven ground."""
-        g = self.ground
-        out = list(row)
-        sensed = g.sensed
-        modes, was_stance, heights, offsets = self.mode, self._was_stance, self.z, self.offset
-        t_lift, z_lifts, offset_lift, landings = self.t_lift, self.z_lift, self.offset_lift, self._landing
-        swing_time = self.planner.swing_time
-        for i in range(6):
-            planned = stance[i]
-            mode = modes[i]
-            was = was_stance[i]
-            was_stance[i] = planned
-            if mode == STANCE and planned:  # most legs, most steps: a stance goes on unchanged
-                offset, j = offsets[i], 3 * i
-                out[j] += offset[0]
-                out[j + 1] += offset[1]
-                out[j + 2] = heights[i]
-                continue
-            if mode in (STANCE, SEEKING) and was and not planned:  # planned lift-off
-                if mode == SEEKING:
-                    self.events.append(Touchdown(i, self.t_lift[i] + self.planner.swing_time, math.nan))
-                self.mode[i] = mode = SWING
-                self.z_lift[i] = self.z[i]
-                self.offset_lift[i] = list(self.offset[i])
-                self.t_lift[i] = t - self.dt
-                self.grounded[i] = True
-                # Where the foot will land (body frame): the planner's touchdown point of this swing.
-                landing = self.planner.swing_targets[i]
-                self._landing[i] = self._neutral[i] if landing is None else (float(landing[0]), float(landing[1]))
-            elif mode == EARLY and planned:
-                self.mode[i] = mode = STANCE
-            if mode == SWING:
-                s = (t - t_lift[i]) / swing_time
-                if s > 1.0:
-                    s = 1.0
-                u = s * s * (3 - 2 * s)
-                x, y = landings[i]
-                a, b, c = self._plane
-                z_lift = z_lifts[i]
-                base = z_lift + (a + b * x + c * y - z_lift) * u  # toward the stance plane under the landing point
-                z = base + row[3 * i + 2] - self._neutral_z[i]  # + the planner's lift
-                offset = offsets[i]
-                if s < 0.5:
-                    fade = 1.0 - 2.0 * s
-                    fade = fade * fade * (3 - 2 * fade)
-                    offset[0] = offset_lift[i][0] * fade
-                    offset[1] = offset_lift[i][1] * fade
-                else:
-                    offset[0] = offset[1] = 0.0
-                if sensed and s >= 0.5 and self._sensordata[self.touch_adr[i]] > g.touch_threshold:
-                    self.events.append(Touchdown(i, self.t_lift[i] + swing_time, t))
-                    self.z[i] = z
-                    self.mode[i] = mode = EARLY if not planned else STANCE
-                    if planned:  # touched right at the planned touchdown
-                        out[3 * i + 2] = z
-                        out[3 * i] += self.offset[i][0]
-                        out[3 * i + 1] += self.offset[i][1]
-                        continue
-                elif planned:  # the planned touchdown came without a touch
-                    self.z[i] = base
-                    if sensed:
-                        self.mode[i] = mode = SEEKING
-                    else:
-                        self.mode[i] = mode = STANCE
-                        self.events.append(Touchdown(i, t, t))
-                else:
-                    j = 3 * i
-                    out[j] += offset[0]
-                    out[j + 1] += offset[1]
-                    out[j + 2] = z
-                    continue
-            if mode == EARLY:
-                # Ground-fixed from the touch on: the target moves at the stance velocity, not along the swing.
-                cmd = self._cmd.scaled(self._factor(t))  # the command in force (ramp included)
-                bx, by = self._body_xy(row_prev, i)
-                bx += self.offset[i][0] * self._cos[i] - self.offset[i][1] * self._sin[i]
-                by += self.offset[i][0] * self._sin[i] + self.offset[i][1] * self._cos[i]
-                vx, vy = -cmd.vx + cmd.yaw_rate * by, -cmd.vy - cmd.yaw_rate * bx
-                c, s_ = self._cos[i], self._sin[i]
-                hx_, hy_ = c * vx + s_ * vy, -s_ * vx + c * vy  # body -> hip frame
-                self.offset[i][0] += hx_ * self.dt - (row[3 * i] - row_prev[3 * i])
-                self.offset[i][1] += hy_ * self.dt - (row[3 * i + 1] - row_prev[3 * i + 1])
-            elif mode == SEEKING:
-                if self._sensordata[self.touch_adr[i]] > g.touch_threshold:
-                    self.events.append(Touchdown(i, self.t_lift[i] + self.planner.swing_time, t))
-                    self.mode[i] = mode = STANCE
-                elif self.z[i] - self.seek_speed * self.dt < -g.depth_range[1]:
-                    self.events.append(Touchdown(i, self.t_lift[i] + self.planner.swing_time, math.nan))
-                    self.mode[i] = mode = STANCE
-                    self.grounded[i] = False
-                else:
-                    self.z[i] -= self.seek_speed * self.dt
-            out[3 * i] += self.offset[i][0]
-            out[3 * i + 1] += self.offset[i][1]
-            out[3 * i + 2] = self.z[i]
-        return out
+    def _record(self, n: int) -> None:
+        """Keeps the n swings that ended in the last kernel call."""
+        self.events += [Touchdown(int(leg), float(planned), float(t)) for leg, planned, t in self._events[:n]]
 
     def __call__(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
         """Sets data.ctrl for the step from data.time to data.time + dt."""
+        K = self.kernels
         k = self._k
         if k >= self._chunk:
             self._replan(data.time)
             k = 0
-            self._cmd = Command(*self.commands[-1][1:])
-        if self._row_prev is None:
-            self._row_prev = self._targets(self._rows[k], self._stance[k], data.time, self._rows[k])
-        row0 = self._row_prev
-        if self._count % self.ground.update_every == 0:
-            self._update_plane(row0)
-        self._count += 1
-        row1 = self._targets(self._rows[k + 1], self._stance[k + 1], data.time + self.dt, self._rows[k])
-        self._servo(feed(self.consts[3], row0, row1, self.dt))
-        self._row_prev = row1
+            self.cmd[:] = self.commands[-1][1:]
+        rows, stance, t = self._rows, self._stance, data.time
+        if not self._started:  # the targets at the start
+            n = K.targets(self.par, self.geo, self.legs, self.flags, self.plane, self.cmd, rows[k], stance[k], t,
+                          rows[k], self._sensordata, self._row_prev, self._events)  # fmt: skip
+            self._record(n)
+            self._started = True
+        n = K.ground_step(self.par, self.geo, self.consts, self.legs, self.flags, self.plane, self.counts, self.cmd,
+                          rows, stance, k, t, self._row_prev, self.q_cmd, self.dq, self.trims, self._qpos,
+                          self._sensordata, self._ctrl, self._events)  # fmt: skip
+        if n:
+            self._record(n)
         self._k = k + 1

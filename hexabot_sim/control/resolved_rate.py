@@ -1,7 +1,9 @@
 """Resolved-rate control of the leg's foot: dq = J^-1 (v_des + K (x_des - x)), damped near singularities.
 
 Pure Python floats in the loop (no numpy): at 1 kHz a 3x3 problem is dominated by call overhead,
-and this keeps the controller cheaper than the MuJoCo step it drives (scripts/bench.py).
+and this keeps the controller cheaper than the MuJoCo step it drives (scripts/bench.py). The walking
+hexabot runs `rate_steps` compiled by numba (control/kernels.py): its source must stay in the
+subset numba compiles (floats, indexing, math; no helper that is not compiled too).
 """
 
 from __future__ import annotations
@@ -93,13 +95,6 @@ def damped_solve(jac: Mat3, u: Vec3, lam: float) -> Vec3:
     )
 
 
-def _brake(dq: float, room_below: float, room_above: float, max_acceleration: float) -> float:
-    """Caps a joint speed so the joint can still stop at max_acceleration before either range limit."""
-    down = math.sqrt(2.0 * max_acceleration * max(room_below, 0.0))
-    up = math.sqrt(2.0 * max_acceleration * max(room_above, 0.0))
-    return min(max(dq, -down), up)
-
-
 class ResolvedRateController:
     """Integrates dq = J^+ (v_des + K (x_des - x)) into a joint command q_cmd.
 
@@ -186,8 +181,8 @@ def rate_steps(
     Near a singularity (sigma_min < threshold) damped least squares J^T (J J^T + lambda^2 I)^-1 u
     decouples the same way. Then: the joint speed limit on dq as a whole (the foot keeps its
     direction), braking before a range limit, the acceleration limit on the change of dq, and the
-    integration inside the ranges. Pure Python floats: for 1 to 6 legs at 0.5-1 kHz this is cheaper
-    than numpy's per-call overhead (scripts/bench.py).
+    integration inside the ranges. Pure Python floats for one leg (leg-step), cheaper than numpy's
+    per-call overhead; compiled for the hexabot's six (kernels.rate_steps, on arrays).
 
     Args:
         k: step_constants of the legs (the same for all).
@@ -240,15 +235,16 @@ def rate_steps(
         if not (-max_speed <= d1 <= max_speed and -max_speed <= d2 <= max_speed and -max_speed <= d3 <= max_speed):
             scale = max_speed / max(abs(d1), abs(d2), abs(d3))
             d1, d2, d3 = d1 * scale, d2 * scale, d3 * scale
-        # Joint ranges: never faster toward a limit than braking at max_acc allows.
+        # Joint ranges: never faster toward a limit than braking at max_acc can stop, sqrt(2 a room).
         c1, c2, c3 = cmd[j], cmd[j + 1], cmd[j + 2]
         if not (lz1 <= c1 <= hz1 and lz2 <= c2 <= hz2 and lz3 <= c3 <= hz3):
+            brake = 2.0 * max_acc
             if c1 - lo1 < zone or hi1 - c1 < zone:
-                d1 = _brake(d1, c1 - lo1, hi1 - c1, max_acc)
+                d1 = min(max(d1, -sqrt(brake * max(c1 - lo1, 0.0))), sqrt(brake * max(hi1 - c1, 0.0)))
             if c2 - lo2 < zone or hi2 - c2 < zone:
-                d2 = _brake(d2, c2 - lo2, hi2 - c2, max_acc)
+                d2 = min(max(d2, -sqrt(brake * max(c2 - lo2, 0.0))), sqrt(brake * max(hi2 - c2, 0.0)))
             if c3 - lo3 < zone or hi3 - c3 < zone:
-                d3 = _brake(d3, c3 - lo3, hi3 - c3, max_acc)
+                d3 = min(max(d3, -sqrt(brake * max(c3 - lo3, 0.0))), sqrt(brake * max(hi3 - c3, 0.0)))
         # Joint acceleration limit on the change of the command, as a whole.
         p1, p2, p3 = dq[j], dq[j + 1], dq[j + 2]
         e1, e2, e3 = d1 - p1, d2 - p2, d3 - p3

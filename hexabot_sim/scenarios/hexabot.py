@@ -28,11 +28,12 @@ LOADED_FRACTION: float = 0.05  # a foot counts as loaded above this fraction of 
 TORQUE_LIMIT: float = 1.5  # [N m] the joints' actuatorfrcrange (models/hexabot.xml)
 CSV_COLUMNS: int = 37  # columns of timeseries.csv
 # Cost of a run for params.check_run_cost, measured on the 2-core development machine (10 s vs 60 s
-# walks): seconds per physics step (controller + mj_step), seconds per recorded row (contact replay,
-# derived columns; the CSV is counted apart), peak bytes per recorded row.
-RUN_COST: tuple[float, float, float] = (45e-6, 40e-6, 2000.0)
-# Seconds per physics step with terrain or the ground-finding controller (rough ground: 61-73 us in bench.py).
-TERRAIN_STEP_SECONDS: float = 80e-6
+# walks): seconds per physics step (controller + mj_step: 25 us in bench.py, with a margin for a loaded
+# machine), seconds per recorded row (contact replay, derived columns; the CSV is counted apart), peak
+# bytes per recorded row.
+RUN_COST: tuple[float, float, float] = (30e-6, 40e-6, 2000.0)
+# Seconds per physics step with terrain or the ground-finding controller (rough ground: 42-44 us in bench.py).
+TERRAIN_STEP_SECONDS: float = 50e-6
 FALL_TILT_DEG: float = 45.0  # body tilt beyond which the robot has fallen over
 # NoSlip iterations on uneven ground. MuJoCo's soft friction lets a foot under a steady tangential
 # load creep: the standing robot slid down a 10 deg slope at 0.9-1.8 mm/s with the defaults. Two

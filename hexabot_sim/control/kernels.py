@@ -1,0 +1,289 @@
+"""Compiled per-step work of the walking controllers (numba): the servo step and the ground-finding legs.
+
+A walking controller runs before every 2 ms physics step. In pure Python its per-step work (six
+resolved-rate leg steps, the touchdown state machine, the stance plane) cost as much as MuJoCo's
+step itself; compiled it costs a few microseconds (scripts/bench.py). Everything that happens once
+per chunk (the gait plan, rolling offsets, heading hold) stays in Python, in control/hexabot.py,
+which owns the state arrays these kernels update in place.
+
+The resolved-rate step is `resolved_rate.rate_steps` itself, compiled here: the single leg of
+leg-step runs the same source as plain Python (cheaper there than converting its lists to arrays).
+The kernels are cached on disk (numba's cache beside the source, or its user-wide cache when the
+package directory is read-only), so only the first run on a machine compiles them (a few seconds).
+NUMBA_DISABLE_JIT=1 runs them as plain Python, for debugging.
+
+State of the ground-finding legs (GroundController), one row per leg:
+- `legs` float (6, NLEG): stance height z [m] (body/hip frame z of the foot target), its value at
+  lift-off, the lift-off time [s], the horizontal target offset (x, y) [m] in the hip frame, the
+  offset at lift-off, the landing point (x, y) of the swing under way in the body frame, and the
+  planner's landing point of the next swing (set with each chunk's plan);
+- `flags` int (6, 3): swing mode (STANCE, SWING, EARLY, SEEKING), planned stance at the last step, grounded.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from hexabot_sim.control import resolved_rate
+
+
+def jit(function):
+    """numba.njit, cached on disk; compiled in every process where numba finds no writable cache directory."""
+    try:
+        return numba.njit(cache=True, nogil=True)(function)
+    except RuntimeError:  # numba's "cannot cache function ...: no locator available"
+        return numba.njit(nogil=True)(function)
+
+
+rate_steps = jit(resolved_rate.rate_steps)
+
+# Swing state machine, per leg.
+STANCE, SWING, EARLY, SEEKING = 0, 1, 2, 3
+# Columns of `legs`.
+Z, Z_LIFT, T_LIFT, OFFSET, OFFSET_LIFT, LANDING, NEXT_LANDING = 0, 1, 2, 3, 5, 7, 9
+NLEG = 11
+# Columns of `flags`.
+MODE, WAS_STANCE, GROUNDED = 0, 1, 2
+# Per-leg constants `geo` (6, 6): cos and sin of the hip yaw, hip position (x, y) in the body frame, the
+# neutral foot height [m], the touch sensor's address in sensordata.
+COS, SIN, HIP_X, HIP_Y, NEUTRAL_Z, TOUCH_ADR = 0, 1, 2, 3, 4, 5
+# Scalars `par`: GroundSettings, the gait's timing and the command's ramp.
+(SENSED, LEVEL, STAND_HEIGHT, DEPTH_MIN, DEPTH_MAX, ATTITUDE_GAIN, HEIGHT_GAIN, TOUCH_THRESHOLD, UPDATE_EVERY,
+ SWING_TIME, SEEK_SPEED, DT, SETTLE_TIME, RAMP_TIME, QUAT_ADR) = range(15)  # fmt: skip
+NPAR = 15
+# Counters `counts`: control steps so far, plane updates, updates whose heights were clipped to the workspace.
+STEPS, UPDATES, CLIPPED = 0, 1, 2
+
+
+@jit
+def servo(k, qpos, trims, q_cmd, dq, feed, dt, ctrl):
+    """One resolved-rate step of the 18 joints toward `feed` (rate_steps), written to the 36 servos.
+
+    The encoders read qpos[7:25] - trims; the position servos get q_cmd + trims, the velocity servos dq.
+    """
+    q = qpos[7:25] - trims
+    rate_steps(k, q, q_cmd, dq, feed, dt)
+    for i in range(18):
+        ctrl[i] = q_cmd[i] + trims[i]
+        ctrl[18 + i] = dq[i]
+
+
+@jit
+def plane_fit(x, y, z, n, out):
+    """Least-squares plane z = a + b x + c y through the first n points into out[:3]; False if they span none.
+
+    The 3x3 normal equations, centred, solved by Cramer's rule.
+    """
+    if n < 3:
+        return False
+    sx = sy = sxx = sxy = syy = sz = sxz = syz = 0.0
+    for i in range(n):
+        xi, yi, h = x[i], y[i], z[i]
+        sx += xi
+        sy += yi
+        sxx += xi * xi
+        sxy += xi * yi
+        syy += yi * yi
+        sz += h
+        sxz += xi * h
+        syz += yi * h
+    # Centred sums: the plane's slope from the covariance of the points, its height at their centroid.
+    mx, my, mz = sx / n, sy / n, sz / n
+    cxx, cxy, cyy = sxx - sx * mx, sxy - sx * my, syy - sy * my
+    cxz, cyz = sxz - sx * mz, syz - sy * mz
+    det = cxx * cyy - cxy * cxy
+    if det <= 1e-12 * (cxx + cyy) ** 2 or det <= 0.0:  # collinear points: no plane through them
+        return False
+    b = (cyy * cxz - cxy * cyz) / det
+    c = (cxx * cyz - cxy * cxz) / det
+    out[0], out[1], out[2] = mz - b * mx - c * my, b, c
+    return True
+
+
+@jit
+def update_plane(par, geo, legs, flags, plane, counts, row, sensordata):
+    """Refits the stance plane and moves every grounded stance target by the levelling/height correction.
+
+    The plane z = a + b x + c y (body frame) through the stance feet's targets; a is driven to
+    -stand_height, (b, c) to zero: from the IMU's roll and pitch (level) or the plane's own slope.
+    Heights are clipped to the legs' workspace depths.
+    """
+    xs, ys, zs = np.empty(6), np.empty(6), np.empty(6)
+    idx = np.empty(6, dtype=np.int64)
+    n = 0
+    for i in range(6):
+        mode = flags[i, MODE]
+        if (mode == STANCE or mode == EARLY) and flags[i, GROUNDED]:
+            c, s = geo[i, COS], geo[i, SIN]
+            x, y = row[3 * i], row[3 * i + 1]
+            xs[n] = c * x - s * y + geo[i, HIP_X]
+            ys[n] = s * x + c * y + geo[i, HIP_Y]
+            zs[n] = legs[i, Z]
+            idx[n] = i
+            n += 1
+    fit = plane.copy()
+    plane_fit(xs, ys, zs, n, fit)  # keeps the last plane where the feet span none
+    step = par[UPDATE_EVERY] * par[DT]
+    gain = par[ATTITUDE_GAIN]
+    da = -par[HEIGHT_GAIN] * (fit[0] + par[STAND_HEIGHT]) * step
+    if par[LEVEL]:
+        a = int(par[QUAT_ADR])
+        w, x, y, z = sensordata[a], sensordata[a + 1], sensordata[a + 2], sensordata[a + 3]
+        roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+        pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
+        db, dc = -gain * math.tan(pitch) * step, gain * math.tan(roll) * step
+    else:
+        db, dc = -gain * fit[1] * step, -gain * fit[2] * step
+    lo, hi = -par[DEPTH_MAX], -par[DEPTH_MIN]
+    clipped = False
+    for m in range(n):
+        i = idx[m]
+        z = legs[i, Z] + da + db * xs[m] + dc * ys[m]
+        if not lo <= z <= hi:
+            z, clipped = min(hi, max(lo, z)), True
+        legs[i, Z] = z
+    counts[UPDATES] += 1
+    counts[CLIPPED] += clipped
+    plane[0], plane[1], plane[2] = fit[0] + da, fit[1] + db, fit[2] + dc
+
+
+@jit
+def _event(events, n, leg, planned, touched):
+    events[n, 0], events[n, 1], events[n, 2] = leg, planned, touched
+    return n + 1
+
+
+@jit
+def targets(par, geo, legs, flags, plane, cmd, row, stance, t, row_prev, sensordata, out, events):
+    """The planner's hip-frame row (18,) at time t with the heights and offsets of uneven ground, into out.
+
+    Per leg: a planned stance goes on at its height z; a planned lift-off starts a swing from the
+    lift-off height toward the stance plane under the landing point (smoothstep) plus the planner's
+    lift, the lift-off offset fading out over the first half; a touch in the second half of a swing
+    (sensed) ends it early, the target then ground-fixed at the command's stance velocity; a swing
+    that reaches its planned touchdown untouched keeps descending (SEEKING) until it touches or
+    leaves the workspace (no ground). Swings that ended are written to events as (leg, planned
+    touchdown time, touch time or NaN); returns how many.
+    """
+    sensed = par[SENSED] != 0.0
+    swing_time, dt, threshold = par[SWING_TIME], par[DT], par[TOUCH_THRESHOLD]
+    n_events = 0
+    for i in range(6):
+        j = 3 * i
+        planned = stance[i]
+        mode = flags[i, MODE]
+        was = flags[i, WAS_STANCE] != 0
+        flags[i, WAS_STANCE] = planned
+        out[j], out[j + 1], out[j + 2] = row[j], row[j + 1], row[j + 2]
+        touching = sensordata[int(geo[i, TOUCH_ADR])] > threshold
+        if mode == STANCE and planned:  # most legs, most steps: a stance goes on unchanged
+            out[j] += legs[i, OFFSET]
+            out[j + 1] += legs[i, OFFSET + 1]
+            out[j + 2] = legs[i, Z]
+            continue
+        if (mode == STANCE or mode == SEEKING) and was and not planned:  # planned lift-off
+            if mode == SEEKING:
+                n_events = _event(events, n_events, i, legs[i, T_LIFT] + swing_time, np.nan)
+            mode = SWING
+            legs[i, Z_LIFT] = legs[i, Z]
+            legs[i, OFFSET_LIFT], legs[i, OFFSET_LIFT + 1] = legs[i, OFFSET], legs[i, OFFSET + 1]
+            legs[i, T_LIFT] = t - dt
+            legs[i, LANDING], legs[i, LANDING + 1] = legs[i, NEXT_LANDING], legs[i, NEXT_LANDING + 1]
+            flags[i, GROUNDED] = 1
+        elif mode == EARLY and planned:
+            mode = STANCE
+        if mode == SWING:
+            s = min((t - legs[i, T_LIFT]) / swing_time, 1.0)
+            u = s * s * (3 - 2 * s)
+            z_lift = legs[i, Z_LIFT]
+            under = plane[0] + plane[1] * legs[i, LANDING] + plane[2] * legs[i, LANDING + 1]
+            base = z_lift + (under - z_lift) * u  # toward the stance plane under the landing point
+            z = base + row[j + 2] - geo[i, NEUTRAL_Z]  # + the planner's lift
+            if s < 0.5:
+                fade = 1.0 - 2.0 * s
+                fade = fade * fade * (3 - 2 * fade)
+                legs[i, OFFSET] = legs[i, OFFSET_LIFT] * fade
+                legs[i, OFFSET + 1] = legs[i, OFFSET_LIFT + 1] * fade
+            else:
+                legs[i, OFFSET] = legs[i, OFFSET + 1] = 0.0
+            if sensed and s >= 0.5 and touching:
+                n_events = _event(events, n_events, i, legs[i, T_LIFT] + swing_time, t)
+                legs[i, Z] = z
+                mode = STANCE if planned else EARLY
+            elif planned:  # the planned touchdown came without a touch
+                legs[i, Z] = base
+                if sensed:
+                    mode = SEEKING
+                else:
+                    mode = STANCE
+                    n_events = _event(events, n_events, i, t, t)
+            else:  # still swinging
+                out[j] += legs[i, OFFSET]
+                out[j + 1] += legs[i, OFFSET + 1]
+                out[j + 2] = z
+                flags[i, MODE] = mode
+                continue
+        if mode == EARLY:
+            # Ground-fixed from the touch on: the target moves at the stance velocity, not along the swing.
+            f = ramp(par, t)
+            c, s_ = geo[i, COS], geo[i, SIN]
+            ox, oy = legs[i, OFFSET], legs[i, OFFSET + 1]
+            px, py = row_prev[j] + ox, row_prev[j + 1] + oy
+            bx, by = c * px - s_ * py + geo[i, HIP_X], s_ * px + c * py + geo[i, HIP_Y]  # body frame
+            vx, vy = f * (-cmd[0] + cmd[2] * by), f * (-cmd[1] - cmd[2] * bx)
+            hx, hy = c * vx + s_ * vy, -s_ * vx + c * vy  # body -> hip frame
+            legs[i, OFFSET] = ox + hx * dt - (row[j] - row_prev[j])
+            legs[i, OFFSET + 1] = oy + hy * dt - (row[j + 1] - row_prev[j + 1])
+        elif mode == SEEKING:
+            if touching:
+                n_events = _event(events, n_events, i, legs[i, T_LIFT] + swing_time, t)
+                mode = STANCE
+            elif legs[i, Z] - par[SEEK_SPEED] * dt < -par[DEPTH_MAX]:
+                n_events = _event(events, n_events, i, legs[i, T_LIFT] + swing_time, np.nan)
+                mode = STANCE
+                flags[i, GROUNDED] = 0
+            else:
+                legs[i, Z] -= par[SEEK_SPEED] * dt
+        flags[i, MODE] = mode
+        out[j] += legs[i, OFFSET]
+        out[j + 1] += legs[i, OFFSET + 1]
+        out[j + 2] = legs[i, Z]
+    return n_events
+
+
+@jit
+def ramp(par, t):
+    """Fraction of the command in force at t: 0 while settling, then a linear ramp to 1."""
+    if t <= par[SETTLE_TIME]:
+        return 0.0
+    if par[RAMP_TIME] <= 0:
+        return 1.0
+    return min(1.0, (t - par[SETTLE_TIME]) / par[RAMP_TIME])
+
+
+@jit
+def ground_step(par, geo, k, legs, flags, plane, counts, cmd, rows, stance, r, t, row_prev, q_cmd, dq, trims,
+                qpos, sensordata, ctrl, events):  # fmt: skip
+    """One control step of GroundController from t to t + dt (row r of the chunk's rows is time t).
+
+    Updates the stance plane every UPDATE_EVERY steps, sets the targets at t + dt, and advances the
+    servos by one resolved-rate step from row_prev (the targets at t) to them. Returns the number of
+    swings that ended (written to events).
+    """
+    dt = par[DT]
+    if counts[STEPS] % int(par[UPDATE_EVERY]) == 0:
+        update_plane(par, geo, legs, flags, plane, counts, row_prev, sensordata)
+    counts[STEPS] += 1
+    row1 = np.empty(18)
+    n_events = targets(par, geo, legs, flags, plane, cmd, rows[r + 1], stance[r + 1], t + dt, rows[r], sensordata,
+                       row1, events)  # fmt: skip
+    feed = np.empty(18)
+    gain = k[3]
+    for i in range(18):
+        feed[i] = (row1[i] - row_prev[i]) / dt + gain * row_prev[i]
+        row_prev[i] = row1[i]
+    servo(k, qpos, trims, q_cmd, dq, feed, dt, ctrl)
+    return n_events

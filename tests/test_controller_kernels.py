@@ -1,0 +1,73 @@
+"""The walking controllers' compiled kernels (hexabot_sim/control/kernels.py).
+
+The walking hexabot runs `resolved_rate.rate_steps` compiled by numba, the single leg of leg-step the
+same source as plain Python: both must give the same joint commands, including the damped singular
+neighbourhood, the speed and acceleration limits and braking before the joint ranges.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from hexabot_sim.control import kernels
+from hexabot_sim.control.resolved_rate import ResolvedRateGains, step_constants
+from hexabot_sim.kinematics import hexabot as hx
+
+
+@pytest.mark.parametrize("acceleration", [200.0, math.inf])
+def test_compiled_rate_step_equals_the_python_one(acceleration):
+    rng = np.random.default_rng(7)
+    lower, upper = hx.JOINT_LOWER, hx.JOINT_UPPER
+    k = step_constants(hx.DEFAULT_LAYOUT.geometry, ResolvedRateGains(50.0, 0.01, 0.01, 5.0, acceleration), lower, upper)
+    n = 600  # legs, 3 joints each
+    q = rng.uniform(np.tile(lower, n), np.tile(upper, n))
+    q[2:300:3] = rng.uniform(0.0, 1e-3, 100)  # near the stretched-leg singularity (q3 = 0)
+    q[0:150:3] = np.tile(lower, 50)[0::3] + rng.uniform(0, 0.01, 50)  # coxa near its lower limit
+    cmd = q + rng.normal(0, 0.01, q.size)
+    cmd = np.clip(cmd, np.tile(lower, n), np.tile(upper, n))
+    dq = rng.uniform(-5.0, 5.0, q.size)  # the previous step's rates, inside the speed limit
+    feed = rng.normal(0, 3.0, q.size)  # includes rates far beyond the speed limit
+    previous, start = dq.copy(), cmd.copy()
+    cmd_py, dq_py = cmd.tolist(), dq.tolist()
+    kernels.rate_steps.py_func(k, q.tolist(), cmd_py, dq_py, feed.tolist(), 0.002)
+    kernels.rate_steps(np.array(k), q, cmd, dq, feed, 0.002)
+    np.testing.assert_allclose(cmd, cmd_py, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(dq, dq_py, rtol=0, atol=1e-9)
+    # The limits were exercised, and held.
+    assert np.abs(dq).max() <= 5.0 + 1e-9
+    if math.isinf(acceleration):
+        assert (np.abs(dq).reshape(-1, 3).max(axis=1) > 5.0 - 1e-9).sum() > 10
+    else:
+        # Away from the ranges (beyond the braking zone v^2 / 2a), the command's acceleration is limited.
+        zone = 5.0**2 / (2 * acceleration)
+        lo, hi = np.tile(lower, n) + zone, np.tile(upper, n) - zone
+        free = ((start > lo) & (start < hi) & (cmd > lo) & (cmd < hi)).reshape(-1, 3).all(axis=1)
+        change = np.abs(dq - previous).reshape(-1, 3).max(axis=1)[free]
+        assert change.max() <= acceleration * 0.002 + 1e-9
+        assert (change > acceleration * 0.002 - 1e-9).sum() > 10
+
+
+def test_kernels_work_where_no_cache_directory_is_writable():
+    """A read-only install with no writable user cache: numba cannot cache, the kernels compile per process."""
+    code = (
+        "import numba.core.caching as c\n"
+        "def refuse(self):\n"
+        "    raise PermissionError('read-only')\n"
+        "c._CacheLocator.ensure_cache_path = refuse\n"
+        "import numpy as np\n"
+        "from hexabot_sim.control import kernels\n"
+        "assert type(kernels.plane_fit._cache).__name__ == 'NullCache', kernels.plane_fit._cache\n"
+        "out = np.zeros(3)\n"
+        "x, y, z = np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 1.0]), np.array([1.0, 3.0, 4.0])\n"
+        "ok = kernels.plane_fit(x, y, z, 3, out)\n"
+        "print(ok, out.tolist())\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=os.environ)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["True", "[1.0,", "2.0,", "3.0]"]
