@@ -767,6 +767,8 @@ def _main(argv: list[str]) -> int:
         return e.code if isinstance(e.code, int) else 0
     except (Exception, RecursionError) as e:
         cause = _interruption_in(e)
+        if cause is None and RECEIVED_SIGNALS:  # a library swallowed the stop request and failed after it
+            cause = stop_request(RECEIVED_SIGNALS[-1])
         if cause is not None:  # e.g. Ctrl-C while a C extension was being imported (ImportError from it)
             return _interrupted(cause)
         if _debug_requested(argv):

@@ -1,4 +1,9 @@
-"""Exception types that the CLI turns into exit codes and one-line messages."""
+"""Exception types that the CLI turns into exit codes and one-line messages, and its stop-signal bookkeeping."""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator
 
 
 class HexabotError(Exception):
@@ -33,7 +38,7 @@ class OutputError(HexabotError):
 # before it publishes anything, so a stop request is never lost.
 RECEIVED_SIGNALS: list[int] = []
 # While HOLD[0] > 0 (publishing, cleaning up) the command line's handler only records a signal in
-# PENDING_SIGNALS; the hold raises it when it ends (see output._signals_held).
+# PENDING_SIGNALS; the hold raises it when it ends (see signals_held).
 HOLD: list[int] = [0]
 PENDING_SIGNALS: list[int] = []
 
@@ -43,6 +48,25 @@ def stop_request(signum: int) -> KeyboardInterrupt:
     import signal
 
     return KeyboardInterrupt() if signum == signal.SIGINT else Interrupted(signum)
+
+
+@contextlib.contextmanager
+def signals_held() -> Iterator[None]:
+    """Delays Ctrl-C, SIGTERM and SIGHUP until the block is done, then raises the stop request.
+
+    Works with the command line's handler (hexabot_sim.__main__), which only records a signal while
+    a hold is on: no handler is swapped, and the kernel may hand the signal to any thread. (Outside
+    the command line Python's own Ctrl-C handler is in force and the hold does nothing.)
+    """
+    HOLD[0] += 1
+    try:
+        yield
+    finally:
+        HOLD[0] -= 1
+        if HOLD[0] == 0 and PENDING_SIGNALS:
+            signum = PENDING_SIGNALS[-1]
+            PENDING_SIGNALS.clear()
+            raise stop_request(signum)
 
 
 class Interrupted(KeyboardInterrupt):

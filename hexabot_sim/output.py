@@ -22,12 +22,11 @@ from typing import Any
 import numpy as np
 
 from hexabot_sim.errors import (
-    HOLD,
-    PENDING_SIGNALS,
     RECEIVED_SIGNALS,
     OutputError,
     SimulationError,
     UsageError,
+    signals_held,
     stop_request,
 )
 
@@ -50,24 +49,6 @@ _OLD_PREFIX = ".hexabot-sim-replaced-"
 def default_out(scenario: str, root: Path = Path("runs")) -> Path:
     """The default run folder name, runs/<scenario>-YYYYmmdd-HHMMSS (a -N suffix is added at publish if taken)."""
     return root / f"{scenario}-{_dt.datetime.now().strftime('%Y%m%d-%H%M%S')}"
-
-
-@contextmanager
-def _signals_held() -> Iterator[None]:
-    """Delays Ctrl-C, SIGTERM and SIGHUP until the block is done, then raises the stop request.
-
-    Works with the command line's handler (hexabot_sim.__main__), which only records a signal while
-    a hold is on: no handler is swapped, and the kernel may hand the signal to any thread.
-    """
-    HOLD[0] += 1
-    try:
-        yield
-    finally:
-        HOLD[0] -= 1
-        if HOLD[0] == 0 and PENDING_SIGNALS:
-            signum = PENDING_SIGNALS[-1]
-            PENDING_SIGNALS.clear()
-            raise stop_request(signum)
 
 
 def check_out(out: str | os.PathLike[str], force: bool = False) -> None:
@@ -263,7 +244,7 @@ def run_folder(out: str | os.PathLike[str] | None, scenario: str = "run", force:
     parent_fd = -1
     staging = ""
     try:
-        with _signals_held():
+        with signals_held():
             created = _make_parents(target.parent)
             # The staging folder is created, published and removed through a handle on its parent,
             # so it is found again even if the parent is renamed meanwhile.
@@ -271,7 +252,7 @@ def run_folder(out: str | os.PathLike[str] | None, scenario: str = "run", force:
             staging = _mkdir_unique(parent_fd, f"{STAGING_PREFIX}{os.getpid()}-", STAGING_SUFFIX)
             folder = RunFolder(target.parent / staging)
         yield folder
-        with _signals_held():
+        with signals_held():
             if RECEIVED_SIGNALS:  # a stop request some library swallowed on its way: honour it now
                 raise stop_request(RECEIVED_SIGNALS[-1])
             if os.stat(target.parent).st_ino != os.fstat(parent_fd).st_ino:
@@ -279,7 +260,7 @@ def run_folder(out: str | os.PathLike[str] | None, scenario: str = "run", force:
             folder.final = _publish(parent_fd, staging, target, auto_name, force and not auto_name, before)
     except BaseException as e:
         # Ctrl-C, a signal, a failed simulation or write: remove everything this run made, then say why.
-        with _signals_held():
+        with signals_held():
             if staging and parent_fd >= 0:
                 shutil.rmtree(staging, ignore_errors=True, dir_fd=parent_fd)
             _remove_created(created)

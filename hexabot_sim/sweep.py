@@ -376,7 +376,7 @@ def run_cells(
     Raises:
         WorkerFailed: if a worker could not run a cell at all (it died, or cannot import hexabot_sim).
     """
-    from hexabot_sim.output import _signals_held
+    from hexabot_sim.errors import signals_held
 
     results: list[CellResult | None] = [None] * len(jobs)
     futures: list[concurrent.futures.Future] = []
@@ -402,7 +402,7 @@ def run_cells(
                 progress(done, len(jobs))
         finished = True
     finally:
-        with _signals_held():  # a second Ctrl-C must not leave workers behind
+        with signals_held():  # a second Ctrl-C must not leave workers behind
             if finished:
                 executor.shutdown(wait=True)
             else:

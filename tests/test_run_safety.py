@@ -241,6 +241,27 @@ def test_signals_stop_the_run_and_clean_up(tmp_path, sig):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_ctrl_c_while_the_walking_kernels_compile_stops_the_run_cleanly(tmp_path):
+    """The first hexabot run on a machine compiles the numba kernels (seconds): Ctrl-C then must stop the
+    run in one line, not break numba's compiler ("no compiled object yet", reported as an internal error)."""
+    cache = tmp_path / "numba-cache"  # empty: this run compiles
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "hexabot_sim", "run", "hexabot-rough", "--set", "duration=3", "--out", "out"],
+        cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        env={**os.environ, "NUMBA_CACHE_DIR": str(cache)},
+    )  # fmt: skip
+    deadline = time.monotonic() + 120
+    while not any(cache.rglob("*.nbi")):  # the first kernel is compiled: the others are being compiled now
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode in (130, -signal.SIGINT), err
+    assert err.strip() == "hexabot-sim: interrupted; nothing written"
+    assert not (tmp_path / "out").exists()
+
+
 def test_leg_sweep_stops_promptly_and_leaves_no_worker(tmp_path):
     proc = _start(tmp_path, "run", "leg-sweep", "--set", "workers=2", "--out", "sweep")
     _wait_for_staging(tmp_path, proc)
@@ -511,7 +532,7 @@ def test_signals_are_held_during_publish_even_with_other_threads():
     previous = signal.signal(signal.SIGHUP, _raise_interrupted)
     try:
         with pytest.raises(Interrupted):
-            with output._signals_held():
+            with output.signals_held():
                 os.kill(os.getpid(), signal.SIGHUP)
                 time.sleep(0.05)
                 seen.append("block done")

@@ -28,6 +28,7 @@ import numba
 import numpy as np
 
 from hexabot_sim.control import resolved_rate
+from hexabot_sim.kinematics.leg import LegGeometry
 
 
 def jit(function):
@@ -287,3 +288,32 @@ def ground_step(par, geo, k, legs, flags, plane, counts, cmd, rows, stance, r, t
         row_prev[i] = row1[i]
     servo(k, qpos, trims, q_cmd, dq, feed, dt, ctrl)
     return n_events
+
+
+_WARM = [False]
+
+
+def warm_up() -> None:
+    """Compiles every kernel (or loads it from the cache) for the argument types the controllers pass.
+
+    Once per process, before a walk's first step, so the compiling (a few seconds on a machine's
+    first run) happens under the command line's signal hold: a Ctrl-C that struck inside numba's
+    compiler would leave the kernel unusable ("no compiled object yet") instead of stopping the run.
+    """
+    if _WARM[0]:
+        return
+    par = np.zeros(NPAR)
+    par[UPDATE_EVERY], par[DT], par[SWING_TIME] = 1.0, 0.002, 1.0
+    gains = resolved_rate.ResolvedRateGains(max_joint_acceleration=200.0)
+    k = np.array(resolved_rate.step_constants(LegGeometry(), gains, (-1.0, -1.0, 0.0), (1.0, 1.0, 2.0)))
+    qpos, sensordata, ctrl = np.zeros(25), np.zeros(8), np.zeros(36)
+    qpos[7:] = np.tile([0.0, 0.5, 1.0], 6)  # a leg away from its singularities
+    geo, legs, flags = np.zeros((6, 6)), np.zeros((6, NLEG)), np.zeros((6, 3), dtype=np.int64)
+    plane, counts, cmd = np.zeros(3), np.zeros(3, dtype=np.int64), np.zeros(3)
+    rows, stance = np.zeros((2, 18)), np.ones((2, 6), dtype=bool)
+    q_cmd, dq, trims, row, events = np.zeros(18), np.zeros(18), np.zeros(18), np.zeros(18), np.zeros((6, 3))
+    servo(k, qpos, trims, q_cmd, dq, rows[0], 0.002, ctrl)
+    targets(par, geo, legs, flags, plane, cmd, rows[0], stance[0], 0.0, rows[0], sensordata, row, events)
+    ground_step(par, geo, k, legs, flags, plane, counts, cmd, rows, stance, 0, 0.0, row, q_cmd, dq, trims, qpos,
+                sensordata, ctrl, events)  # fmt: skip
+    _WARM[0] = True
