@@ -607,6 +607,8 @@ def _curve(p: Plan, t: Table, name: str, values: np.ndarray, failed: np.ndarray)
         ax.set_xscale("log")
     if _spans_decades(values):
         ax.set_yscale("log")
+    else:
+        ax.ticklabel_format(axis="y", useOffset=False)
     ax.set_xlabel(_axis_label(axis.name, t.units.get(axis.name, "")))
     ax.set_ylabel(_axis_label(name, t.units.get(name, "")))
     ax.grid(alpha=0.3, which="both")
@@ -638,7 +640,9 @@ def _heatmap(p: Plan, t: Table, name: str, values: np.ndarray, failed: np.ndarra
     mesh = ax.pcolormesh(np.arange(len(cols.values) + 1) - 0.5, np.arange(len(rows.values) + 1) - 0.5, masked,
                          cmap="viridis", norm=norm)  # fmt: skip
     ax.set_facecolor("0.85")  # cells without a value (failed or null) show grey
-    fig.colorbar(mesh, ax=ax, label=_axis_label(name, t.units.get(name, "")) + (" (log scale)" if log else ""))
+    bar = fig.colorbar(mesh, ax=ax, label=_axis_label(name, t.units.get(name, "")) + (" (log scale)" if log else ""))
+    if not log:  # full values on the ticks: an offset ("1e-8 + ...") above the bar is easily missed
+        bar.ax.ticklabel_format(axis="y", useOffset=False)
     if bad.any():
         r, c = np.nonzero(bad)
         ax.plot(c, r, "x", color="tab:red", ms=12, mew=2, label="cell failed (see the error column)")

@@ -190,3 +190,24 @@ def test_sweep_folder_has_a_report_page(tmp_path, capsys):
         if name != "report.html":
             assert f'href="{name}"' in page and (out / name).exists()
     assert "swept: 0.01, 0.02" in page and "<script" not in page
+
+
+@pytest.mark.parametrize("grid", [["damping=0.01:0.02:4"], ["damping=0.01:0.02:2", "stiffness=0.5:1:2"]])
+def test_sweep_figures_print_full_values_not_an_offset(grid):
+    """Values that differ in the 8th digit (an energy drift of 1e-8, say): the ticks carry the values themselves,
+    never matplotlib's offset text ("+1" or "1e-8" above the axis), which a reader misses."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    p = sweep.plan("pendulum", grid, {}, {})
+    n = len(p.cells)
+    swept = tuple(axis.name for axis in p.axes)
+    rows = tuple((*[getattr(cell, a) for a in swept], 1.0 + 1e-8 * i, "") for i, cell in enumerate(p.cells))
+    table = sweep.Table(swept, ("drift",), ("drift",), rows, {"drift": "1"}, {"drift": "a metric"})
+    fig = sweep.figures(p, table)["drift"]
+    FigureCanvasAgg(fig).draw()
+    value_axis = fig.axes[-1].yaxis if len(grid) == 2 else fig.axes[0].yaxis  # the colour bar, or the curve's y
+    assert value_axis.get_offset_text().get_text() == ""
+    labels = [t.get_text() for t in value_axis.get_ticklabels() if t.get_text()]
+    values = [float(label.replace("\u2212", "-")) for label in labels]
+    assert len(set(values)) >= 2 and all(abs(v - 1.0) < 1e-7 for v in values), labels
+    assert n == 4
