@@ -629,9 +629,15 @@ TOUCHDOWN_TOLERANCE: float = 0.02  # [s] a touchdown further than this from the 
 
 
 def terrain_metrics(
-    p: HexabotParams, ground: Terrain, t: np.ndarray, qpos: np.ndarray, controller: HexabotController
+    p: HexabotParams,
+    ground: Terrain,
+    t: np.ndarray,
+    qpos: np.ndarray,
+    controller: HexabotController,
+    loaded: np.ndarray,
 ) -> dict[str, Metric]:
-    """Attitude relative to gravity, height above the local ground, progress, touchdowns, levelling limits."""
+    """Attitude relative to gravity, height above the local ground, progress, touchdowns, levelling limits,
+    and how often the feet the plan has in stance carry load (`loaded`, (n, 6): above LOADED_FRACTION)."""
     window = steady_window(p, t)
     rpy = np.degrees(rpy_from_quat(qpos[window, 3:7]))  # z-y-x angles: roll and pitch are relative to gravity
     roll, pitch = rpy[:, 0], rpy[:, 1]
@@ -645,6 +651,9 @@ def terrain_metrics(
     events = [e for e in getattr(controller, "events", []) if e.planned > SETTLE_TIME]
     touched = np.array([e.touched - e.planned for e in events if math.isfinite(e.touched)])
     updates = getattr(controller, "updates", 0)
+    planned = controller.planner.in_stance(t[window])  # (m, 6)
+    bearing = loaded[window] & planned
+    per_leg = bearing.sum(axis=0) / np.maximum(planned.sum(axis=0), 1)
     return {
         "roll_peak": Metric(float(np.abs(roll).max()), "deg", "largest |body roll| relative to gravity (steady walk)"),
         "pitch_peak": Metric(float(np.abs(pitch).max()), "deg", "largest |body pitch| relative to gravity"),
@@ -681,6 +690,15 @@ def terrain_metrics(
         "feet_without_ground": Metric(
             len(events) - int(touched.size), "1", "swings that found no ground by the end of the leg's reach"
         ),
+        "stance_loaded_fraction": Metric(
+            float(bearing.sum() / max(planned.sum(), 1)),
+            "1",
+            f"share of the planned stance time in which the feet carry load (> {LOADED_FRACTION:g} of a sixth of "
+            "the weight), all feet",
+        ),
+        "stance_loaded_fraction_min": Metric(
+            float(per_leg.min()), "1", "stance_loaded_fraction of the foot that carries load least often"
+        ),
         "level_clipped_fraction": Metric(
             controller.clipped_updates / updates if updates else 0.0,
             "1",
@@ -705,8 +723,9 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
         "real_time_factor": Metric(t[-1] / wall, "1", "simulated time / wall time of the simulation loop"),
     }
     ground = terrain(p)
+    loaded = contacts.load > LOADED_FRACTION * total_mass * 9.81 / 6
     if not ground.flat or p.on_ground():  # flat runs with the planned controller keep their metrics as they were
-        metrics |= terrain_metrics(p, ground, t, qpos, controller)
+        metrics |= terrain_metrics(p, ground, t, qpos, controller, loaded)
     rpy = rpy_from_quat(qpos[:, 3:7])
     # Command in force at every row: the chunk's command (re-planned every chunk) times the ramp's factor.
     plan_t = np.array([c[0] for c in controller.commands])
@@ -719,7 +738,6 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     columns |= {"roll": rpy[:, 0], "pitch": rpy[:, 1], "yaw": np.unwrap(rpy[:, 2])}
     columns |= {"vx_body": vx_b, "vy_body": vy_b, "yaw_rate": qvel[:, 5]}
     columns |= {"cmd_vx": plan[:, 0], "cmd_vy": plan[:, 1], "cmd_yaw_rate": plan[:, 2]}
-    loaded = contacts.load > LOADED_FRACTION * total_mass * 9.81 / 6
     for i, leg in enumerate(hx.LEGS):
         columns[f"contact_{leg}"] = loaded[:, i].astype(float)
     for i, leg in enumerate(hx.LEGS):
