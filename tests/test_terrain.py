@@ -84,7 +84,10 @@ def test_ground_height_agrees_with_mujoco_ray_casting(overrides):
     terrain_only = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)  # group 0: floor, heightfield, kerb
     geom = np.zeros(1, dtype=np.int32)
     worst = 0.0
-    for x, y in rng.uniform([x0, y0], [x1, y1], size=(400, 2)):
+    # On the terrain, and up to 3 m beyond it (a robot that wanders off the rough patch still has ground).
+    inside = rng.uniform([x0, y0], [x1, y1], size=(400, 2))
+    around = rng.uniform([x0 - 3, y0 - 3], [x1 + 3, y1 + 3], size=(400, 2))
+    for x, y in np.vstack([inside, around]):
         distance = mujoco.mj_ray(
             model, data, np.array([x, y, 1.0]), np.array([0.0, 0.0, -1.0]), terrain_only, 1, -1, geom
         )
@@ -123,14 +126,20 @@ def test_the_slope_video_looks_across_the_slope():
 def test_only_feet_and_plate_touch_the_terrain():
     for overrides in ({"roughness": 0.01}, {"kerb_height": 0.02}):
         model, _ = compiled(resolve(**overrides))
-        name = "terrain" if "roughness" in overrides else "kerb"
-        g = model.geom(name).id
-        touching = {
-            model.geom(h).name
-            for h in range(model.ngeom)
-            if model.geom_contype[h] & model.geom_conaffinity[g] or model.geom_contype[g] & model.geom_conaffinity[h]
-        }
-        assert touching == {"torso", *(f"{leg}_foot" for leg in hx.LEGS)}
+        names = (
+            ["terrain", "floor_west", "floor_east", "floor_south", "floor_north"]
+            if "roughness" in overrides
+            else ["kerb"]
+        )
+        for name in names:
+            g = model.geom(name).id
+            touching = {
+                model.geom(h).name
+                for h in range(model.ngeom)
+                if model.geom_contype[h] & model.geom_conaffinity[g]
+                or model.geom_contype[g] & model.geom_conaffinity[h]
+            }
+            assert touching == {"torso", *(f"{leg}_foot" for leg in hx.LEGS)}, name
 
 
 # --- refusals ------------------------------------------------------------------------------------------

@@ -5,7 +5,9 @@ feature at a time:
 - slope: the floor plane turned about a horizontal axis, so the ground rises by tan(slope) per
   metre along `uphill` (a unit vector in the ground plane's horizontal projection);
 - roughness: a MuJoCo heightfield of smoothed white noise, peak amplitude `roughness`, over a
-  rectangle that covers the walk; the flat floor outside is lowered out of the way;
+  rectangle that covers the walk, its bumps fading to zero at the border; around it four boxes whose
+  tops are the level floor (z = 0) out to FLOOR_RING metres, so a robot that wanders off the patch
+  walks on (the floor plane is lowered below the bumps' valleys, as scenery);
 - kerb: a box across the path whose top, `kerb_height` above the floor, starts `kerb_distance`
   ahead of the start along `along` and continues beyond the walk (a step up onto a pavement).
 
@@ -37,6 +39,8 @@ HFIELD_MARGIN: float = 0.6  # [m] heightfield beyond the body's path on every si
 HFIELD_MAX_POINTS: int = 2_000_000  # larger fields make the model files and compile time unreasonable
 HFIELD_DECIMALS: int = 6  # digits of the normalised elevation written into the MJCF
 KERB_LENGTH: float = 20.0  # [m] the pavement after the kerb (beyond any walk)
+FLOOR_RING: float = 20.0  # [m] the level floor around the heightfield, beyond any walk
+FLOOR_THICKNESS: float = 0.05  # [m] of the boxes around the heightfield
 KERB_WIDTH: float = 20.0  # [m] across the path
 # Checker drawn on every terrain geom, so the video shows the ground's shape: the squares' edges bend
 # over the bumps. MuJoCo maps a 2d texture onto a heightfield or box by the geom's x and y (object-linear
@@ -181,6 +185,19 @@ class Terrain:
                 f'pos="{(x0 + x1) / 2!r} {(y0 + y1) / 2!r} {base!r}" '
                 'material="terrain" contype="0" conaffinity="2" group="0"/>'
             )
+            # The level floor around the patch: west and east full width, south and north between them.
+            far = FLOOR_RING
+            for side, (a0, a1, b0, b1) in (
+                ("west", (x0 - far, x0, y0 - far, y1 + far)),
+                ("east", (x1, x1 + far, y0 - far, y1 + far)),
+                ("south", (x0, x1, y0 - far, y0)),
+                ("north", (x0, x1, y1, y1 + far)),
+            ):
+                geoms.append(
+                    f'<geom name="floor_{side}" type="box" size="{(a1 - a0) / 2!r} {(b1 - b0) / 2!r} '
+                    f'{FLOOR_THICKNESS / 2!r}" pos="{(a0 + a1) / 2!r} {(b0 + b1) / 2!r} {-FLOOR_THICKNESS / 2!r}" '
+                    'material="terrain" contype="0" conaffinity="2" group="0"/>'
+                )
         if self.kerb_height:
             ax, ay = self.along
             centre = self.kerb_distance + KERB_LENGTH / 2
