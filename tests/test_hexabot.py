@@ -324,7 +324,7 @@ def test_heading_hold_on_a_symmetric_robot_walks_every_direction(overrides):
         assert abs(m["lateral_drift"].value) <= 2.0 and abs(m["heading_drift"].value) <= 0.1
 
 
-@pytest.mark.parametrize("w", [0.3, -1.2, 1e-19, 0.0])
+@pytest.mark.parametrize("w", [0.3, -1.2, 1e-19, 5e-324, -5e-324, 0.0])
 def test_stance_path_solves_the_ground_fixed_point_ode(w):
     """p' = -v - w x p against a high-accuracy ODE solve, including yaw rates far below rounding."""
     from scipy.integrate import solve_ivp
@@ -341,6 +341,13 @@ def test_stance_path_solves_the_ground_fixed_point_ode(w):
                 lambda _t, p: [-cmd.vx + w * p[1], -cmd.vy - w * p[0]], (0.0, end), p0, rtol=1e-12, atol=1e-14
             )
             np.testing.assert_allclose(got[i, k], sol.y[:, -1], atol=1e-10)
+
+
+def test_a_yaw_rate_that_underflows_walks_straight():
+    """w = 5e-324 (the smallest float): w tau underflows to 0, and the walk is the straight one (it stood still)."""
+    tiny = walk(yaw_rate=5e-324, duration=4.0).metrics
+    assert abs(tiny["vx_error"].value) <= 0.02
+    assert tiny["mean_vx"].value == pytest.approx(walk(duration=4.0).metrics["mean_vx"].value, rel=1e-6)
 
 
 def test_perturbations_are_seeded():

@@ -78,6 +78,8 @@ def stance_path(cmd: Command, start: np.ndarray, tau: np.ndarray) -> np.ndarray:
     p(tau) = R(-w tau) p0 - [[S, C], [-C, S]] v with S = sin(w tau) / w and C = (1 - cos(w tau)) / w: the
     solution of dp/dtau = -v - w x p written without the centre of rotation (-vy / w, vx / w), which is
     ill-conditioned for the tiny yaw rates heading hold can ask for (w = 1e-19 put it 1e18 m away).
+    S and C are evaluated as tau sinc(w tau) and (w tau^2 / 2) sinc^2(w tau / 2), with no division by w:
+    where w tau underflows to 0 (w = 5e-324) they are the straight-line tau and 0, not 0 and 0.
     """
     start = np.asarray(start, dtype=float)[..., None, :]  # (..., 1, 2)
     vx, vy, w = cmd.vx, cmd.vy, cmd.yaw_rate
@@ -85,8 +87,8 @@ def stance_path(cmd: Command, start: np.ndarray, tau: np.ndarray) -> np.ndarray:
         return start - np.stack([vx * tau, vy * tau], axis=-1)
     angle = w * tau
     c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]  # (n, 1)
-    big_s = (np.sin(angle) / w)[:, None]
-    big_c = (2.0 * np.sin(0.5 * angle) ** 2 / w)[:, None]
+    big_s = (tau * np.sinc(angle / np.pi))[:, None]  # numpy's sinc(x) = sin(pi x) / (pi x)
+    big_c = (0.5 * w * tau**2 * np.sinc(angle / (2 * np.pi)) ** 2)[:, None]
     x0, y0 = start[..., :1], start[..., 1:]
     x = c * x0 + s * y0 - (big_s * vx + big_c * vy)
     y = -s * x0 + c * y0 + (big_c * vx - big_s * vy)
@@ -312,9 +314,13 @@ class GaitPlanner:
             tau = self._warp(t) - self._warp(t_state)
             if w == 0.0:
                 x, y = px - vx * tau, py - vy * tau
-            else:  # as stance_path, without the centre of rotation
-                c, s = math.cos(w * tau), math.sin(w * tau)
-                big_s, big_c = s / w, 2.0 * math.sin(0.5 * w * tau) ** 2 / w
+            else:  # as stance_path, without the centre of rotation or a division by w
+                angle = w * tau
+                c, s = math.cos(angle), math.sin(angle)
+                half = 0.5 * angle
+                sinc_half = math.sin(half) / half if half else 1.0
+                big_s = tau * (s / angle if angle else 1.0)
+                big_c = 0.5 * w * tau * tau * sinc_half * sinc_half
                 x = c * px + s * py - (big_s * vx + big_c * vy)
                 y = -s * px + c * py + (big_c * vx - big_s * vy)
             f = self._warp.factor(t)
