@@ -374,12 +374,47 @@ def test_perturbations_are_seeded():
         ({"seed": "abc"}, "must be a number with 0 <= seed <= 4294967295; got 'abc'"),  # not 4.29497e+09
         ({"gait": "wave", "period": 0.5}, "even stepping in place is infeasible"),
         ({"timestep": 0.005}, "timestep"),
+        # A single row after the ramp gave NaN mean speeds and numpy warnings (found by fuzzing).
+        ({"duration": 1.5001, "timestep": 0.0017}, "0.1 s to measure the walk: 1.6 s; got 1.5001"),
     ],
 )
 def test_infeasible_commands_are_refused_up_front(overrides, fragment):
     with pytest.raises(UsageError, match=None) as info:
         params.resolve(scenario.HexabotParams, {}, overrides)
     assert fragment in str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "pattern", "fix"),
+    [
+        *[
+            ({"gait": g, d: v}, "largest feasible in this direction is (.+?); ", "command")
+            for g in ("tripod", "ripple", "wave")
+            for d, v in (("vx", 0.6), ("vx", -0.6), ("vy", 0.6), ("vy", -0.6), ("yaw_rate", 2.9), ("yaw_rate", -2.9))
+        ],
+        ({"gait": "wave", "vx": 0.05, "duty": 0.8}, r"must be (\S+) to < 1", "duty"),
+        ({"gait": "ripple", "duty": 0.6}, r"must be (\S+) to < 1", "duty"),
+        ({"slope_deg": 10.0, "friction": 0.1}, r"at least tan\(slope\) = (\S+)", "friction"),
+        ({"slope_deg": 10.0, "friction": 0.1}, r"the steepest slope it holds is (\S+) deg", "slope_deg"),
+        ({"slope_deg": 30.0, "level_body": "on"}, r"steepest levelled slope is (\S+) deg", "slope_deg"),
+        ({"kerb_height": 0.05}, r"largest climbable, (\S+) mm", "kerb_height"),
+    ],
+)
+def test_the_values_a_refusal_suggests_are_accepted(overrides, pattern, fix):
+    """The advice in a refusal, typed back in, is accepted: bounds are rounded to the allowed side (found by fuzzing:
+    'duty must be 0.833 to < 1' refused 0.833 for the wave, whose smallest duty is 5/6)."""
+    import re
+
+    with pytest.raises(UsageError) as refused:
+        params.resolve(scenario.HexabotParams, {}, overrides)
+    found = re.search(pattern, str(refused.value))
+    assert found, str(refused.value)
+    if fix == "command":  # "vx = 0.0561 m/s, vy = 0.336 m/s": the components not named are 0
+        suggested = {"vx": 0.0, "vy": 0.0, "yaw_rate": 0.0}
+        suggested |= {name: float(v) for name, v in re.findall(r"(\w+) = (\S+) ", found.group(1))}
+    else:
+        suggested = {fix: float(found.group(1)) / (1000 if fix == "kerb_height" else 1)}
+    params.resolve(scenario.HexabotParams, {}, {**overrides, **suggested})  # no UsageError
 
 
 def test_refused_largest_feasible_command_is_feasible():

@@ -165,7 +165,7 @@ def test_largest_climbable_kerb_is_predicted_and_ten_percent_more_refused():
     # The swing clears step_height less a foot radius; the legs can reach much higher (95 mm) at this stance.
     assert largest == pytest.approx(0.04 - hx.DEFAULT_LAYOUT.foot_radius)
     assert scenario.depth_range(p)[0] < p.stand_height - largest
-    with pytest.raises(UsageError, match=f"largest climbable, {largest * 1000:.1f} mm"):
+    with pytest.raises(UsageError, match=f"largest climbable, {largest * 1000:.3g} mm"):
         resolve(kerb_height=1.1 * largest, step_height=0.04)
 
 

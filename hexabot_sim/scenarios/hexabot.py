@@ -34,6 +34,7 @@ CSV_COLUMNS: int = 37  # columns of timeseries.csv
 RUN_COST: tuple[float, float, float] = (30e-6, 40e-6, 2000.0)
 # Seconds per physics step with terrain or the ground-finding controller (rough ground: 42-44 us in bench.py).
 TERRAIN_STEP_SECONDS: float = 50e-6
+MEASURE_TIME: float = 0.1  # [s] shortest walk after the ramp that the metrics are measured over
 FALL_TILT_DEG: float = 45.0  # body tilt beyond which the robot has fallen over
 # NoSlip iterations on uneven ground. MuJoCo's soft friction lets a foot under a steady tangential
 # load creep: the standing robot slid down a 10 deg slope at 0.9-1.8 mm/s with the defaults. Two
@@ -110,13 +111,13 @@ class HexabotParams:
         if self.duty and not self.gait_duty_range()[0] <= self.duty < 1.0:
             lo = self.gait_duty_range()[0]
             raise ValueError(
-                f"parameter 'duty' for the {self.gait} gait must be {lo:.3g} to < 1 (or 0); got {self.duty}"
+                f"parameter 'duty' for the {self.gait} gait must be {allowed(lo, 'up')} to < 1 (or 0); got {self.duty}"
             )
-        if self.duration <= SETTLE_TIME + self.period:
+        shortest = SETTLE_TIME + self.period + MEASURE_TIME
+        if self.duration < shortest - 1e-9:
             raise ValueError(
-                "parameter 'duration' must exceed the settling time plus one period "
-                f"({SETTLE_TIME + self.period:g} s); "
-                f"got {self.duration}"
+                f"parameter 'duration' must be at least the settling time, one period (the ramp) and "
+                f"{MEASURE_TIME:g} s to measure the walk: {shortest:.15g} s; got {self.duration}"
             )
         n = step_count(self.duration, self.timestep)
         step_s, row_s, row_bytes = RUN_COST
@@ -178,6 +179,18 @@ def _cycle_problem(p: HexabotParams, cmd: Command) -> str:
     return ""
 
 
+def allowed(value: float, toward: str) -> str:
+    """`value` to 3 significant digits, rounded so the printed number is itself allowed: "up" for a lower
+    bound, "down" for an upper bound, "zero" for the largest magnitude in a direction (0.8333 printed as
+    0.833 was refused as below the wave's smallest duty, 5/6)."""
+    if value == 0 or not math.isfinite(value):
+        return f"{value:.3g}"
+    scale = 10.0 ** (math.floor(math.log10(abs(value))) - 2)
+    q = value / scale
+    digits = {"up": math.ceil(q - 1e-9), "down": math.floor(q + 1e-9), "zero": math.trunc(q)}[toward]
+    return f"{digits * scale:.3g}"
+
+
 def feasibility(p: HexabotParams) -> str:
     """'' if the legs can deliver the command, else a one-line reason with the largest feasible command."""
     if not math.isfinite(p.vx + p.vy + p.yaw_rate):
@@ -199,7 +212,7 @@ def feasibility(p: HexabotParams) -> str:
         lo, hi = (mid, hi) if not _cycle_problem(p, cmd.scaled(mid)) else (lo, mid)
     best = cmd.scaled(lo)
     named = (("vx", best.vx, "m/s"), ("vy", best.vy, "m/s"), ("yaw_rate", best.yaw_rate, "rad/s"))
-    parts = [f"{name} = {value:.3g} {unit}" for name, value, unit in named if value]
+    parts = [f"{name} = {allowed(value, 'zero')} {unit}" for name, value, unit in named if value]
     duty = p.the_gait().duty
     stride = math.hypot(p.vx, p.vy) * duty * p.period
     if problem.startswith("joints would turn"):
@@ -289,9 +302,9 @@ def terrain_problem(p: HexabotParams) -> str:
         tan = math.tan(math.radians(p.slope_deg))
         if tan > p.friction:
             return (
-                f"a {p.slope_deg:g} deg slope needs a friction coefficient of at least tan(slope) = {tan:.3g} "
-                f"to hold the feet; friction is {p.friction:g} (the steepest slope it holds is "
-                f"{math.degrees(math.atan(p.friction)):.3g} deg)"
+                f"a {p.slope_deg:g} deg slope needs a friction coefficient of at least tan(slope) = "
+                f"{allowed(tan, 'up')} to hold the feet; friction is {p.friction:g} (the steepest slope it holds is "
+                f"{allowed(math.degrees(math.atan(p.friction)), 'down')} deg)"
             )
         if p.level_body == "on":
             # A level body on a slope: the stance feet reach down or up by x tan(slope) (x along the uphill).
@@ -302,13 +315,15 @@ def terrain_problem(p: HexabotParams) -> str:
                 return (
                     f"a level body on a {p.slope_deg:g} deg slope needs the feet {reach * 1000:.0f} mm above and "
                     f"below the neutral stance, beyond the legs' workspace (stance depth {lo:.3f} to {hi:.3f} m with "
-                    f"this gait); the steepest levelled slope is {steepest:.3g} deg (or set level_body=off)"
+                    f"this gait); the steepest levelled slope is {allowed(steepest, 'down')} deg "
+                    "(or set level_body=off)"
                 )
     if p.kerb_height:
         largest = largest_climbable_kerb(p)
         if p.kerb_height > largest:
             return (
-                f"a {p.kerb_height * 1000:.0f} mm kerb is above the largest climbable, {largest * 1000:.1f} mm "
+                f"a {p.kerb_height * 1000:.0f} mm kerb is above the largest climbable, "
+                f"{allowed(largest * 1000, 'down')} mm "
                 f"(the foot lifts step_height = {p.step_height:g} m, less a foot radius of clearance; the legs reach "
                 f"{(p.stand_height - depth_range(p)[0]) * 1000:.0f} mm above the stance); raise 'step_height'"
             )
