@@ -148,7 +148,7 @@ def test_only_feet_and_plate_touch_the_terrain():
 @pytest.mark.parametrize(
     ("overrides", "fragment"),
     [
-        ({"slope_deg": 30.0, "friction": 0.5}, "friction coefficient of at least tan(slope) = 0.577"),
+        ({"slope_deg": 30.0, "friction": 0.5}, "friction coefficient of at least tan(slope) = 0.578"),
         ({"slope_deg": 30.0, "level_body": "on"}, "steepest levelled slope is"),
         ({"roughness": 0.01, "slope_deg": 5.0}, "one terrain feature at a time"),
     ],
