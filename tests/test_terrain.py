@@ -200,6 +200,16 @@ def test_without_levelling_the_body_tilts_with_the_slope(slope_runs):
     assert not value(off, "fell") and abs(value(off, "speed_made_good_error")) <= 0.05
 
 
+def test_without_levelling_a_steep_slope_is_walked_parallel_to_it():
+    """Beyond the steepest levelled slope the body starts and walks parallel to the ground (it once started level
+    and failed with a raw inverse-kinematics message: the feet could not reach the slope from a level body)."""
+    with pytest.raises(UsageError, match="steepest levelled slope"):
+        resolve(**{**SLOPE, "slope_deg": 25.0})
+    r = walk(**{**SLOPE, "slope_deg": 25.0, "level_body": "off", "duration": 5.0})
+    assert value(r, "pitch_rms") == pytest.approx(25.0, abs=0.5)
+    assert not value(r, "fell") and abs(value(r, "speed_made_good_error")) <= 0.15
+
+
 def test_standing_still_on_the_slope_does_not_slide():
     r = walk(**{**SLOPE, "vx": 0.0, "duration": 8.0})
     assert abs(value(r, "distance_made_good")) < 0.002  # over 5.5 s of stepping in place

@@ -118,9 +118,8 @@ def ik_body(layout: Layout, feet: ArrayLike) -> np.ndarray:
             if np.all(b >= np.array(JOINT_LOWER) - 1e-12) and np.all(b <= np.array(JOINT_UPPER) + 1e-12)
         ]
         if not inside:
-            raise leg_kin.IKError(
-                f"foot {LEGS[i]} at {tuple(np.round(point, 4))} m (hip frame) is outside the joint ranges"
-            )
+            where = ", ".join(f"{round(float(v), 6) + 0.0:.4g}" for v in point)
+            raise leg_kin.IKError(f"foot {LEGS[i]} at ({where}) m (hip frame) is outside the joint ranges")
         q[i] = inside[0]
     return q
 

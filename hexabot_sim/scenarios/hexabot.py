@@ -408,7 +408,7 @@ def _add_terrain(root, p: HexabotParams, ground: Terrain, feet: np.ndarray, q0: 
         floor.attrib.update(conaffinity="0", pos=models.fmt([0.0, 0.0, -ground.roughness - 0.002]))
     r = LAYOUT.foot_radius
     normal = ground.normal()
-    if p.on_ground():
+    if p.on_ground() and not (ground.slope_deg and p.level_body == "off"):
         # Level body; every foot centre r (along the normal) above the ground under its neutral point.
         g = ground.height(feet[:, 0], feet[:, 1]) + r / normal[2]  # (6,)
         z0 = p.stand_height + float(g.mean())
