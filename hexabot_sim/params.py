@@ -3,9 +3,13 @@
 from __future__ import annotations
 
 import dataclasses
+import datetime
+import decimal
 import math
+import numbers
 import os
 import stat
+import sys
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
@@ -113,7 +117,14 @@ def _show(raw: Any) -> str:
     if isinstance(raw, float):
         text = repr(raw)
     elif isinstance(raw, int) and not isinstance(raw, bool):
-        text = str(raw) if raw.bit_length() < 128 else f"an integer of {len(str(abs(raw)))} digits"
+        if raw.bit_length() < 128:
+            text = str(raw)
+        elif raw.bit_length() < 4000 * 3.3:  # str() of an int past sys.get_int_max_str_digits() (4300) raises
+            text = f"an integer of {len(str(abs(raw)))} digits"
+        else:
+            text = f"an integer of about {int(raw.bit_length() * math.log10(2)) + 1} digits"
+    elif isinstance(raw, (datetime.date, datetime.time)):  # TOML dates and times
+        text = f"the {type(raw).__name__} {raw.isoformat()}"
     else:
         text = repr(raw)
     return text if len(text) <= MAX_SHOWN else text[: MAX_SHOWN - 3] + "..."
@@ -138,6 +149,11 @@ def _to_float(raw: Any) -> float | None:
             return math.inf if raw > 0 else -math.inf
     if isinstance(raw, float):
         return raw
+    if isinstance(raw, (numbers.Real, decimal.Decimal)):  # numpy scalars, Fraction, Decimal from the Python API
+        try:
+            return float(raw)
+        except (OverflowError, ValueError):
+            return None
     return None
 
 
@@ -245,8 +261,10 @@ def read_config(path: str | Path) -> dict[str, Any]:
         raise UsageError(f"config file {shown} is not valid TOML: {_first_line(e)}") from None
     except (RecursionError, MemoryError):
         raise UsageError(f"config file {shown} is not a parameter file: nested too deeply") from None
-    except ValueError as e:  # e.g. an integer longer than Python converts
-        raise UsageError(f"config file {shown} is not valid TOML: {_first_line(e)}") from None
+    except ValueError as e:  # an integer longer than Python converts ("Exceeds the limit (4300 digits) ...")
+        limit = sys.get_int_max_str_digits()
+        reason = f"an integer of more than {limit} digits" if "digits" in str(e) else _first_line(e)
+        raise UsageError(f"config file {shown} is not a parameter file: {reason}") from None
     table = data.pop("params", None)
     if table is not None:
         if not isinstance(table, dict):

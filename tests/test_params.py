@@ -100,3 +100,14 @@ def test_every_parameter_has_unit_and_doc():
             assert info.doc, name
         assert dataclasses.is_dataclass(scenario.params_type)
         assert set(scenario.defaults) <= set(params.infos(scenario.params_type))
+
+
+def test_exact_python_numbers_are_accepted():
+    """From the Python API: Fraction and Decimal are numbers too (they were refused as "must be a number")."""
+    import decimal
+    import fractions
+
+    p = params.resolve(PendulumParams, {}, {"duration": decimal.Decimal("2.5"), "damping": fractions.Fraction(1, 50)})
+    assert (p.duration, p.damping) == (2.5, 0.02)
+    with pytest.raises(UsageError, match="got Decimal"):
+        params.resolve(PendulumParams, {}, {"duration": decimal.Decimal("NaN")})
