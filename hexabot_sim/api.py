@@ -130,6 +130,8 @@ def run(
         hexabot_sim.errors.SimulationError: the simulation went unstable (names the time and likely cause).
     """
     entry = registry.get(scenario)
+    _check_path("config", config)
+    _check_callable("progress", progress)
     layer = {name: _plain(value) for name, value in params.items()}
     layers = [params_mod.read_config(Path(config))] if config is not None else []
     p: Any = params_mod.resolve(entry.params_type, entry.defaults, *layers, layer)
@@ -137,6 +139,18 @@ def run(
     with _mujoco_warnings():
         result = entry.runner(entry.name, p, progress=progress)
     return Result(entry, p, result, time.perf_counter() - started)
+
+
+def _check_path(name: str, value: Any) -> None:
+    """A path argument is a str or os.PathLike (or None), else a UsageError (not pathlib's TypeError)."""
+    if value is not None and not isinstance(value, (str, os.PathLike)):
+        raise UsageError(f"'{name}' must be a path (str or os.PathLike) or None; got {type(value).__name__}")
+
+
+def _check_callable(name: str, value: Any) -> None:
+    """A callback argument is callable (or None), checked before the run rather than at its first call."""
+    if value is not None and not callable(value):
+        raise UsageError(f"'{name}' must be a callable (done, total) -> None or None; got {type(value).__name__}")
 
 
 class Result:
@@ -239,6 +253,8 @@ class Result:
             hexabot_sim.errors.UsageError: a refused `out` (see the README's run folder contract) or bad video options.
             hexabot_sim.errors.OutputError: the folder could not be written.
         """
+        _check_path("out", out)
+        _check_callable("progress", progress)
         settings = _video_settings(quality, size, fps) if video else None
         backend, reason = None, output.NOT_REQUESTED
         if video:
@@ -283,6 +299,10 @@ class Result:
             hexabot_sim.errors.UsageError: bad options, or a scenario without a trajectory (leg-sweep).
             hexabot_sim.errors.OutputError: no working OpenGL or ffmpeg here, or rendering failed.
         """
+        if path is None:
+            raise UsageError("'path' must be a path (str or os.PathLike); got NoneType")
+        _check_path("path", path)
+        _check_callable("progress", progress)
         settings = _video_settings(quality, size, fps)
         if self.raw.camera is None or self.raw.trajectory is None:
             raise UsageError(f"{self.scenario} produces no trajectory to film")

@@ -197,3 +197,26 @@ def test_config_file_then_keywords(tmp_path):
     assert (result.params["damping"], result.params["stiffness"]) == (0.02, 0.9)
     with pytest.raises(UsageError, match="not found"):
         hs.run("pendulum", config=tmp_path / "missing.toml")
+
+
+@pytest.mark.parametrize(
+    ("call", "fragment"),
+    [
+        (lambda: hs.run("pendulum", config=5), "'config' must be a path"),
+        (lambda: hs.run("pendulum", config={"mass": 1}), "'config' must be a path"),
+        (lambda: hs.run("pendulum", progress=5), "'progress' must be a callable"),
+    ],
+)
+def test_wrong_argument_types_are_usage_errors(call, fragment):
+    with pytest.raises(UsageError, match=fragment):
+        call()
+
+
+def test_wrong_save_and_video_arguments_are_usage_errors(tmp_path, leg):
+    with pytest.raises(UsageError, match="'out' must be a path"):
+        leg.save(5)
+    with pytest.raises(UsageError, match="'progress' must be a callable"):
+        leg.save(tmp_path / "run", progress="yes")
+    with pytest.raises(UsageError, match="'path' must be a path"):
+        leg.video(b"video.mp4")
+    assert list(tmp_path.iterdir()) == []
