@@ -398,6 +398,7 @@ def test_infeasible_commands_are_refused_up_front(overrides, fragment):
         ({"slope_deg": 10.0, "friction": 0.1}, r"the steepest slope it holds is (\S+) deg", "slope_deg"),
         ({"slope_deg": 30.0, "level_body": "on"}, r"steepest levelled slope is (\S+) deg", "slope_deg"),
         ({"kerb_height": 0.05}, r"largest climbable, (\S+) mm", "kerb_height"),
+        ({"kerb_height": 0.02, "stand_height": 0.03}, r"\(at most (\S+) mm\)", "kerb_height"),
     ],
 )
 def test_the_values_a_refusal_suggests_are_accepted(overrides, pattern, fix):

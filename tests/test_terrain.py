@@ -151,6 +151,8 @@ def test_only_feet_and_plate_touch_the_terrain():
         ({"slope_deg": 30.0, "friction": 0.5}, "friction coefficient of at least tan(slope) = 0.578"),
         ({"slope_deg": 30.0, "level_body": "on"}, "steepest levelled slope is"),
         ({"roughness": 0.01, "slope_deg": 5.0}, "one terrain feature at a time"),
+        # The plate 23 mm above the ground: a 20 mm kerb knocked it over (found by fuzzing).
+        ({"kerb_height": 0.02, "stand_height": 0.03}, "kerb would hit the plate"),
     ],
 )
 def test_impossible_ground_is_refused_in_one_line(overrides, fragment):

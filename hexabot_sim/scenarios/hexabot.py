@@ -34,6 +34,7 @@ CSV_COLUMNS: int = 37  # columns of timeseries.csv
 RUN_COST: tuple[float, float, float] = (30e-6, 40e-6, 2000.0)
 # Seconds per physics step with terrain or the ground-finding controller (rough ground: 42-44 us in bench.py).
 TERRAIN_STEP_SECONDS: float = 50e-6
+KERB_PLATE_CLEARANCE: float = 0.005  # [m] a kerb stays this far below the plate's underside at the stand height
 MEASURE_TIME: float = 0.1  # [s] shortest walk after the ramp that the metrics are measured over
 FALL_TILT_DEG: float = 45.0  # body tilt beyond which the robot has fallen over
 # NoSlip iterations on uneven ground. MuJoCo's soft friction lets a foot under a steady tangential
@@ -319,6 +320,14 @@ def terrain_problem(p: HexabotParams) -> str:
                     "(or set level_body=off)"
                 )
     if p.kerb_height:
+        underside = p.stand_height + LAYOUT.foot_radius - LAYOUT.plate[2]  # the plate's underside above the ground
+        if p.kerb_height > underside - KERB_PLATE_CLEARANCE:
+            return (
+                f"a {p.kerb_height * 1000:.0f} mm kerb would hit the plate: at stand_height {p.stand_height:g} m its "
+                f"underside is {underside * 1000:.0f} mm above the ground, and the kerb must stay "
+                f"{KERB_PLATE_CLEARANCE * 1000:g} mm below it (at most "
+                f"{allowed((underside - KERB_PLATE_CLEARANCE) * 1000, 'down')} mm); raise 'stand_height'"
+            )
         largest = largest_climbable_kerb(p)
         if p.kerb_height > largest:
             return (
