@@ -373,6 +373,7 @@ def test_perturbations_are_seeded():
         ({"vx": 100}, "did you mean 100 mm/s = 0.1 m/s"),
         ({"seed": "abc"}, "must be a number with 0 <= seed <= 4294967295; got 'abc'"),  # not 4.29497e+09
         ({"gait": "wave", "period": 0.5}, "even stepping in place is infeasible"),
+        ({"max_joint_speed": 0.5}, "lengthen 'period' or lower 'step_height' (or raise 'max_joint_speed')"),
         ({"timestep": 0.005}, "timestep"),
         # A single row after the ramp gave NaN mean speeds and numpy warnings (found by fuzzing).
         ({"duration": 1.5001, "timestep": 0.0017}, "0.1 s to measure the walk: 1.6 s; got 1.5001"),

@@ -198,10 +198,11 @@ def feasibility(p: HexabotParams) -> str:
         return "vx, vy and yaw_rate must be finite"
     standing = _cycle_problem(p, Command())
     if standing:
+        faster = " (or raise 'max_joint_speed')" if standing.startswith("joints would turn") else ""
         return (
             f"even stepping in place is infeasible with the {p.gait} gait at period {p.period:g} s "
             f"(stand_height {p.stand_height:g} m, step_height {p.step_height:g} m): {standing}; "
-            "lengthen 'period' or lower 'step_height'"
+            f"lengthen 'period' or lower 'step_height'{faster}"
         )
     cmd = p.command()
     problem = _cycle_problem(p, cmd)
