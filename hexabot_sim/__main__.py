@@ -20,6 +20,7 @@ from hexabot_sim import scenarios
 from hexabot_sim.errors import (
     HOLD,
     PENDING_SIGNALS,
+    PUBLISHED,
     RECEIVED_SIGNALS,
     HexabotError,
     Interrupted,
@@ -720,6 +721,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if argv is not None:  # called from Python (tests, scripts): no stop request carries over from before
         RECEIVED_SIGNALS.clear()
         PENDING_SIGNALS.clear()
+        PUBLISHED[0] = False
+    argv_given = argv is not None
     argv = list(sys.argv[1:] if argv is None else argv)
     stdout, sys.stdout = sys.stdout, _GuardedStdout(sys.stdout)
     _COMPLETED.clear()
@@ -732,6 +735,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         _eprint(f"{PROG}: error: cannot write to standard output: {e.error.strerror or e.error}{done}")
         return 1
     finally:
+        if argv_given:  # nor does a published run's "too late" carry over to the next call
+            PUBLISHED[0] = False
         sys.stdout = stdout
 
 
@@ -815,7 +820,7 @@ def _interrupted(error: KeyboardInterrupt) -> int:
 def _raise_interrupted(signum: int, frame: Any) -> None:
     """Ctrl-C, SIGTERM and SIGHUP stop the run; while a publish or clean-up is held, only after it."""
     RECEIVED_SIGNALS.append(signum)
-    if HOLD[0] > 0:
+    if HOLD[0] > 0 or PUBLISHED[0]:  # held, or too late: the results are published
         PENDING_SIGNALS.append(signum)
         return
     raise stop_request(signum)
@@ -854,6 +859,13 @@ def console() -> NoReturn:
     except OSError as e:  # stdout full at the final flush
         _eprint(f"{PROG}: error: cannot write to standard output: {e.strerror or e}")
         code = 1
+    # The outcome is decided: a stop request now must not kill the exit (Python's shutdown puts the default
+    # handlers back, which would end a published run with 128 + N and no word).
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, signal.SIG_IGN)
+    if PUBLISHED[0] and PENDING_SIGNALS:
+        name = signal.Signals(PENDING_SIGNALS[-1]).name
+        _eprint(f"{PROG}: {name} came after the results were published; they are complete")
     sys.exit(code)
 
 

@@ -16,7 +16,7 @@ import numpy as np
 from hexabot_sim import output
 from hexabot_sim import params as params_mod
 from hexabot_sim import scenarios as registry
-from hexabot_sim.errors import OutputError, UsageError
+from hexabot_sim.errors import PUBLISHED, OutputError, UsageError
 from hexabot_sim.scenarios.base import Metric
 
 __all__ = ["Columns", "Metric", "Parameter", "Result", "ScenarioInfo", "run", "scenarios"]
@@ -259,19 +259,22 @@ class Result:
         backend, reason = None, output.NOT_REQUESTED
         if video:
             backend, reason = _video_backend()
-        with output.run_folder(out, self.scenario, force=force) as folder:
-            output.write_run(
-                folder.path,
-                self._scenario,
-                self._params,
-                self.raw,
-                sim_seconds=self.wall_time,
-                plots=plots,
-                video=settings,
-                backend=backend,
-                no_video_reason=reason,
-                video_progress=progress,
-            )
+        try:
+            with output.run_folder(out, self.scenario, force=force) as folder:
+                output.write_run(
+                    folder.path,
+                    self._scenario,
+                    self._params,
+                    self.raw,
+                    sim_seconds=self.wall_time,
+                    plots=plots,
+                    video=settings,
+                    backend=backend,
+                    no_video_reason=reason,
+                    video_progress=progress,
+                )
+        finally:
+            PUBLISHED[0] = False  # the command line's "too late to stop" state; nothing to do with the API
         assert folder.final is not None
         return folder.final
 

@@ -41,6 +41,9 @@ RECEIVED_SIGNALS: list[int] = []
 # PENDING_SIGNALS; the hold raises it when it ends (see signals_held).
 HOLD: list[int] = [0]
 PENDING_SIGNALS: list[int] = []
+# True once the run folder is published: a stop request after that comes too late to stop anything, so the
+# command line's handler only records it (the run completes and says so) and no hold raises it.
+PUBLISHED: list[bool] = [False]
 
 
 def stop_request(signum: int) -> KeyboardInterrupt:
@@ -63,7 +66,7 @@ def signals_held() -> Iterator[None]:
         yield
     finally:
         HOLD[0] -= 1
-        if HOLD[0] == 0 and PENDING_SIGNALS:
+        if HOLD[0] == 0 and PENDING_SIGNALS and not PUBLISHED[0]:
             signum = PENDING_SIGNALS[-1]
             PENDING_SIGNALS.clear()
             raise stop_request(signum)

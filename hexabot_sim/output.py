@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from hexabot_sim.errors import (
+    PUBLISHED,
     RECEIVED_SIGNALS,
     OutputError,
     SimulationError,
@@ -239,6 +240,7 @@ def run_folder(out: str | os.PathLike[str] | None, scenario: str = "run", force:
     check_out(target if out is None else out, force=force or auto_name)
     target = Path(os.path.abspath(target))  # a later chdir or a renamed working folder cannot redirect it
     before = _snapshot(target) if force and not auto_name else None
+    PUBLISHED[0] = False
     created: list[Path] = []
     folder = None
     parent_fd = -1
@@ -258,6 +260,7 @@ def run_folder(out: str | os.PathLike[str] | None, scenario: str = "run", force:
             if os.stat(target.parent).st_ino != os.fstat(parent_fd).st_ino:
                 raise OutputError(f"the folder {str(target.parent)!r} was moved or replaced during the run")
             folder.final = _publish(parent_fd, staging, target, auto_name, force and not auto_name, before)
+            PUBLISHED[0] = True  # a stop request from now on (even one held above) is too late: the run is complete
     except BaseException as e:
         # Ctrl-C, a signal, a failed simulation or write: remove everything this run made, then say why.
         with signals_held():

@@ -543,6 +543,37 @@ def test_signals_are_held_during_publish_even_with_other_threads():
     assert seen == ["block done"]
 
 
+@pytest.mark.parametrize("when", ["before", "after"])
+def test_a_stop_request_during_the_publish_does_not_deny_the_published_run(tmp_path, when):
+    """SIGTERM while the run folder is being published (held) or just after: the run is complete, so the command
+    says so and exits 0 (it said "stopped by SIGTERM; nothing written" with the run in place, found by fuzzing)."""
+    out = tmp_path / "out"
+    code = (
+        "import os, signal, sys\n"
+        "from hexabot_sim import output\n"
+        "real = output._publish\n"
+        "def publish(*args, **kwargs):\n"
+        f"    if {when == 'before'}:\n"
+        "        os.kill(os.getpid(), signal.SIGTERM)\n"
+        "    final = real(*args, **kwargs)\n"
+        f"    if {when == 'after'}:\n"
+        "        os.kill(os.getpid(), signal.SIGTERM)\n"
+        "    return final\n"
+        "output._publish = publish\n"
+        "from hexabot_sim.__main__ import console\n"
+        f"sys.argv = ['hexabot-sim', 'run', 'pendulum', '--set', 'duration=0.5', '--no-plots', '--out', {str(out)!r}]\n"
+        "console()\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert "-> " in done.stdout and "files:" in done.stdout
+    last = done.stderr.strip().splitlines()[-1]  # after the progress line
+    assert last == "hexabot-sim: SIGTERM came after the results were published; they are complete", done.stderr
+    assert "nothing written" not in done.stderr and "Traceback" not in done.stderr
+    assert (out / "run.json").is_file() and (out / "timeseries.csv").is_file()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no staging or replaced folder left
+
+
 def test_ctrl_c_while_loading_ends_in_one_line(tmp_path):
     """Ctrl-C while numpy and MuJoCo are still being imported: no traceback, exit 130, nothing written.
 
