@@ -99,3 +99,39 @@ def test_warm_up_compiles_what_a_walk_uses():
         simulate(model, data, 50, controller=hexabot.make_controller(p, model, data))
     for kernel in (kernels.servo, kernels.targets, kernels.ground_step):
         assert len(kernel.signatures) == 1, (kernel, kernel.signatures)
+
+
+def _warm_up_in_a_new_process(cache, prelude=""):
+    code = prelude + "from hexabot_sim.control import kernels\nkernels.warm_up()\nprint('warm')\n"
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, env=env)
+
+
+def test_an_unusable_numba_cache_does_not_stop_a_walk(tmp_path):
+    """A corrupted cache file (truncated, foreign) or a full disk under the cache: the kernels are compiled in
+    memory with a one-line note naming the folder (they ended the run as an internal error, found by fuzzing)."""
+    cache = tmp_path / "cache"
+    one = (
+        "import numpy as np\nfrom hexabot_sim.control import kernels\n"
+        "kernels.plane_fit(*[np.zeros(3)] * 3, 3, np.zeros(3))\n"
+    )
+    subprocess.run(
+        [sys.executable, "-c", one], check=True, timeout=300, env={**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    )
+    index = list(cache.rglob("*.nbi"))  # plane_fit's, which the full compile finds and cannot read
+    assert index
+    for path in index:
+        path.write_bytes(b"\x0cnot a pickle")
+    done = _warm_up_in_a_new_process(cache)
+    assert done.returncode == 0 and done.stdout.split() == ["warm"], done.stderr
+    assert done.stderr.startswith("hexabot-sim: note: numba's cache in ") and done.stderr.count("\n") == 1
+    assert "could not be used (UnpicklingError" in done.stderr and str(cache) in done.stderr
+    full_disk = (
+        "import errno, numba.core.caching as c\n"
+        "def full(self, *args):\n"
+        "    raise OSError(errno.ENOSPC, 'No space left on device')\n"
+        "c.IndexDataCacheFile.save = full\n"
+    )
+    done = _warm_up_in_a_new_process(tmp_path / "empty", full_disk)
+    assert done.returncode == 0 and done.stdout.split() == ["warm"], done.stderr
+    assert "could not be used (OSError: [Errno 28] No space left on device)" in done.stderr

@@ -23,9 +23,11 @@ State of the ground-finding legs (GroundController), one row per leg:
 from __future__ import annotations
 
 import math
+import sys
 
 import numba
 import numpy as np
+from numba.core.caching import NullCache
 
 from hexabot_sim.control import resolved_rate
 from hexabot_sim.kinematics.leg import LegGeometry
@@ -299,9 +301,32 @@ def warm_up() -> None:
     Once per process, before a walk's first step, so the compiling (a few seconds on a machine's
     first run) happens under the command line's signal hold: a Ctrl-C that struck inside numba's
     compiler would leave the kernel unusable ("no compiled object yet") instead of stopping the run.
+    A cache numba cannot use (a full disk, a truncated or foreign file) does not stop the walk: the
+    kernels are compiled in memory instead, with a one-line note naming the cache folder.
     """
     if _WARM[0]:
         return
+    try:
+        _compile_all()
+    except Exception as error:  # retried without the cache; if that fails too, the first error stands
+        where = getattr(getattr(ground_step, "_cache", None), "cache_path", "?")
+        for kernel in _KERNELS:
+            kernel._cache = NullCache()  # numba's own "no caching" (the dispatcher attribute cache=True sets)
+        try:
+            _compile_all()
+        except Exception:
+            raise error from None
+        text = " ".join(f"{type(error).__name__}: {error}".split())[:200]
+        print(
+            f"hexabot-sim: note: numba's cache in {where} could not be used ({text}); the walking kernels were "
+            "compiled in memory (removing that folder lets numba rebuild it)",
+            file=sys.stderr,
+        )
+    _WARM[0] = True
+
+
+def _compile_all() -> None:
+    """Calls each kernel the controllers call from Python once, on arrays of the types they pass."""
     par = np.zeros(NPAR)
     par[UPDATE_EVERY], par[DT], par[SWING_TIME] = 1.0, 0.002, 1.0
     gains = resolved_rate.ResolvedRateGains(max_joint_acceleration=200.0)
@@ -316,4 +341,6 @@ def warm_up() -> None:
     targets(par, geo, legs, flags, plane, cmd, rows[0], stance[0], 0.0, rows[0], sensordata, row, events)
     ground_step(par, geo, k, legs, flags, plane, counts, cmd, rows, stance, 0, 0.0, row, q_cmd, dq, trims, qpos,
                 sensordata, ctrl, events)  # fmt: skip
-    _WARM[0] = True
+
+
+_KERNELS = (rate_steps, servo, plane_fit, update_plane, _event, targets, ramp, ground_step)
