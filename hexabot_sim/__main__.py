@@ -10,6 +10,7 @@ import os
 import shutil
 import signal
 import sys
+import tempfile
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -394,7 +395,7 @@ def cmd_clean(args: argparse.Namespace) -> int:
     root = Path(args.folder)
     if not root.is_dir():
         raise UsageError(f"{args.folder!r} is not a folder")
-    stale = output.stale_staging(root)
+    stale = output.stale_staging(root) + output.stale_cells()
     for path in stale:
         if args.dry_run:
             print(f"would remove {path}")
@@ -402,7 +403,8 @@ def cmd_clean(args: argparse.Namespace) -> int:
             shutil.rmtree(path)
             print(f"removed {path}")
     if not stale:
-        print(f"no staging folders left by interrupted runs in {args.folder}")
+        cells = tempfile.gettempdir()
+        print(f"no staging folders left by interrupted runs in {args.folder} (nor sweep cells in {cells})")
     return 0
 
 

@@ -13,6 +13,7 @@ import os
 import platform
 import secrets
 import shutil
+import tempfile
 import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
@@ -275,6 +276,19 @@ def run_folder(out: str | os.PathLike[str] | None, scenario: str = "run", force:
     finally:
         if parent_fd >= 0:
             os.close(parent_fd)
+
+
+CELL_PREFIX = "hexabot-sim-cell-"  # a sweep worker's kept-run folder in the temporary folder: <prefix><pid>-...
+
+
+def stale_cells() -> list[Path]:
+    """Sweep workers' kept-run folders in the system's temporary folder whose process is gone."""
+    found = []
+    for path in sorted(Path(tempfile.gettempdir()).glob(f"{CELL_PREFIX}*")):
+        pid_text = path.name.removeprefix(CELL_PREFIX).split("-", 1)[0]
+        if pid_text.isdigit() and not _alive(int(pid_text)) and path.is_dir() and not path.is_symlink():
+            found.append(path)
+    return found
 
 
 def stale_staging(root: Path) -> list[Path]:

@@ -9,6 +9,7 @@ import dataclasses
 import math
 import multiprocessing
 import os
+import shutil
 import signal
 import sys
 import tempfile
@@ -22,6 +23,7 @@ import numpy as np
 from hexabot_sim import params as params_mod
 from hexabot_sim import scenarios
 from hexabot_sim.errors import HexabotError, UsageError
+from hexabot_sim.output import CELL_PREFIX
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -278,15 +280,19 @@ def run_cell(job: CellJob) -> CellResult:
         files = None
         if job.keep_run:
             sim_seconds = time.perf_counter() - started
-            with tempfile.TemporaryDirectory(prefix="hexabot-sim-cell-") as tmp:
-                folder = Path(tmp)
-                output.write_run(folder, scenario, job.params, result, sim_seconds=sim_seconds, plots=job.plots,
-                                 no_video_reason="not made in a sweep")  # fmt: skip
-                files = {
-                    path.relative_to(folder).as_posix(): path.read_bytes()
-                    for path in sorted(folder.rglob("*"))
-                    if path.is_file()
-                }
+            with tempfile.TemporaryDirectory(prefix=f"{CELL_PREFIX}{os.getpid()}-") as tmp:
+                _CELL_FOLDERS.append(tmp)  # removed by _worker_stopped if the sweep stops this worker
+                try:
+                    folder = Path(tmp)
+                    output.write_run(folder, scenario, job.params, result, sim_seconds=sim_seconds, plots=job.plots,
+                                     no_video_reason="not made in a sweep")  # fmt: skip
+                    files = {
+                        path.relative_to(folder).as_posix(): path.read_bytes()
+                        for path in sorted(folder.rglob("*"))
+                        if path.is_file()
+                    }
+                finally:
+                    _CELL_FOLDERS.remove(tmp)
         return CellResult(job.index, metrics, units, docs, None, time.perf_counter() - started, files)
     except (KeyboardInterrupt, MemoryError):
         raise
@@ -301,11 +307,23 @@ def run_cell(job: CellJob) -> CellResult:
 # Executors: a process pool here, or a Dask cluster; the sweep only sees concurrent.futures
 
 
+# A kept cell's run folder is written in the system's temporary folder, named <CELL_PREFIX><pid>-<random>;
+# `hexabot-sim clean` removes those whose process is gone (a worker killed with SIGKILL leaves one).
+_CELL_FOLDERS: list[str] = []  # the kept-run folder this worker is writing, if any
+
+
+def _worker_stopped(signum: int, frame: Any) -> None:
+    """SIGTERM/SIGHUP in a worker (the sweep stopping it): remove the cell folder it was writing, exit at once."""
+    for path in list(_CELL_FOLDERS):
+        shutil.rmtree(path, ignore_errors=True)
+    os._exit(128 + signum)
+
+
 def _worker_init() -> None:
     """Worker processes leave Ctrl-C to the parent (which stops them) and die with it (Linux)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+    signal.signal(signal.SIGTERM, _worker_stopped)
+    signal.signal(signal.SIGHUP, _worker_stopped)
     if sys.platform.startswith("linux"):
         try:
             import ctypes
