@@ -90,8 +90,8 @@ def _check_existing(out: Path, text: str, force: bool) -> None:
             raise UsageError(
                 f"output folder {text!r} is inside another run's staging folder {part!r}; choose a new folder"
             )
-    if force and out.is_dir() and os.path.ismount(out):
-        raise UsageError(f"output folder {text!r} is a mount point; --force cannot replace it")
+    if out.is_dir() and os.path.ismount(out):  # a run is published by renaming onto --out: not onto a mount point
+        raise UsageError(f"output folder {text!r} is a mount point; give a new folder inside it")
     if out.exists() and not out.is_dir():
         raise UsageError(f"output path {text!r} exists and is not a folder")
     try:
@@ -154,7 +154,11 @@ def _snapshot(folder: Path) -> tuple | None:
     for root, dirs, files in os.walk(folder):
         for name in sorted(dirs) + sorted(files):
             path = os.path.join(root, name)
-            st = os.stat(path, follow_symlinks=False)
+            try:
+                st = os.stat(path, follow_symlinks=False)
+            except FileNotFoundError:  # removed while we looked: the folder is changing
+                entries.append((os.path.relpath(path, folder), -1, -1, -1, -1))
+                continue
             entries.append((os.path.relpath(path, folder), st.st_mode, st.st_size, st.st_mtime_ns, st.st_ino))
     return (top.st_ino, top.st_dev, tuple(sorted(entries)))
 
@@ -190,6 +194,34 @@ def _publish(parent_fd: int, staging: str, out: Path, auto_name: bool, force: bo
         raise OutputError(f"no free run folder name next to {str(out)!r}")
     if out.is_symlink():
         raise OutputError(f"{str(out)!r} became a symbolic link during the run; result not written")
+    with _publishing(parent_fd):
+        old = _replace(parent_fd, staging, out, force, before, rename)
+    if old is not None:  # what --force replaced, deleted once the new run is in place (and the lock is free)
+        shutil.rmtree(old, ignore_errors=True, dir_fd=parent_fd)
+    return out
+
+
+@contextlib.contextmanager
+def _publishing(parent_fd: int) -> Iterator[None]:
+    """One publisher at a time in a folder (an advisory lock on it): two --force runs to the same `out` cannot
+    both find it as it was at their start and both replace it."""
+    try:
+        import fcntl
+    except ImportError:  # not on Linux or macOS: no lock
+        yield
+        return
+    fcntl.flock(parent_fd, fcntl.LOCK_EX)
+    try:
+        yield
+    finally:
+        fcntl.flock(parent_fd, fcntl.LOCK_UN)
+
+
+def _replace(parent_fd: int, staging: str, out: Path, force: bool, before: tuple | None, rename) -> str | None:
+    """_publish's rename into an explicit `out`: only over nothing, an empty folder, or (force) what was there.
+
+    Returns the folder (in `parent_fd`) holding what --force moved aside, or None.
+    """
     now = _snapshot(out)
     if force and now != before and not (before is None and now is not None and not now[2]):
         raise OutputError(
@@ -216,9 +248,7 @@ def _publish(parent_fd: int, staging: str, out: Path, auto_name: bool, force: bo
                 "(run again with another --out, or --force to replace it)"
             ) from None
         raise
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True, dir_fd=parent_fd)
-    return out
+    return old
 
 
 @contextmanager
@@ -279,6 +309,18 @@ def run_folder(out: str | os.PathLike[str] | None, scenario: str = "run", force:
 
 
 CELL_PREFIX = "hexabot-sim-cell-"  # a sweep worker's kept-run folder in the temporary folder: <prefix><pid>-...
+
+
+DISK_FULL_BYTES = 1 << 20  # [B] a folder with less free space than this is out of disk
+
+
+def _disk_full(folder: Path) -> bool:
+    """True if the file system of `folder` has less than DISK_FULL_BYTES free (for this user)."""
+    try:
+        st = os.statvfs(folder)
+    except (OSError, AttributeError):
+        return False
+    return st.f_bavail * st.f_frsize < DISK_FULL_BYTES
 
 
 def stale_cells() -> list[Path]:
@@ -481,7 +523,10 @@ def write_video(
         (folder / name).unlink(missing_ok=True)
         if isinstance(e, OSError) and e.errno in (errno.ENOSPC, errno.EDQUOT):
             raise
-        reason = f"rendering failed: {type(e).__name__}: {str(e).strip().splitlines()[-1] if str(e).strip() else ''}"
+        if _disk_full(folder):  # ffmpeg ran out of space: its error (a broken pipe) does not say so
+            raise OSError(errno.ENOSPC, "No space left on device (while encoding the video)") from None
+        lines = [line.strip() for line in str(e).splitlines() if line.strip()]
+        reason = f"rendering failed: {type(e).__name__}: {lines[0] if lines else ''}"  # the first line says what
         return {"written": False, "reason": reason.rstrip(": ")}, time.perf_counter() - started
     video = {
         "written": True,

@@ -12,9 +12,10 @@ from pathlib import Path
 
 import pytest
 
-from hexabot_sim import output, scenarios
+from hexabot_sim import output, params, scenarios
 from hexabot_sim.__main__ import main
 from hexabot_sim.errors import OutputError, UsageError
+from hexabot_sim.scenarios.pendulum import PendulumParams
 
 FAST = ["--set", "duration=0.05", "--no-plots"]
 
@@ -611,3 +612,65 @@ def test_config_edge_cases(tmp_path, capsys):
     bom.write_bytes(b"\xef\xbb\xbfmass = 0.2\n")
     code, _, err = cli(capsys, "run", "pendulum", *FAST, "--config", str(bom), "--out", str(tmp_path / "r"))
     assert code == 0, err
+
+
+def test_a_mount_point_is_refused_before_the_run(tmp_path, monkeypatch):
+    """A run is published by renaming onto --out, which a mount point refuses (EBUSY): say so before simulating."""
+    mounted = tmp_path / "mnt"
+    mounted.mkdir()
+    real = os.path.ismount
+    monkeypatch.setattr(os.path, "ismount", lambda p: Path(p) == mounted or real(p))
+    with pytest.raises(UsageError, match="is a mount point; give a new folder inside it"):
+        output.check_out(mounted)
+    output.check_out(mounted / "run")  # inside it: fine
+
+
+def test_publishers_in_one_folder_take_turns(tmp_path):
+    """Two runs publishing into the same folder hold a lock while they compare --out with what it was and rename,
+    so two --force runs cannot both find it unchanged and both replace it."""
+    import threading
+
+    first, second = (os.open(tmp_path, os.O_RDONLY | os.O_DIRECTORY) for _ in range(2))
+    times = {}
+
+    def publish(name, fd, hold):
+        with output._publishing(fd):
+            times[name] = time.monotonic()
+            time.sleep(hold)
+
+    try:
+        a = threading.Thread(target=publish, args=("a", first, 0.4))
+        a.start()
+        time.sleep(0.1)
+        b = threading.Thread(target=publish, args=("b", second, 0.0))
+        b.start()
+        a.join()
+        b.join()
+    finally:
+        os.close(first)
+        os.close(second)
+    assert times["b"] - times["a"] >= 0.35
+
+
+@pytest.mark.parametrize("full", [True, False])
+def test_an_encoder_failure_on_a_full_disk_fails_the_run(tmp_path, monkeypatch, full):
+    """ffmpeg that runs out of disk dies with a broken pipe, which does not say why: with the disk full the run
+    fails as out of disk (nothing written); otherwise the run keeps its CSV and names the first line of the error
+    (it named the last, 'FFMPEG STDERR OUTPUT:', found by fuzzing)."""
+    from hexabot_sim import render
+
+    def broken(*args, **kwargs):
+        raise OSError("[Errno 32] Broken pipe\n\nFFMPEG COMMAND:\nffmpeg -y ...\n\nFFMPEG STDERR OUTPUT:\n")
+
+    monkeypatch.setattr(render, "render_video", broken)
+    monkeypatch.setattr(output, "_disk_full", lambda folder: full)
+    result = scenarios.get("pendulum").runner("pendulum", params.resolve(PendulumParams, {}, {"duration": 0.2}))
+    folder = tmp_path / "r"
+    folder.mkdir()
+    settings = output.VideoSettings()
+    if full:
+        with pytest.raises(OSError, match="No space left on device"):
+            output.write_video(folder, result, settings, "egl")
+    else:
+        video, _ = output.write_video(folder, result, settings, "egl")
+        assert video == {"written": False, "reason": "rendering failed: OSError: [Errno 32] Broken pipe"}
