@@ -165,7 +165,7 @@ class Terrain:
         return cache
 
     def mjcf(self) -> tuple[list[str], list[str]]:
-        """(asset elements, worldbody geoms) of the terrain features, as MJCF text."""
+        """(asset elements, worldbody elements: geoms, and the floor ring's static bodies) as MJCF text."""
         assets = [TERRAIN_TEXTURE]
         geoms: list[str] = []
         assets.append(TERRAIN_MATERIAL)
@@ -185,7 +185,9 @@ class Terrain:
                 f'pos="{(x0 + x1) / 2!r} {(y0 + y1) / 2!r} {base!r}" '
                 'material="terrain" contype="0" conaffinity="2" group="0"/>'
             )
-            # The level floor around the patch: west and east full width, south and north between them.
+            # The level floor around the patch: west and east full width, south and north between them. Each box
+            # in a static body of its own: MuJoCo's broadphase then prunes it by its own bounding box (as geoms of
+            # the world body the four cost 2 us a step against 0.8 us, bare mj_step on rough ground, measured).
             far = FLOOR_RING
             for side, (a0, a1, b0, b1) in (
                 ("west", (x0 - far, x0, y0 - far, y1 + far)),
@@ -194,9 +196,9 @@ class Terrain:
                 ("north", (x0, x1, y1, y1 + far)),
             ):
                 geoms.append(
+                    f'<body name="floor_{side}" pos="{(a0 + a1) / 2!r} {(b0 + b1) / 2!r} {-FLOOR_THICKNESS / 2!r}">'
                     f'<geom name="floor_{side}" type="box" size="{(a1 - a0) / 2!r} {(b1 - b0) / 2!r} '
-                    f'{FLOOR_THICKNESS / 2!r}" pos="{(a0 + a1) / 2!r} {(b0 + b1) / 2!r} {-FLOOR_THICKNESS / 2!r}" '
-                    'material="terrain" contype="0" conaffinity="2" group="0"/>'
+                    f'{FLOOR_THICKNESS / 2!r}" material="terrain" contype="0" conaffinity="2" group="0"/></body>'
                 )
         if self.kerb_height:
             ax, ay = self.along
