@@ -306,3 +306,12 @@ def test_a_3_cm_kerb_is_climbed():
     above = c["z"][-1] - r.extras["terrain"].height(c["x"][-1], c["y"][-1])
     assert above == pytest.approx(0.098, abs=0.003)  # back at its height, now above the pavement
     assert value(r, "largest_climbable_kerb") == pytest.approx(0.032)
+
+
+@pytest.mark.parametrize("overrides", [{"roughness": 0.01}, {"kerb_height": 0.02}, {"slope_deg": 10.0}])
+def test_the_cameras_near_plane_stays_at_the_robots_scale(overrides):
+    """MuJoCo sizes a scene from its geoms: the 20 m kerb or floor ring made it 28-67 m and the renderer's near
+    plane (znear x extent) 0.3-0.7 m, which cut away the ground in front of the chase camera (seen in a frame)."""
+    model, _ = compiled(resolve(**overrides))
+    assert model.stat.extent == scenario.SCENE_EXTENT
+    assert model.vis.map.znear * model.stat.extent <= 0.05  # [m]

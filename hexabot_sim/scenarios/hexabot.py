@@ -45,6 +45,7 @@ FALL_TILT_DEG: float = 45.0  # body tilt beyond which the robot has fallen over
 # against 31.5 us with NoSlip (median of 15 walks, 3 gaits x 5 seeds). The flat floor keeps the
 # defaults (its published results were measured with them; there is no steady tangential load there).
 TERRAIN_NOSLIP_ITERATIONS: int = 2
+SCENE_EXTENT: float = 2.0  # [m] <statistic extent> of a scene with terrain (what MuJoCo computes for the flat one)
 SLOPE_CAMERA_DISTANCE: float = 0.9  # [m] the slope video's camera: beside the body, across the slope
 SLOPE_CAMERA_HEIGHT: float = 0.08  # [m] above the body's centre of mass (low: the ground's tilt shows)
 # Limit on the commanded joint acceleration (resolved-rate step). It smooths what the position feedback
@@ -401,6 +402,9 @@ def _add_terrain(root, p: HexabotParams, ground: Terrain, feet: np.ndarray, q0: 
         world.append(ET.fromstring(text))
     floor = models.find(root, "geom", "floor")
     models.find(root, "option").set("noslip_iterations", str(TERRAIN_NOSLIP_ITERATIONS))
+    # MuJoCo sizes the scene from its geoms unless told: the 20 m kerb or floor ring made it 28-67 m, and the
+    # renderer's near plane (znear x extent) clipped the ground in front of the chase camera. The robot's scale:
+    root.insert(0, ET.Element("statistic", extent=models.fmt(SCENE_EXTENT), center="0 0 0.1"))
     if ground.slope_deg:
         floor.set("quat", models.fmt(ground.floor_quat()))
         # From the chase camera a 10 deg tilt hardly shows: the video looks along the slope's contour lines
