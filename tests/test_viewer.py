@@ -170,8 +170,9 @@ def drawn(image: np.ndarray) -> bool:
     return bool(image.std() > 20 and (image.max(axis=2) > 20).mean() > 0.2)
 
 
-def watch(display: str, argv: list[str], shot: Path, quit_after: float = 6.0) -> tuple[np.ndarray, str]:
-    """Runs `hexabot-sim view ...` on the display, captures the screen once it draws, returns (RGB, stdout)."""
+def watch(display: str, argv: list[str], shot: Path, quit_after: float = 6.0, ready=None) -> tuple[np.ndarray, str]:
+    """Runs `hexabot-sim view ...` on the display, captures the screen once it draws (and `ready(image)`, e.g.
+    the robot is in view: a loaded machine can show a frame drawn before the scene), returns (RGB, stdout)."""
     env = dict(os.environ, DISPLAY=display)
     env.pop("WAYLAND_DISPLAY", None)
     env.pop("MUJOCO_GL", None)
@@ -190,7 +191,7 @@ def watch(display: str, argv: list[str], shot: Path, quit_after: float = 6.0) ->
             dump = subprocess.run(["xwd", "-root", "-silent", "-display", display], capture_output=True)
             if dump.returncode == 0:
                 image = read_xwd(dump.stdout)
-                if drawn(image):
+                if drawn(image) and (ready is None or ready(image)):
                     break
             time.sleep(CAPTURE_EVERY)
         out, err = proc.communicate(timeout=OPEN_TIMEOUT)
@@ -225,14 +226,22 @@ def assert_drawn(image: np.ndarray, colours: list[tuple[float, float, float]], l
         assert colour_pixels(image, rgb) >= least, f"robot colour {rgb} missing"
 
 
+def showing(colours: list[tuple[float, float, float]], least: int):
+    """A `watch` predicate: every robot colour covers at least `least` pixels."""
+    return lambda image: all(colour_pixels(image, rgb) >= least for rgb in colours)
+
+
 def test_pendulum_live_is_drawn(xdisplay, tmp_path) -> None:
-    image, out = watch(xdisplay, ["pendulum"], tmp_path / "pendulum_live.png")
+    image, out = watch(xdisplay, ["pendulum"], tmp_path / "pendulum_live.png", ready=showing([BLUE], 300))
     assert_drawn(image, [BLUE], least=300)
     assert "last state shown: t =" in out
 
 
 def test_leg_step_live_is_drawn(xdisplay, tmp_path) -> None:
-    image, out = watch(xdisplay, ["leg-step", "--set", "mode=kinematic"], tmp_path / "leg_live.png")
+    image, out = watch(
+        xdisplay, ["leg-step", "--set", "mode=kinematic"], tmp_path / "leg_live.png",
+        ready=showing([BLUE, ORANGE, GREEN], 100),
+    )  # fmt: skip
     assert_drawn(image, [BLUE, ORANGE, GREEN], least=100)
     t = float(out.split("t = ")[1].split()[0])
     assert 0.5 < t < 12.6  # it advanced in real time, not to the end
@@ -243,6 +252,11 @@ def test_hexabot_replay_reaches_the_final_state(xdisplay, tmp_path) -> None:
     assert main(["run", "hexabot-walk", "--set", "duration=2", "--out", str(folder), "--no-plots"]) == 0
     with np.load(folder / "trajectory.npz") as npz:
         t = npz["t"]
-    image, out = watch(xdisplay, [str(folder), "--speed", "4"], tmp_path / "hexabot_replay.png")
+    image, out = watch(
+        xdisplay,
+        [str(folder), "--speed", "4"],
+        tmp_path / "hexabot_replay.png",
+        ready=showing([BLUE, ORANGE, GREEN], 100),
+    )
     assert_drawn(image, [BLUE, ORANGE, GREEN], least=100)
     assert f"t = {t[-1]:.6g} s (row {len(t) - 1} of {len(t) - 1}, the final state)" in out
