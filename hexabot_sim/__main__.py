@@ -724,7 +724,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         RECEIVED_SIGNALS.clear()
         PENDING_SIGNALS.clear()
         PUBLISHED[0] = False
-    argv_given = argv is not None
     argv = list(sys.argv[1:] if argv is None else argv)
     stdout, sys.stdout = sys.stdout, _GuardedStdout(sys.stdout)
     _COMPLETED.clear()
@@ -737,8 +736,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         _eprint(f"{PROG}: error: cannot write to standard output: {e.error.strerror or e.error}{done}")
         return 1
     finally:
-        if argv_given:  # nor does a published run's "too late" carry over to the next call
-            PUBLISHED[0] = False
         sys.stdout = stdout
 
 

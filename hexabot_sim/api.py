@@ -16,7 +16,7 @@ import numpy as np
 from hexabot_sim import output
 from hexabot_sim import params as params_mod
 from hexabot_sim import scenarios as registry
-from hexabot_sim.errors import PUBLISHED, OutputError, UsageError
+from hexabot_sim.errors import OutputError, UsageError
 from hexabot_sim.scenarios.base import Metric
 
 __all__ = ["Columns", "Metric", "Parameter", "Result", "ScenarioInfo", "run", "scenarios"]
@@ -141,10 +141,11 @@ def run(
     return Result(entry, p, result, time.perf_counter() - started)
 
 
-def _check_path(name: str, value: Any) -> None:
-    """A path argument is a str or os.PathLike (or None), else a UsageError (not pathlib's TypeError)."""
-    if value is not None and not isinstance(value, (str, os.PathLike)):
-        raise UsageError(f"'{name}' must be a path (str or os.PathLike) or None; got {type(value).__name__}")
+def _check_path(name: str, value: Any, optional: bool = True) -> None:
+    """A path argument is a str or os.PathLike (or None where optional), else a UsageError (not pathlib's TypeError)."""
+    if not (isinstance(value, (str, os.PathLike)) or (optional and value is None)):
+        allowed = "a path (str or os.PathLike)" + (" or None" if optional else "")
+        raise UsageError(f"'{name}' must be {allowed}; got {type(value).__name__}")
 
 
 def _check_callable(name: str, value: Any) -> None:
@@ -259,22 +260,19 @@ class Result:
         backend, reason = None, output.NOT_REQUESTED
         if video:
             backend, reason = _video_backend()
-        try:
-            with output.run_folder(out, self.scenario, force=force) as folder:
-                output.write_run(
-                    folder.path,
-                    self._scenario,
-                    self._params,
-                    self.raw,
-                    sim_seconds=self.wall_time,
-                    plots=plots,
-                    video=settings,
-                    backend=backend,
-                    no_video_reason=reason,
-                    video_progress=progress,
-                )
-        finally:
-            PUBLISHED[0] = False  # the command line's "too late to stop" state; nothing to do with the API
+        with output.run_folder(out, self.scenario, force=force) as folder:
+            output.write_run(
+                folder.path,
+                self._scenario,
+                self._params,
+                self.raw,
+                sim_seconds=self.wall_time,
+                plots=plots,
+                video=settings,
+                backend=backend,
+                no_video_reason=reason,
+                video_progress=progress,
+            )
         assert folder.final is not None
         return folder.final
 
@@ -302,9 +300,7 @@ class Result:
             hexabot_sim.errors.UsageError: bad options, or a scenario without a trajectory (leg-sweep).
             hexabot_sim.errors.OutputError: no working OpenGL or ffmpeg here, or rendering failed.
         """
-        if path is None:
-            raise UsageError("'path' must be a path (str or os.PathLike); got NoneType")
-        _check_path("path", path)
+        _check_path("path", path, optional=False)
         _check_callable("progress", progress)
         settings = _video_settings(quality, size, fps)
         if self.raw.camera is None or self.raw.trajectory is None:

@@ -201,7 +201,7 @@ def _publish(parent_fd: int, staging: str, out: Path, auto_name: bool, force: bo
     return out
 
 
-@contextlib.contextmanager
+@contextmanager
 def _publishing(parent_fd: int) -> Iterator[None]:
     """One publisher at a time in a folder (an advisory lock on it): two --force runs to the same `out` cannot
     both find it as it was at their start and both replace it."""
@@ -325,12 +325,11 @@ def _disk_full(folder: Path) -> bool:
 
 def stale_cells() -> list[Path]:
     """Sweep workers' kept-run folders in the system's temporary folder whose process is gone."""
-    found = []
-    for path in sorted(Path(tempfile.gettempdir()).glob(f"{CELL_PREFIX}*")):
-        pid_text = path.name.removeprefix(CELL_PREFIX).split("-", 1)[0]
-        if pid_text.isdigit() and not _alive(int(pid_text)) and path.is_dir() and not path.is_symlink():
-            found.append(path)
-    return found
+    return [
+        path
+        for path in sorted(Path(tempfile.gettempdir()).glob(f"{CELL_PREFIX}*"))
+        if _is_folder(path) and (pid := _owner(path, CELL_PREFIX)) is not None and not _alive(pid)
+    ]
 
 
 def stale_staging(root: Path) -> list[Path]:
@@ -339,12 +338,20 @@ def stale_staging(root: Path) -> list[Path]:
     for prefix in (STAGING_PREFIX, _OLD_PREFIX):
         for pattern in (f"{prefix}*", f"*/{prefix}*"):
             for path in sorted(root.glob(pattern)):
-                pid_text = path.name.removeprefix(prefix).split("-", 1)[0]
-                if pid_text.isdigit() and _alive(int(pid_text)):
-                    continue
-                if path.is_dir() and not path.is_symlink():
+                pid = _owner(path, prefix)
+                if _is_folder(path) and (pid is None or not _alive(pid)):
                     found.append(path)
     return found
+
+
+def _owner(path: Path, prefix: str) -> int | None:
+    """The process id in a name <prefix><pid>-..., None if there is none."""
+    pid_text = path.name.removeprefix(prefix).split("-", 1)[0]
+    return int(pid_text) if pid_text.isdigit() else None
+
+
+def _is_folder(path: Path) -> bool:
+    return path.is_dir() and not path.is_symlink()
 
 
 def _alive(pid: int) -> bool:

@@ -117,12 +117,13 @@ def _show(raw: Any) -> str:
     if isinstance(raw, float):
         text = repr(raw)
     elif isinstance(raw, int) and not isinstance(raw, bool):
+        digits = int(raw.bit_length() * math.log10(2)) + 1  # the count, or one less
         if raw.bit_length() < 128:
             text = str(raw)
-        elif raw.bit_length() < 4000 * 3.3:  # str() of an int past sys.get_int_max_str_digits() (4300) raises
+        elif digits < sys.get_int_max_str_digits():  # str() of a longer int raises
             text = f"an integer of {len(str(abs(raw)))} digits"
         else:
-            text = f"an integer of about {int(raw.bit_length() * math.log10(2)) + 1} digits"
+            text = f"an integer of about {digits} digits"
     elif isinstance(raw, (datetime.date, datetime.time)):  # TOML dates and times
         text = f"the {type(raw).__name__} {raw.isoformat()}"
     else:

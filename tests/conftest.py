@@ -16,3 +16,15 @@ def gl_backend() -> str:
     if backend is None:
         pytest.skip(f"rendering unavailable here: {reason}")
     return backend
+
+
+@pytest.fixture(autouse=True)
+def fresh_stop_state():
+    """The command line's stop-signal bookkeeping (hexabot_sim.errors) is per process: reset for every test, since
+    many tests run commands in this one process."""
+    from hexabot_sim import errors
+
+    errors.RECEIVED_SIGNALS.clear()
+    errors.PENDING_SIGNALS.clear()
+    errors.HOLD[0] = 0
+    errors.PUBLISHED[0] = False

@@ -166,7 +166,9 @@ class HexabotController:
 
     def _publish(self, rows: np.ndarray, stance: np.ndarray) -> None:
         """Keeps what the steps of the chunk need from its targets rows (n + 1, 18) (hip frames) and stance flags."""
-        self._feed = (rows[1:] - rows[:-1]) / self.dt + self.consts[3] * rows[:-1]
+        rates = np.empty(rows[1:].size)
+        self.kernels.feed(self.consts[3], rows[:-1].ravel(), rows[1:].ravel(), self.dt, rates)
+        self._feed = rates.reshape(-1, 18)
 
     def _rolling_offsets(self, hip: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
         """Offsets (n + 1, 6, 3) of the foot-centre targets for feet that roll without slipping.

@@ -42,6 +42,7 @@ def jit(function):
 
 
 rate_steps = jit(resolved_rate.rate_steps)
+feed = jit(resolved_rate.feed)
 
 # Swing state machine, per leg.
 STANCE, SWING, EARLY, SEEKING = 0, 1, 2, 3
@@ -283,12 +284,10 @@ def ground_step(par, geo, k, legs, flags, plane, counts, cmd, rows, stance, r, t
     row1 = np.empty(18)
     n_events = targets(par, geo, legs, flags, plane, cmd, rows[r + 1], stance[r + 1], t + dt, rows[r], sensordata,
                        row1, events)  # fmt: skip
-    feed = np.empty(18)
-    gain = k[3]
-    for i in range(18):
-        feed[i] = (row1[i] - row_prev[i]) / dt + gain * row_prev[i]
-        row_prev[i] = row1[i]
-    servo(k, qpos, trims, q_cmd, dq, feed, dt, ctrl)
+    rate = np.empty(18)
+    feed(k[3], row_prev, row1, dt, rate)
+    row_prev[:] = row1
+    servo(k, qpos, trims, q_cmd, dq, rate, dt, ctrl)
     return n_events
 
 
@@ -337,10 +336,11 @@ def _compile_all() -> None:
     plane, counts, cmd = np.zeros(3), np.zeros(3, dtype=np.int64), np.zeros(3)
     rows, stance = np.zeros((2, 18)), np.ones((2, 6), dtype=bool)
     q_cmd, dq, trims, row, events = np.zeros(18), np.zeros(18), np.zeros(18), np.zeros(18), np.zeros((6, 3))
+    feed(1.0, rows[:-1].ravel(), rows[1:].ravel(), 0.002, np.empty(18))  # as HexabotController._publish
     servo(k, qpos, trims, q_cmd, dq, rows[0], 0.002, ctrl)
     targets(par, geo, legs, flags, plane, cmd, rows[0], stance[0], 0.0, rows[0], sensordata, row, events)
     ground_step(par, geo, k, legs, flags, plane, counts, cmd, rows, stance, 0, 0.0, row, q_cmd, dq, trims, qpos,
                 sensordata, ctrl, events)  # fmt: skip
 
 
-_KERNELS = (rate_steps, servo, plane_fit, update_plane, _event, targets, ramp, ground_step)
+_KERNELS = (rate_steps, feed, servo, plane_fit, update_plane, _event, targets, ramp, ground_step)

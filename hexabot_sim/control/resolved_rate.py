@@ -138,7 +138,8 @@ class ResolvedRateController:
         self._next_t = t + dt
         self._next_ref = xd1, yd1, zd1 = self.reference(self._next_t)
         dq = list(self.dq)
-        rate = feed(self.gains.task_gain, [xd0, yd0, zd0], [xd1, yd1, zd1], dt)
+        rate = [0.0, 0.0, 0.0]
+        feed(self.gains.task_gain, (xd0, yd0, zd0), (xd1, yd1, zd1), dt, rate)
         rate_steps(self._k, list(q), self.q_cmd, dq, rate, dt)
         self.dq = (dq[0], dq[1], dq[2])
         return (*self.q_cmd, *dq)
@@ -159,10 +160,12 @@ def step_constants(geometry: LegGeometry, gains: ResolvedRateGains, q_lower: Vec
     )  # fmt: skip
 
 
-def feed(gain: float, target0: list[float], target1: list[float], dt: float) -> list[float]:
-    """The target part of the task-space rate, (x_des(t + dt) - x_des(t)) / dt + K x_des(t), for rate_steps."""
+def feed(gain: float, target0, target1, dt: float, out) -> None:
+    """The target part of the task-space rate, (x_des(t + dt) - x_des(t)) / dt + K x_des(t), for rate_steps,
+    into `out` (as many values as it holds; compiled as kernels.feed for the hexabot's rows)."""
     inv = 1.0 / dt
-    return [(b - a) * inv + gain * a for a, b in zip(target0, target1, strict=True)]
+    for i in range(len(out)):
+        out[i] = (target1[i] - target0[i]) * inv + gain * target0[i]
 
 
 def rate_steps(

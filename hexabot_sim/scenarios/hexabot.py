@@ -499,6 +499,10 @@ class Contacts:
     torque: np.ndarray  # (n, 18) joint actuator torque [N m]
     body_contact: np.ndarray  # (n,) the plate touches the ground
 
+    def loaded(self, total_mass: float) -> np.ndarray:
+        """(n, 6) the feet that carry load: more than LOADED_FRACTION of a sixth of the robot's weight."""
+        return self.load > LOADED_FRACTION * total_mass * 9.81 / 6
+
 
 def replay_contacts(
     model: mujoco.MjModel, t: np.ndarray, qpos: np.ndarray, qvel: np.ndarray, ctrl: np.ndarray
@@ -594,7 +598,7 @@ def walking_metrics(
     z = qpos[window, 2]
     roll, pitch = np.degrees(rpy[window, 0]), np.degrees(rpy[window, 1])
     # Slip of loaded feet, per stance.
-    loaded = contacts.load > LOADED_FRACTION * total_mass * 9.81 / 6
+    loaded = contacts.loaded(total_mass)
     slip_loaded = contacts.slip[window][loaded[window]]
     slip_distance = float((contacts.slip[window] * loaded[window]).sum() * dt)
     touchdowns = int((np.diff(loaded[window].astype(int), axis=0) == 1).sum())
@@ -663,10 +667,11 @@ def terrain_metrics(
     t: np.ndarray,
     qpos: np.ndarray,
     controller: HexabotController,
-    loaded: np.ndarray,
+    bearing: np.ndarray,
+    planned: np.ndarray,
 ) -> dict[str, Metric]:
     """Attitude relative to gravity, height above the local ground, progress, touchdowns, levelling limits,
-    and how often the feet the plan has in stance carry load (`loaded`, (n, 6): above LOADED_FRACTION)."""
+    and how often the feet the plan has in stance (`planned`, (n, 6)) carry load (`bearing`: loaded and planned)."""
     window = steady_window(p, t)
     rpy = np.degrees(rpy_from_quat(qpos[window, 3:7]))  # z-y-x angles: roll and pitch are relative to gravity
     roll, pitch = rpy[:, 0], rpy[:, 1]
@@ -680,8 +685,7 @@ def terrain_metrics(
     events = [e for e in getattr(controller, "events", []) if e.planned > SETTLE_TIME]
     touched = np.array([e.touched - e.planned for e in events if math.isfinite(e.touched)])
     updates = getattr(controller, "updates", 0)
-    planned = controller.planner.in_stance(t[window])  # (m, 6)
-    bearing = loaded[window] & planned
+    bearing, planned = bearing[window], planned[window]
     per_leg = bearing.sum(axis=0) / np.maximum(planned.sum(axis=0), 1)
     return {
         "roll_peak": Metric(float(np.abs(roll).max()), "deg", "largest |body roll| relative to gravity (steady walk)"),
@@ -752,9 +756,10 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
         "real_time_factor": Metric(t[-1] / wall, "1", "simulated time / wall time of the simulation loop"),
     }
     ground = terrain(p)
-    loaded = contacts.load > LOADED_FRACTION * total_mass * 9.81 / 6
+    loaded = contacts.loaded(total_mass)
+    planned = controller.planner.in_stance(t)  # (n, 6)
     if not ground.flat or p.on_ground():  # flat runs with the planned controller keep their metrics as they were
-        metrics |= terrain_metrics(p, ground, t, qpos, controller, loaded)
+        metrics |= terrain_metrics(p, ground, t, qpos, controller, loaded & planned, planned)
     rpy = rpy_from_quat(qpos[:, 3:7])
     # Command in force at every row: the chunk's command (re-planned every chunk) times the ramp's factor.
     plan_t = np.array([c[0] for c in controller.commands])
@@ -799,7 +804,7 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
         overlay=overlay,
         extras={
             "contacts": contacts,
-            "planned_stance": controller.planner.in_stance(t),
+            "planned_stance": planned,
             "window": steady_window(p, t),
             "terrain": ground,
             "touchdowns": getattr(controller, "events", []),
