@@ -168,8 +168,23 @@ def _plan_cycle(p: HexabotParams, cmd: Command, samples: int = 240) -> tuple[np.
     return hip, dt
 
 
+# _cycle_problem's answers by what the cycle depends on: a sweep checks each gait for each of its other values.
+_CYCLE_PROBLEMS: dict[tuple[Any, ...], str] = {}
+CYCLE_CACHE_SIZE: int = 1 << 14
+
+
 def _cycle_problem(p: HexabotParams, cmd: Command) -> str:
     """'' if every leg can follow the planned cycle, else why not (reach, joint range or joint speed)."""
+    key = (p.gait, p.duty, p.period, p.step_height, p.stand_height, p.max_joint_speed, cmd)
+    problem = _CYCLE_PROBLEMS.get(key)
+    if problem is None:
+        if len(_CYCLE_PROBLEMS) >= CYCLE_CACHE_SIZE:
+            _CYCLE_PROBLEMS.clear()
+        problem = _CYCLE_PROBLEMS[key] = _cycle_problem_computed(p, cmd)
+    return problem
+
+
+def _cycle_problem_computed(p: HexabotParams, cmd: Command) -> str:
     hip, dt = _plan_cycle(p, cmd)
     q, ok = hx.ik_hip_batch(LAYOUT, hip)
     if not ok.all():
