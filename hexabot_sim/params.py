@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import datetime
 import decimal
@@ -11,7 +12,7 @@ import os
 import stat
 import sys
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -292,8 +293,8 @@ def _first_line(e: Exception) -> str:
 T = TypeVar("T")
 
 
-def resolve(cls: type[T], defaults: Mapping[str, Any], *layers: Mapping[str, Any]) -> T:
-    """Builds a parameter object: class defaults < scenario defaults < each layer in order.
+def converted(cls: type, defaults: Mapping[str, Any], *layers: Mapping[str, Any]) -> dict[str, Any]:
+    """The given values of `cls`'s parameters, each checked on its own (name, type, range), merged in order.
 
     Raises:
         UsageError: naming the unknown parameter or the bad value and what is allowed.
@@ -306,10 +307,28 @@ def resolve(cls: type[T], defaults: Mapping[str, Any], *layers: Mapping[str, Any
             if name not in known:
                 raise UsageError(f"unknown parameter {_show(name)}; known: {', '.join(known)}")
             values[name] = _convert(name, raw, known[name][0], kinds[name])
+    return values
+
+
+def build(cls: type[T], values: Mapping[str, Any]) -> T:
+    """A parameter object from converted values: the cross-parameter checks (__post_init__) run here.
+
+    Raises:
+        UsageError: with the check's message.
+    """
     try:
         return cls(**values)
     except ValueError as e:  # cross-field checks in __post_init__
         raise UsageError(str(e)) from None
+
+
+def resolve(cls: type[T], defaults: Mapping[str, Any], *layers: Mapping[str, Any]) -> T:
+    """Builds a parameter object: class defaults < scenario defaults < each layer in order.
+
+    Raises:
+        UsageError: naming the unknown parameter or the bad value and what is allowed.
+    """
+    return build(cls, converted(cls, defaults, *layers))
 
 
 def check_duration(duration: float, timestep: float) -> None:
@@ -330,6 +349,21 @@ def _time(seconds: float) -> str:
     return f"{seconds / 60:.2g} min" if seconds >= 60 else f"{seconds:.2g} s"
 
 
+# While estimates() is active: the estimated seconds of every run checked by check_budget (a sweep's cost).
+_ESTIMATES: list[float] | None = None
+
+
+@contextlib.contextmanager
+def estimates() -> Iterator[list[float]]:
+    """Collects the estimated wall time [s] of each parameter object built in the block (check_budget's)."""
+    global _ESTIMATES
+    outer, _ESTIMATES = _ESTIMATES, []
+    try:
+        yield _ESTIMATES
+    finally:
+        _ESTIMATES = outer
+
+
 def check_budget(steps: float, memory_bytes: float, output_bytes: float, seconds: float, fix: str) -> None:
     """Refuses, before it starts, a run that would not fit in memory or on disk or would take hours.
 
@@ -343,6 +377,8 @@ def check_budget(steps: float, memory_bytes: float, output_bytes: float, seconds
     Raises:
         ValueError: (reported as a usage error) with the estimates and the limits.
     """
+    if _ESTIMATES is not None:
+        _ESTIMATES.append(seconds)
     fits = steps <= MAX_STEPS and memory_bytes <= MAX_MEMORY_BYTES and output_bytes <= MAX_OUTPUT_BYTES
     if fits and seconds <= MAX_SECONDS:
         return
