@@ -559,20 +559,24 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
     sets = params_mod.parse_assignments(args.sets)
     config = params_mod.read_config(args.config) if args.config is not None else {}
-    plan = sweep.plan(args.scenario, args.grid, config, sets)  # every cell validated: nothing runs before
     if args.scheduler is not None and args.workers is not None:
         raise UsageError("--workers is for the local pool; with --scheduler the cluster's workers run the cells")
+    name = f"sweep-{scenarios.get(args.scenario).name}"
+    checking = SweepProgress(f"{name}: checking")  # speaks only if checking the cells takes seconds
+    plan = sweep.plan(args.scenario, args.grid, config, sets, checking)  # every cell validated: nothing runs before
     if args.out is not None:
         output.check_out(args.out, force=args.force)
-    name = f"sweep-{plan.scenario}"
     if args.scheduler is not None:
         pool: Any = sweep.dask_executor(args.scheduler)  # connects now: an unreachable scheduler writes nothing
     else:
         workers = min(args.workers or sweep.workers_default(), len(plan.cells))
+        sweep.check_cost(plan, workers, f"{workers} local process{'es' if workers > 1 else ''}")
         pool = contextlib.nullcontext((sweep.local_executor(workers), workers))
     started = time.perf_counter()
     with pool as (executor, workers), output.run_folder(args.out, name, force=args.force) as run:
         where = f"Dask scheduler {args.scheduler} ({workers} worker threads)" if args.scheduler else None
+        if where:  # the cluster's size is known once connected (the staging folder goes with the refusal)
+            sweep.check_cost(plan, workers, where)
         where = where or f"{workers} local process{'es' if workers > 1 else ''}"
         kept = 0
 

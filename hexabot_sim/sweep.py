@@ -36,6 +36,10 @@ ERROR_COLUMN = "error"
 MAX_CELLS: int = 100_000  # cells of one sweep (a cell is one run)
 MAX_AXIS_POINTS: int = 10_000  # values of one --grid axis
 MAX_WORKERS: int = 256  # local worker processes
+MAX_SWEEP_SECONDS: float = 24 * params_mod.MAX_SECONDS  # estimated wall time of a whole sweep (a run: 1 h)
+CHECK_QUIET_SECONDS: float = 2.0  # checking the cells longer than this reports its progress ...
+CHECK_REPORT_SECONDS: float = 1.0  # ... at most this often (the printer throttles its lines further)
+COUNT_SECONDS: float = 10.0  # after a cell that cannot run, counting the others stops after this long
 HEATMAP_LABELS_MAX: int = 12  # an axis with more values labels every k-th only
 ANNOTATE_MAX_CELLS: int = 100  # heatmaps up to this many cells print each value in its cell
 DECADES_FOR_LOG: float = 2.0  # positive values spanning this many decades get a log scale
@@ -81,8 +85,9 @@ class Plan:
 
     scenario: str
     axes: tuple[Axis, ...]
-    base: Any  # the scenario's parameters with --config/--set applied, before the grid
+    base: Any  # the scenario's parameters with --config/--set applied, before the grid (else cells[0])
     cells: tuple[Any, ...]  # (n,) resolved parameter objects
+    costs: tuple[float, ...] | None = None  # (n,) estimated wall time of each cell [s]; None: no cost model
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -126,15 +131,28 @@ def parse_axis(spec: str) -> tuple[str, list[Any], bool]:
     if len(parts) != 3:
         raise UsageError(f"malformed --grid {shown!r}: a range is START:STOP:N or log:START:STOP:N")
     start, stop = _number(parts[0], "START", shown), _number(parts[1], "STOP", shown)
-    count = params_mod._to_float(parts[2])
-    if count is None or count != int(count) or not 2 <= count <= MAX_AXIS_POINTS:
-        raise UsageError(f"--grid {shown!r}: N must be a whole number from 2 to {MAX_AXIS_POINTS}; got {parts[2]!r}")
+    count = params_mod._to_float(parts[2])  # None, nan and inf fail the range test (int() would raise)
+    if count is None or not 2 <= count <= MAX_AXIS_POINTS or count != int(count):
+        raise UsageError(
+            f"--grid {shown!r}: N must be a whole number from 2 to {MAX_AXIS_POINTS} (the number of values, "
+            f"both ends included); got {parts[2].strip()[: params_mod.MAX_SHOWN]!r}"
+        )
     if start == stop:
         raise UsageError(f"--grid {shown!r}: START and STOP are equal; give the value with --set instead")
     if log and (start <= 0 or stop <= 0):
         raise UsageError(f"--grid {shown!r}: a log range needs START > 0 and STOP > 0")
-    values = np.geomspace(start, stop, int(count)) if log else np.linspace(start, stop, int(count))
+    n = int(count)
+    with np.errstate(all="ignore"):  # a span past the largest float (-1e308:1e308): no warning on stderr
+        if log:
+            values = np.geomspace(start, stop, n)
+        elif math.isfinite(stop - start):
+            values = np.linspace(start, stop, n)
+        else:
+            t = np.linspace(0.0, 1.0, n)
+            values = start * (1 - t) + stop * t
     values[0], values[-1] = start, stop  # exactly as typed
+    if not np.isfinite(values).all():
+        raise UsageError(f"--grid {shown!r}: the values between START and STOP are not all finite numbers")
     return name, [float(v) for v in values], log
 
 
@@ -142,17 +160,30 @@ def _label(names: Sequence[str], values: Sequence[Any]) -> str:
     return ", ".join(f"{n} = {_text(v)}" for n, v in zip(names, values, strict=True))
 
 
-def plan(scenario_name: str, grid: Sequence[str], config: Mapping[str, Any], sets: Mapping[str, str]) -> Plan:
+def plan(
+    scenario_name: str,
+    grid: Sequence[str],
+    config: Mapping[str, Any],
+    sets: Mapping[str, str],
+    progress: Callable[[int, int], None] | None = None,
+) -> Plan:
     """Resolves and validates every cell of the grid (nothing runs).
+
+    A value is checked on its own (type, range) on its axis; whether it can run with the other
+    parameters (cross-parameter rules, feasibility, run cost) is checked per cell, with the values
+    it meets there: gait=wave is refused only where it meets a speed it cannot walk.
 
     Args:
         scenario_name: Scenario to sweep.
         grid: --grid specs, in order: the first is the slowest-varying axis.
         config: Parameters from --config.
         sets: Parameters from --set (fixed in every cell).
+        progress: Called with (cells checked, cells) when checking takes longer than CHECK_QUIET_SECONDS,
+            at most every CHECK_REPORT_SECONDS and once at the end.
 
     Raises:
-        UsageError: naming the bad spec, value or cell and what is allowed.
+        UsageError: naming the bad spec, value or cell and what is allowed; if any cell cannot run,
+            how many cannot, the first of them and its reason.
     """
     scenario = scenarios.get(scenario_name)
     if scenario.name in NOT_SWEEPABLE:
@@ -160,38 +191,40 @@ def plan(scenario_name: str, grid: Sequence[str], config: Mapping[str, Any], set
     if not grid:
         raise UsageError("give at least one --grid PARAM=V1,V2,... (or START:STOP:N, log:START:STOP:N)")
     cls = scenario.params_type
-    base = params_mod.resolve(cls, scenario.defaults, config, sets)
+    fixed = params_mod.converted(cls, scenario.defaults, config, sets)  # each on its own; together: per cell
     known = params_mod.infos(cls)
     kinds = {f.name: type(f.default) for f in dataclasses.fields(cls)}
     parsed: list[tuple[str, str, list[Any], bool]] = []
     for spec in grid:
         name, raw, log = parse_axis(spec)
+        shown = spec if len(spec) <= params_mod.MAX_SHOWN else spec[: params_mod.MAX_SHOWN - 3] + "..."
         if name not in known:
-            raise UsageError(f"--grid {spec!r}: unknown parameter {name!r}; known: {', '.join(known)}")
+            raise UsageError(f"--grid {shown!r}: unknown parameter {params_mod._show(name)}; known: {', '.join(known)}")
         if kinds[name] is tuple:
-            raise UsageError(f"--grid {spec!r}: parameter {name!r} is a list and cannot be swept")
+            raise UsageError(f"--grid {shown!r}: parameter {name!r} is a list and cannot be swept")
         if name in sets:
             raise UsageError(f"parameter {name!r} is given both with --set and with --grid; keep one")
         if any(name == other for other, *_ in parsed):
             raise UsageError(f"parameter {name!r} is given twice with --grid; give all its values in one")
-        parsed.append((name, spec, raw, log))
+        parsed.append((name, shown, raw, log))
 
     # Each value on its own first: the message names the parameter's range, not a cell.
     axes = []
-    for name, spec, raw, log in parsed:
+    for name, shown, raw, log in parsed:
         values = []
         for value in raw:
             try:
-                p = params_mod.resolve(cls, scenario.defaults, config, sets, {name: value})
+                values.append(params_mod.converted(cls, {}, {name: value})[name])
             except UsageError as e:
-                raise UsageError(f"--grid {spec!r}: {e}") from None
-            values.append(getattr(p, name))
-        seen = set()
-        for value in values:
+                raise UsageError(f"--grid {shown!r}: {e}") from None
+        seen: dict[Any, Any] = {}
+        for text, value in zip(raw, values, strict=True):
             if value in seen:
-                raise UsageError(f"--grid {spec!r}: the value {_text(value)} appears twice")
-            seen.add(value)
-        axes.append(Axis(name, spec, tuple(values), log))
+                a, b = (str(t)[: params_mod.MAX_SHOWN] for t in (seen[value], text))
+                same = "" if a == b else f" ({a} and {b} read as the same value)"
+                raise UsageError(f"--grid {shown!r}: the value {_text(value)} appears twice{same}")
+            seen[value] = text
+        axes.append(Axis(name, grid[len(axes)], tuple(values), log))
 
     shape = [len(a.values) for a in axes]
     count = math.prod(shape)
@@ -200,17 +233,100 @@ def plan(scenario_name: str, grid: Sequence[str], config: Mapping[str, Any], set
             f"the grid has {' x '.join(map(str, shape))} = {count} cells; the limit is {MAX_CELLS}: "
             "split the study into several sweeps"
         )
+    cells, costs = _check_cells(cls, fixed, axes, progress)
+    try:
+        base = params_mod.build(cls, fixed)
+    except UsageError:  # the fixed values fail only with the swept ones' defaults: no cell has those
+        base = cells[0]
+    return Plan(scenario.name, tuple(axes), base, tuple(cells), costs)
+
+
+def _check_cells(
+    cls: type, fixed: Mapping[str, Any], axes: Sequence[Axis], progress: Callable[[int, int], None] | None
+) -> tuple[list[Any], tuple[float, ...] | None]:
+    """Every cell's parameter object and estimated wall time (None without a cost model), in grid order.
+
+    Raises:
+        UsageError: if a cell cannot run: how many cannot, a value no cell can run with, the first cell and why.
+    """
     names = [a.name for a in axes]
-    cells = []
-    for index in np.ndindex(*shape):
-        values = [a.values[i] for a, i in zip(axes, index, strict=True)]
-        try:
-            cells.append(
-                params_mod.resolve(cls, scenario.defaults, config, sets, dict(zip(names, values, strict=True)))
-            )
-        except UsageError as e:  # a cross-parameter check (e.g. the leg's omega * timestep)
-            raise UsageError(f"grid cell {_label(names, values)}: {e}") from None
-    return Plan(scenario.name, tuple(axes), base, tuple(cells))
+    shape = [len(a.values) for a in axes]
+    total = math.prod(shape)
+    runs = [np.zeros(n, dtype=bool) for n in shape]  # [axis][value]: some cell with this value can run
+    cells: list[Any] = []
+    costs: list[float] = []
+    modelled = True
+    failed, checked = 0, total
+    first: tuple[list[Any], str, float] | None = None  # the first cell that cannot run: values, why, when
+    started = last = time.monotonic()
+    reported = False
+    with params_mod.estimates() as seconds:
+        for k, index in enumerate(np.ndindex(*shape)):
+            if first is not None and time.monotonic() - first[2] > COUNT_SECONDS:
+                checked = k  # a walk's refusal bisects its fastest command (~60 ms): 1e5 of them take hours
+                break
+            values = {a.name: a.values[i] for a, i in zip(axes, index, strict=True)}
+            del seconds[:]
+            try:
+                cells.append(params_mod.build(cls, {**fixed, **values}))
+            except UsageError as e:  # a cross-parameter check (e.g. the leg's omega * timestep)
+                failed += 1
+                first = first or (list(values.values()), " ".join(str(e).split()), time.monotonic())
+            else:
+                for axis, i in enumerate(index):
+                    runs[axis][i] = True
+                modelled = modelled and bool(seconds)
+                costs.append(float(sum(seconds)))
+            if progress is not None and k % 64 == 63:
+                now = time.monotonic()
+                if now - started >= CHECK_QUIET_SECONDS and now - last >= CHECK_REPORT_SECONDS:
+                    progress(k + 1, total)
+                    last, reported = now, True
+    if progress is not None and reported:
+        progress(checked, total)
+    if first is None:
+        return cells, tuple(costs) if modelled else None
+    values, reason, _ = first
+    if checked < total:
+        what = f"at least {failed} of {total} grid cells cannot run ({failed} of the first {checked} checked)"
+        raise UsageError(f"{what}; the first, {_label(names, values)}: {reason.rstrip('.')}; shrink the grid")
+    if failed == 1:
+        raise UsageError(f"grid cell {_label(names, values)}: {reason}")
+    dead = [(a, a.values[i]) for a, ok in zip(axes, runs, strict=True) for i in np.flatnonzero(~ok)]
+    if failed == total:
+        what, fix = "no grid cell can run", "change the fixed parameters or the grid"
+    elif dead:
+        a, value = dead[0]
+        what = f"{failed} of {total} grid cells cannot run, every one with {a.name} = {_text(value)} among them"
+        fix = f"leave {a.name} = {_text(value)} out of its --grid" + (
+            f" ({len(dead)} values of the grid have no cell that can run)" if len(dead) > 1 else ""
+        )
+    else:
+        what = f"{failed} of {total} grid cells cannot run"
+        fix = "every value can run in some cell: split the study into sweeps whose cells all can"
+    raise UsageError(f"{what}; the first, {_label(names, values)}: {reason.rstrip('.')}; {fix}")
+
+
+def _time(seconds: float) -> str:
+    return f"{seconds / 86400:.3g} days" if seconds >= 2 * 86400 else params_mod._time(seconds)
+
+
+def check_cost(p: Plan, workers: int, where: str) -> float | None:
+    """The sweep's estimated wall time on `workers` workers [s] (None without a cost model), or UsageError.
+
+    The estimate is the scenarios' own run-cost model (what refuses a single run over MAX_SECONDS),
+    summed over the cells and shared among the workers; a sweep may take MAX_SWEEP_SECONDS.
+    """
+    if p.costs is None:
+        return None
+    seconds = max(sum(p.costs) / max(workers, 1), max(p.costs, default=0.0))
+    if seconds > MAX_SWEEP_SECONDS:
+        raise UsageError(
+            f"this sweep would take ~{_time(seconds)} ({len(p.cells)} cells, ~{_time(sum(p.costs))} of runs, on "
+            f"{where}); the limit is {_time(MAX_SWEEP_SECONDS)}: fewer cells, shorter runs (e.g. 'duration') "
+            "or more workers (--workers, --scheduler)"
+        )
+    return seconds
 
 
 # ---------------------------------------------------------------------------------------------
