@@ -25,6 +25,7 @@ from hexabot_sim.errors import (
     RECEIVED_SIGNALS,
     HexabotError,
     Interrupted,
+    OutputError,
     UsageError,
     stop_request,
 )
@@ -330,6 +331,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.video:
         _check_video_cost(args, p)
     if args.out is not None:
+        output.check_not_input(args.out, [args.config] if args.config is not None else [])
         output.check_out(args.out, force=args.force)  # before the simulation, not after it
     with _mujoco_warnings_to_stderr():
         return _execute(args, scenario, p, backend, no_video_reason)
@@ -392,16 +394,21 @@ def _execute(args: argparse.Namespace, scenario: Any, p: Any, backend: str | Non
 def cmd_clean(args: argparse.Namespace) -> int:
     from hexabot_sim import output
 
+    if not args.folder:
+        raise UsageError("clean needs a folder name (default: runs); got an empty one")
     root = Path(args.folder)
     if not root.is_dir():
-        raise UsageError(f"{args.folder!r} is not a folder")
+        raise UsageError(f"{output.display_path(root)!r} is not a folder")
     stale = output.stale_staging(root) + output.stale_cells()
     for path in stale:
         if args.dry_run:
-            print(f"would remove {path}")
-        else:
+            print(f"would remove {output.display_path(path)}")
+            continue
+        try:
             shutil.rmtree(path)
-            print(f"removed {path}")
+        except OSError as e:
+            raise OutputError(f"could not remove {output.display_path(path)!r}: {e.strerror or e}") from None
+        print(f"removed {output.display_path(path)}")
     if not stale:
         cells = tempfile.gettempdir()
         print(f"no staging folders left by interrupted runs in {args.folder} (nor sweep cells in {cells})")
@@ -565,6 +572,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     checking = SweepProgress(f"{name}: checking")  # speaks only if checking the cells takes seconds
     plan = sweep.plan(args.scenario, args.grid, config, sets, checking)  # every cell validated: nothing runs before
     if args.out is not None:
+        output.check_not_input(args.out, [args.config] if args.config is not None else [])
         output.check_out(args.out, force=args.force)
     if args.scheduler is not None:
         pool: Any = sweep.dask_executor(args.scheduler)  # connects now: an unreachable scheduler writes nothing
@@ -645,6 +653,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
     runs = compare.load_all(args.runs)  # refuses anything that is not a run folder, before writing
     if args.out is not None:
+        output.check_not_input(args.out, args.runs)
         output.check_out(args.out, force=args.force)
     table = compare.rows(runs)
     shared = compare.shared_columns([compare.header(r) for r in runs])

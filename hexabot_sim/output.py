@@ -11,6 +11,7 @@ import json
 import math
 import os
 import platform
+import re
 import secrets
 import shutil
 import tempfile
@@ -71,6 +72,25 @@ def check_out(out: str | os.PathLike[str], force: bool = False) -> None:
         _check_existing(out, text, force)
     except OSError as e:
         raise UsageError(f"output folder {text!r} cannot be used: {e.strerror or e}") from None
+
+
+def check_not_input(out: str | os.PathLike[str], inputs: list[str]) -> None:
+    """Refuses an --out that is, contains or lies inside one of a command's inputs (with or without --force).
+
+    Raises:
+        UsageError: naming the input; a command never writes over what it reads.
+    """
+    targets = {Path(os.path.abspath(out)), Path(os.path.realpath(out))}
+    for item in inputs:
+        sources = {Path(os.path.abspath(item)), Path(os.path.realpath(item))}
+        overlaps = any(a == b or a.is_relative_to(b) or b.is_relative_to(a) for a in targets for b in sources)
+        with contextlib.suppress(OSError):
+            overlaps = overlaps or os.path.samefile(out, item)
+        if overlaps:
+            raise UsageError(
+                f"output folder {display_path(Path(out))!r} is, contains or lies inside the input "
+                f"{display_path(Path(item))!r}; a command never writes over what it reads: choose another --out"
+            )
 
 
 def _check_existing(out: Path, text: str, force: bool) -> None:
@@ -325,29 +345,34 @@ def _disk_full(folder: Path) -> bool:
 
 def stale_cells() -> list[Path]:
     """Sweep workers' kept-run folders in the system's temporary folder whose process is gone."""
-    return [
-        path
-        for path in sorted(Path(tempfile.gettempdir()).glob(f"{CELL_PREFIX}*"))
-        if _is_folder(path) and (pid := _owner(path, CELL_PREFIX)) is not None and not _alive(pid)
-    ]
+    return [path for path in sorted(Path(tempfile.gettempdir()).glob(f"{CELL_PREFIX}*")) if _stale(path, _CELL_NAME)]
 
 
 def stale_staging(root: Path) -> list[Path]:
     """Staging folders in `root` and its sub-folders left by runs whose process no longer exists."""
     found = []
-    for prefix in (STAGING_PREFIX, _OLD_PREFIX):
+    for prefix, name in ((STAGING_PREFIX, _STAGING_NAME), (_OLD_PREFIX, _OLD_NAME)):
         for pattern in (f"{prefix}*", f"*/{prefix}*"):
-            for path in sorted(root.glob(pattern)):
-                pid = _owner(path, prefix)
-                if _is_folder(path) and (pid is None or not _alive(pid)):
-                    found.append(path)
+            found += [path for path in sorted(root.glob(pattern)) if _stale(path, name)]
     return found
 
 
-def _owner(path: Path, prefix: str) -> int | None:
-    """The process id in a name <prefix><pid>-..., None if there is none."""
-    pid_text = path.name.removeprefix(prefix).split("-", 1)[0]
-    return int(pid_text) if pid_text.isdigit() else None
+# The exact names our runs create (_mkdir_unique: <prefix><pid>-<8 hex digits><suffix>; a sweep cell's
+# tempfile.TemporaryDirectory: <prefix><pid>-<8 of [a-z0-9_]>). A name that merely starts like one is a user's.
+_STAGING_NAME = re.compile(re.escape(STAGING_PREFIX) + r"([1-9][0-9]{0,9})-[0-9a-f]{8}" + re.escape(STAGING_SUFFIX))
+_OLD_NAME = re.compile(re.escape(_OLD_PREFIX) + r"([1-9][0-9]{0,9})-[0-9a-f]{8}")
+_CELL_NAME = re.compile(re.escape(CELL_PREFIX) + r"([1-9][0-9]{0,9})-[a-z0-9_]{8}")
+
+
+def _stale(path: Path, name: re.Pattern[str]) -> bool:
+    """True only for a real folder (not a link) named exactly as a run of ours names it, whose process is gone."""
+    match = name.fullmatch(path.name)
+    if match is None or int(match.group(1)) > _PID_MAX or not _is_folder(path):
+        return False  # a process id no system gives out is not one of ours either
+    return not _alive(int(match.group(1)))
+
+
+_PID_MAX = 1 << 22  # Linux's largest pid_max
 
 
 def _is_folder(path: Path) -> bool:

@@ -1,0 +1,126 @@
+"""Issue 17, data loss: `clean` removes only what a run of ours created; no command writes over its inputs."""
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from hexabot_sim import output
+from hexabot_sim.__main__ import main
+
+FAST = ["--set", "duration=0.05", "--no-plots"]
+
+
+def cli(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _dead_pid() -> int:
+    proc = subprocess.Popen([sys.executable, "-c", "pass"])
+    proc.wait()
+    return proc.pid
+
+
+def test_clean_removes_only_folders_named_exactly_as_a_run_names_them(tmp_path, capsys):
+    dead = _dead_pid()
+    ours = [
+        tmp_path / f"{output.STAGING_PREFIX}{dead}-0a1b2c3d{output.STAGING_SUFFIX}",
+        tmp_path / "sub" / f"{output.STAGING_PREFIX}{dead}-deadbeef{output.STAGING_SUFFIX}",
+        tmp_path / f"{output._OLD_PREFIX}{dead}-00ff00ff",
+    ]
+    users = [
+        tmp_path / f"{output.STAGING_PREFIX}backup",  # merely starts like ours: a user's folder
+        tmp_path / "sub" / f"{output.STAGING_PREFIX}old",
+        tmp_path / f"{output.STAGING_PREFIX}{dead}-0a1b2c3d",  # no suffix
+        tmp_path / f"{output.STAGING_PREFIX}{dead}-0a1b2c3d{output.STAGING_SUFFIX}.keep",
+        tmp_path / f"{output._OLD_PREFIX}{dead}-notes",
+        tmp_path / f"{output._OLD_PREFIX}99999999999-00ff00ff",  # no system gives out such a pid
+        tmp_path / f"{output.STAGING_PREFIX}{os.getpid()}-11223344{output.STAGING_SUFFIX}",  # alive
+    ]
+    for folder in ours + users:
+        folder.mkdir(parents=True)
+        (folder / "thesis.tex").write_text("mine")
+    code, out, err = cli(capsys, "clean", str(tmp_path))
+    assert code == 0, err
+    assert [p for p in ours if p.exists()] == []
+    assert all((p / "thesis.tex").read_text() == "mine" for p in users)
+    assert out.count("removed") == len(ours)
+
+
+def test_clean_never_follows_a_link_named_like_ours(tmp_path, capsys):
+    dead = _dead_pid()
+    target = tmp_path / "precious"
+    target.mkdir()
+    (target / "data.csv").write_text("1,2")
+    link = tmp_path / f"{output.STAGING_PREFIX}{dead}-0a1b2c3d{output.STAGING_SUFFIX}"
+    link.symlink_to(target)
+    code, _, _ = cli(capsys, "clean", str(tmp_path))
+    assert code == 0 and link.is_symlink() and (target / "data.csv").exists()
+
+
+def test_clean_of_an_empty_name_is_refused(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / f"{output.STAGING_PREFIX}{_dead_pid()}-0a1b2c3d{output.STAGING_SUFFIX}").mkdir()
+    code, _, err = cli(capsys, "clean", "")
+    assert code == 2 and "empty" in err and len(err.strip().splitlines()) == 1
+    assert len(list(tmp_path.iterdir())) == 1
+
+
+def test_clean_that_cannot_remove_says_which_folder(tmp_path, monkeypatch, capsys):
+    stale = tmp_path / f"{output.STAGING_PREFIX}{_dead_pid()}-0a1b2c3d{output.STAGING_SUFFIX}"
+    stale.mkdir()
+
+    def denied(path, *args, **kwargs):
+        raise PermissionError(13, "Permission denied", str(path))
+
+    monkeypatch.setattr(shutil, "rmtree", denied)
+    code, _, err = cli(capsys, "clean", str(tmp_path))
+    assert code != 0 and "internal error" not in err and "Traceback" not in err
+    assert "could not remove" in err and "Permission denied" in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.fixture
+def two_runs(tmp_path, capsys):
+    for name in ("a", "b"):
+        code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", str(tmp_path / name))
+        assert code == 0, err
+    return tmp_path / "a", tmp_path / "b"
+
+
+@pytest.mark.parametrize("where", ["a", "a/", "a/inside", "a/../a", "."])
+def test_compare_never_writes_over_an_input(two_runs, capsys, monkeypatch, where):
+    a, b = two_runs
+    monkeypatch.chdir(a.parent)
+    before = {p: p.read_bytes() for p in a.rglob("*") if p.is_file()}
+    target = where if where != "." else str(a.parent)
+    code, _, err = cli(capsys, "compare", "a", "b", "--out", target, "--force")
+    assert code == 2 and "never writes over what it reads" in err, err
+    assert {p: p.read_bytes() for p in a.rglob("*") if p.is_file()} == before
+
+
+def test_compare_refuses_a_link_to_an_input(two_runs, capsys):
+    a, b = two_runs
+    link = a.parent / "link"
+    link.symlink_to(a)
+    code, _, err = cli(capsys, "compare", str(a), str(b), "--out", str(link / "cmp"), "--force")
+    assert code == 2 and "never writes over" in err
+
+
+def test_run_and_sweep_never_write_over_their_config(tmp_path, capsys):
+    folder = tmp_path / "study"
+    folder.mkdir()
+    config = folder / "cfg.toml"
+    config.write_text("damping = 0.01\n")
+    for argv in (
+        ["run", "pendulum", "--config", str(config), *FAST, "--out", str(folder), "--force"],
+        ["sweep", "pendulum", "--grid", "damping=0,0.01", "--config", str(config), "--set", "duration=0.05",
+         "--no-plots", "--out", str(folder), "--force"],
+    ):
+        code, _, err = cli(capsys, *argv)
+        assert code == 2 and "never writes over" in err, err
+        assert config.read_text() == "damping = 0.01\n"
