@@ -447,14 +447,20 @@ def cmd_view(args: argparse.Namespace) -> int:
         raise UsageError(f"run folder {args.target!r} does not exist")
     if replaying and (args.sets or args.config):
         raise UsageError("--set and --config choose a scenario's parameters; a run folder replays its own")
-    # Bad input is reported before the display is looked at.
+    if gl.loaded_backend() is None:
+        os.environ["MUJOCO_GL"] = "glfw"  # MuJoCo binds its OpenGL at import: the window's, not EGL's
+    # Bad input (the folder, or every parameter as a run would check it) is reported before the display is looked at.
     recording = viewer.load_recording(folder) if replaying else None
-    scenario = None if replaying else scenarios.get(args.target)
+    make = None
+    if not replaying:
+        scenario = scenarios.get(args.target)
+        sets = params_mod.parse_assignments(args.sets)
+        config = params_mod.read_config(args.config) if args.config is not None else {}
+        p: Any = params_mod.resolve(scenario.params_type, scenario.defaults, config, sets)
+        make = viewer.live_maker(scenario.name, p)  # a grid scenario is refused before the window opens
     problem = viewer.display_problem()
     if problem is not None:
         raise UsageError(f"cannot open the viewer: {problem}")
-    if gl.loaded_backend() is None:
-        os.environ["MUJOCO_GL"] = "glfw"  # MuJoCo binds its OpenGL at import: the window's, not EGL's
     options = {"speed": args.speed, "paused": args.paused, "quit_after": args.quit_after}
 
     def announce(text: str) -> None:
@@ -464,11 +470,7 @@ def cmd_view(args: argparse.Namespace) -> int:
         if recording is not None:
             summary = viewer.replay(recording, announce=announce, **options)
         else:
-            assert scenario is not None
-            sets = params_mod.parse_assignments(args.sets)
-            config = params_mod.read_config(args.config) if args.config is not None else {}
-            p: Any = params_mod.resolve(scenario.params_type, scenario.defaults, config, sets)
-            make = viewer.live_maker(scenario.name, p)  # a grid scenario is refused before the window opens
+            assert make is not None
             summary = viewer.live(make, scenario.name, announce=announce, **options)
     print(summary)
     return 0

@@ -191,20 +191,61 @@ def load_recording(folder: Path) -> Recording:
         scenario, params = str(info["scenario"]), dict(info.get("params") or {})
     except (OSError, ValueError, KeyError, TypeError):
         pass  # replay works without it (no scenario markers)
-    try:
-        with np.load(traj_path, allow_pickle=False) as npz:
-            arrays = {name: np.asarray(npz[name], dtype=float) for name in ("t", "qpos", "qvel")}
-            n = len(arrays["t"])
-            arrays["ctrl"] = np.asarray(npz["ctrl"], dtype=float) if "ctrl" in npz.files else np.zeros((n, 0))
-    except (OSError, ValueError, KeyError) as e:
-        raise UsageError(f"cannot read {traj_path}: {' '.join(str(e).split())}") from None
+    arrays = _read_trajectory(traj_path)
     t = arrays["t"]
     if t.ndim != 1 or len(t) < 1 or not np.all(np.isfinite(t)) or np.any(np.diff(t) < 0):
         raise UsageError(f"{traj_path}: 't' must be a non-empty, finite, non-decreasing time series")
     for name in ("qpos", "qvel", "ctrl"):
         if arrays[name].ndim != 2 or len(arrays[name]) != len(t):
             raise UsageError(f"{traj_path}: '{name}' must have one row per time (shape ({len(t)}, k))")
+        if not np.all(np.isfinite(arrays[name])):
+            raise UsageError(f"{traj_path}: '{name}' holds values that are not finite numbers")
     return Recording(folder, scenario, params, xml_path, t, arrays["qpos"], arrays["qvel"], arrays["ctrl"])
+
+
+TRAJECTORY_LIMIT = 4 << 30  # [B] the most trajectory.npz may hold once unpacked (a zip bomb is refused unread)
+
+
+def _read_trajectory(path: Path) -> dict[str, np.ndarray]:
+    """t, qpos, qvel and ctrl of a run's trajectory.npz, as float arrays; UsageError in one line for a damaged file.
+
+    Only plain numeric arrays are read: never pickled objects (no allow_pickle), never more than TRAJECTORY_LIMIT.
+    """
+    import zipfile
+
+    def bad(why: str) -> UsageError:
+        return UsageError(f"cannot read {path}: {why}; it is not a trajectory a run of hexabot-sim wrote")
+
+    try:
+        with zipfile.ZipFile(path) as archive:
+            members = {info.filename: info for info in archive.infolist()}
+            missing = [f"{name}.npy" for name in ("t", "qpos", "qvel") if f"{name}.npy" not in members]
+            if missing:
+                raise bad(f"the archive has no {', '.join(missing)}")
+            unpacked = sum(info.file_size for info in members.values())
+            if unpacked > TRAJECTORY_LIMIT:
+                raise bad(f"it would unpack to {unpacked / 2**30:.1f} GiB (the limit is {TRAJECTORY_LIMIT >> 30} GiB)")
+            arrays = {}
+            for name in ("t", "qpos", "qvel", "ctrl"):
+                if f"{name}.npy" not in members:
+                    continue
+                with archive.open(f"{name}.npy") as stream:
+                    array = np.lib.format.read_array(stream, allow_pickle=False)
+                if array.dtype.kind not in "biuf":
+                    raise bad(f"'{name}' holds {array.dtype} values, not real numbers")
+                arrays[name] = np.asarray(array, dtype=float)
+    except UsageError:
+        raise
+    except zipfile.BadZipFile:
+        raise bad("not a NumPy .npz archive (a zip of .npy arrays)") from None
+    except (OSError, EOFError, ValueError, RuntimeError, zipfile.LargeZipFile) as e:
+        why = " ".join(str(e).split()) or type(e).__name__
+        if "pickle" in why.lower():  # numpy's text advises allow_pickle, which would run the file's code
+            why = "it holds Python objects, not numbers (never loaded: unpickling runs the file's code)"
+        raise bad(why) from None
+    if "ctrl" not in arrays:
+        arrays["ctrl"] = np.zeros((len(arrays["t"]), 0))
+    return arrays
 
 
 def _scenario_live(name: str | None, values: dict[str, Any]) -> Any:

@@ -1,0 +1,85 @@
+"""Issue 17: `view` checks its input (a run folder's trajectory, a scenario's parameters) before the display."""
+
+import io
+
+import numpy as np
+import pytest
+
+from hexabot_sim.__main__ import main
+
+
+def cli(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture(scope="module")
+def run_folder(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("view") / "run"
+    assert main(["run", "pendulum", "--set", "duration=0.05", "--no-plots", "--out", str(folder)]) == 0
+    return folder
+
+
+def _npz(arrays: dict) -> bytes:
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    return buffer.getvalue()
+
+
+def _damage(folder, kind):
+    path = folder / "trajectory.npz"
+    good = np.load(path)
+    t, qpos, qvel = good["t"], good["qpos"], good["qvel"]
+    if kind == "empty":
+        path.write_bytes(b"")
+    elif kind == "garbage":
+        path.write_bytes(b"\x80\x04garbage" * 50)
+    elif kind == "truncated":
+        path.write_bytes(path.read_bytes()[:200])
+    elif kind == "missing-member":
+        path.write_bytes(_npz({"t": t, "qpos": qpos}))
+    elif kind == "object":
+        path.write_bytes(_npz({"t": t, "qpos": np.array([object()] * len(t), dtype=object), "qvel": qvel}))
+    elif kind == "text":
+        path.write_bytes(_npz({"t": t, "qpos": np.array(["a"] * len(t)), "qvel": qvel}))
+    elif kind == "nan":
+        q = qpos.copy()
+        q[0, 0] = np.nan
+        path.write_bytes(_npz({"t": t, "qpos": q, "qvel": qvel}))
+    elif kind == "bomb":
+        pass  # the archive is fine; the limit on what it may unpack to is lowered below
+
+
+@pytest.mark.parametrize("kind", ["empty", "garbage", "truncated", "missing-member", "object", "text", "nan", "bomb"])
+def test_a_damaged_trajectory_is_one_line_before_any_display(run_folder, tmp_path, monkeypatch, capsys, kind):
+    import shutil
+
+    folder = tmp_path / "copy"
+    shutil.copytree(run_folder, folder)
+    _damage(folder, kind)
+    if kind == "bomb":
+        from hexabot_sim import viewer
+
+        monkeypatch.setattr(viewer, "TRAJECTORY_LIMIT", 1000)
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    code, _, err = cli(capsys, "view", str(folder))
+    assert code == 2, err
+    line = err.strip()
+    assert len(line.splitlines()) == 1 and "Traceback" not in err and "internal error" not in err
+    assert "trajectory.npz" in line and "display" not in line
+    assert "allow_pickle" not in line
+
+
+def test_view_names_a_bad_parameter_before_the_display(monkeypatch, capsys):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    code, _, err = cli(capsys, "view", "pendulum", "--set", "mass=-1")
+    assert code == 2 and "mass" in err and "display" not in err and "glfw" not in err
+
+
+def test_view_refuses_an_infeasible_walk_before_the_display(monkeypatch, capsys):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    code, _, err = cli(capsys, "view", "hexabot-walk", "--set", "vx=0.9")
+    assert code == 2 and "vx" in err and "display" not in err
