@@ -311,12 +311,19 @@ class Result:
         path = Path(path)
         if path.is_dir():
             raise UsageError(f"video path {str(path)!r} is a folder; give a file name such as video.mp4")
+        folder = path.parent
+        if not folder.is_dir():
+            raise UsageError(f"the folder {str(folder)!r} for the video does not exist")
+        if not os.access(folder, os.W_OK | os.X_OK):
+            raise OutputError(f"the folder {str(folder)!r} for the video cannot be written")
         staging = path.with_name(f".{path.name}.partial-{os.getpid()}.mp4")
         try:
-            record, _ = output.write_video(staging.parent, self.raw, settings, backend, progress, name=staging.name)
+            record, _ = output.write_video(folder, self.raw, settings, backend, progress, name=staging.name)
             if not record["written"]:
                 raise OutputError(f"no video: {record['reason']}")
             os.replace(staging, path)
+        except OSError as e:
+            raise OutputError(f"writing the video {str(path)!r} failed: {e.strerror or e}") from None
         finally:
             staging.unlink(missing_ok=True)
         return path

@@ -560,6 +560,12 @@ def write_video(
         lines = [line.strip() for line in str(e).splitlines() if line.strip()]
         reason = f"rendering failed: {type(e).__name__}: {lines[0] if lines else ''}"  # the first line says what
         return {"written": False, "reason": reason.rstrip(": ")}, time.perf_counter() - started
+    problem = mp4_problem(folder / name)
+    if problem is not None:  # the encoder said nothing but made no playable file: detected, not trusted
+        (folder / name).unlink(missing_ok=True)
+        if _disk_full(folder):
+            raise OSError(errno.ENOSPC, "No space left on device (while encoding the video)")
+        return {"written": False, "reason": f"the video encoder failed: {problem}"}, time.perf_counter() - started
     video = {
         "written": True,
         "file": name,
@@ -570,6 +576,36 @@ def write_video(
         "gl_backend": backend,
     }
     return video, time.perf_counter() - started
+
+
+def mp4_problem(path: Path) -> str | None:
+    """None if `path` is a complete MP4 (an 'ftyp' box first, a 'moov' box, top-level boxes that fill the file
+    exactly), else what is wrong with it."""
+    try:
+        size = path.stat().st_size
+        with open(path, "rb") as stream:
+            at, kinds = 0, []
+            while at < size:
+                stream.seek(at)
+                head = stream.read(16)
+                if len(head) < 8:
+                    return f"{path.name} ends inside a box header at byte {at}"
+                length, kind = int.from_bytes(head[:4], "big"), head[4:8]
+                if length == 1 and len(head) == 16:
+                    length = int.from_bytes(head[8:16], "big")
+                elif length == 0:
+                    length = size - at
+                if length < 8 or at + length > size:
+                    return f"{path.name} is truncated or not an MP4 (a box at byte {at} does not fit)"
+                kinds.append(kind)
+                at += length
+    except OSError as e:
+        return f"{path.name} cannot be read: {e.strerror or e}"
+    if not kinds or kinds[0] != b"ftyp":
+        return f"{path.name} is empty or not an MP4 (no 'ftyp' box first)"
+    if b"moov" not in kinds:
+        return f"{path.name} is unfinished (no 'moov' box: the encoder did not close it)"
+    return None
 
 
 def write_run(

@@ -1,0 +1,72 @@
+"""Issue 17: an encoder that makes no playable file is detected; Result.video() fails in one clear line."""
+
+import json
+import os
+import sys
+
+import pytest
+
+import hexabot_sim as hs
+from hexabot_sim import output
+from hexabot_sim.__main__ import main
+from hexabot_sim.errors import OutputError, UsageError
+
+FAKES = {
+    # reads every frame, exits 0, writes nothing
+    "writes-nothing": "sys.stdin.buffer.read()\n",
+    # reads every frame, exits 0, writes bytes that are no MP4
+    "writes-garbage": "sys.stdin.buffer.read()\nopen(sys.argv[-1], 'wb').write(b'\\x00' * 5000)\n",
+    # an MP4 that was never finished: 'ftyp' and then nothing
+    "unfinished": "sys.stdin.buffer.read()\nopen(sys.argv[-1], 'wb').write((24).to_bytes(4, 'big') + b'ftypisom' + bytes(12))\n",
+}
+
+
+@pytest.fixture(params=sorted(FAKES))
+def fake_encoder(request, tmp_path, monkeypatch, gl_backend):
+    fake = tmp_path / f"{request.param}-ffmpeg"
+    fake.write_text(
+        f"#!{sys.executable}\nimport sys\n"
+        "if sys.argv[1:] == ['-version']:\n    print('ffmpeg version 6.0 (a fake)')\n    sys.exit(0)\n"
+        + FAKES[request.param]
+    )
+    fake.chmod(0o755)
+    monkeypatch.setenv("IMAGEIO_FFMPEG_EXE", str(fake))
+    return request.param
+
+
+def test_a_run_whose_encoder_made_no_video_says_so(fake_encoder, tmp_path, capsys):
+    out = tmp_path / "r"
+    code = main(["run", "pendulum", "--set", "duration=0.2", "--video", "--size", "64x64", "--fps", "10",
+                 "--out", str(out), "--no-plots"])  # fmt: skip
+    assert code == 0
+    record = json.loads((out / "run.json").read_text())
+    assert record["video"]["written"] is False and "encoder failed" in record["video"]["reason"]
+    assert not (out / "video.mp4").exists() and (out / "timeseries.csv").exists()
+    assert "no video" in capsys.readouterr().err
+
+
+def test_result_video_whose_encoder_made_nothing_raises(fake_encoder, tmp_path):
+    result = hs.run("pendulum", duration=0.2)
+    with pytest.raises(OutputError, match="encoder failed"):
+        result.video(tmp_path / "v.mp4", size=(64, 64), fps=10)
+    assert list(tmp_path.glob("*.mp4")) == [] and list(tmp_path.glob(".*")) == []
+
+
+def test_result_video_into_a_missing_folder_is_a_clear_error(tmp_path, gl_backend):
+    result = hs.run("pendulum", duration=0.1)
+    with pytest.raises(UsageError, match="does not exist"):
+        result.video(tmp_path / "no" / "such" / "v.mp4", size=(64, 64), fps=10)
+
+
+def test_result_video_into_a_folder_it_cannot_write_is_a_clear_error(tmp_path, monkeypatch, gl_backend):
+    result = hs.run("pendulum", duration=0.1)
+    monkeypatch.setattr(os, "access", lambda *a, **k: False)
+    with pytest.raises(OutputError, match="cannot be written"):
+        result.video(tmp_path / "v.mp4", size=(64, 64), fps=10)
+
+
+def test_a_real_video_passes_the_mp4_check(tmp_path, gl_backend):
+    path = hs.run("pendulum", duration=0.2).video(tmp_path / "v.mp4", size=(64, 64), fps=10)
+    assert output.mp4_problem(path) is None
+    path.write_bytes(path.read_bytes()[:-100])
+    assert "truncated" in output.mp4_problem(path)
