@@ -66,8 +66,8 @@ def check_out(out: str | os.PathLike[str], force: bool = False) -> None:
     last = text.rstrip("/").rsplit("/", 1)[-1]
     if out.name in ("", ".", "..") or last in ("", ".", ".."):
         raise UsageError(f"output folder {text!r} must end in a folder name (not '.' or '..')")
-    if len(out.name.encode()) > 255:
-        raise UsageError(f"output folder name is {len(out.name.encode())} bytes long; the limit is 255")
+    if len(os.fsencode(out.name)) > 255:
+        raise UsageError(f"output folder name is {len(os.fsencode(out.name))} bytes long; the limit is 255")
     try:
         _check_existing(out, text, force)
     except OSError as e:

@@ -124,3 +124,19 @@ def test_run_and_sweep_never_write_over_their_config(tmp_path, capsys):
         code, _, err = cli(capsys, *argv)
         assert code == 2 and "never writes over" in err, err
         assert config.read_text() == "damping = 0.01\n"
+
+
+def test_a_folder_name_that_is_not_utf8_is_a_legal_out(tmp_path):
+    """b'r\\xff' is a legal Linux name: the run and the sweep are written there, and say so on stdout."""
+    env = {**os.environ, "MUJOCO_GL": "egl"}
+    exe = [os.fsencode(sys.executable), b"-m", b"hexabot_sim"]
+    for argv in (
+        [b"run", b"pendulum", b"--set", b"duration=0.05", b"--out", b"r\xff"],
+        [b"sweep", b"pendulum", b"--grid", b"damping=0,0.01", b"--set", b"duration=0.05", b"--no-plots",
+         b"--out", b"s\xfe"],
+    ):
+        proc = subprocess.run(exe + argv, cwd=tmp_path, capture_output=True, env=env, timeout=120)
+        assert proc.returncode == 0, proc.stderr
+        assert b"internal error" not in proc.stderr
+    assert (tmp_path / os.fsdecode(b"r\xff") / "run.json").is_file()
+    assert (tmp_path / os.fsdecode(b"s\xfe") / "sweep.json").is_file()
