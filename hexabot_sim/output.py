@@ -308,7 +308,7 @@ def run_folder(out: str | os.PathLike[str] | None, scenario: str = "run", force:
         with signals_held():
             if RECEIVED_SIGNALS:  # a stop request some library swallowed on its way: honour it now
                 raise stop_request(RECEIVED_SIGNALS[-1])
-            if os.stat(target.parent).st_ino != os.fstat(parent_fd).st_ino:
+            if _moved(target.parent, parent_fd):
                 raise OutputError(f"the folder {str(target.parent)!r} was moved or replaced during the run")
             folder.final = _publish(parent_fd, staging, target, auto_name, force and not auto_name, before)
             PUBLISHED[0] = True  # a stop request from now on (even one held above) is too late: the run is complete
@@ -320,12 +320,26 @@ def run_folder(out: str | os.PathLike[str] | None, scenario: str = "run", force:
             _remove_created(created)
         if isinstance(e, OSError) and folder is None:
             raise UsageError(f"output folder {str(target)!r} cannot be written: {e.strerror or e}") from None
+        if isinstance(e, OSError) and parent_fd >= 0 and _moved(target.parent, parent_fd):
+            raise OutputError(
+                f"the folder {display_path(target.parent)!r} that was to receive the run folder was moved or "
+                f"removed during the run ({e.strerror or e}); nothing written"
+            ) from None
         if isinstance(e, OSError):
             raise OutputError(f"writing the run folder failed: {e.strerror or e}; nothing written") from None
         raise
     finally:
         if parent_fd >= 0:
             os.close(parent_fd)
+
+
+def _moved(folder: Path, fd: int) -> bool:
+    """True if `folder` is no longer the folder open as `fd` (renamed, removed or replaced)."""
+    try:
+        here, there = os.stat(folder), os.fstat(fd)
+    except OSError:
+        return True
+    return (here.st_ino, here.st_dev) != (there.st_ino, there.st_dev)
 
 
 CELL_PREFIX = "hexabot-sim-cell-"  # a sweep worker's kept-run folder in the temporary folder: <prefix><pid>-...

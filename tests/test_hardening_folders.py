@@ -140,3 +140,22 @@ def test_a_folder_name_that_is_not_utf8_is_a_legal_out(tmp_path):
         assert b"internal error" not in proc.stderr
     assert (tmp_path / os.fsdecode(b"r\xff") / "run.json").is_file()
     assert (tmp_path / os.fsdecode(b"s\xfe") / "sweep.json").is_file()
+
+
+def test_a_parent_folder_renamed_mid_run_is_named(tmp_path, monkeypatch, capsys):
+    """The run's parent folder renamed while it runs: the message says so (not only 'No such file or directory'),
+    and no staging folder is left in the renamed folder."""
+    from hexabot_sim import scenarios
+
+    parent = tmp_path / "study"
+    scenario = scenarios.get("pendulum")
+    runner = scenario.runner
+
+    def rename_then_run(*args, **kwargs):
+        parent.rename(tmp_path / "moved")
+        return runner(*args, **kwargs)
+
+    monkeypatch.setattr(type(scenario), "runner", property(lambda self: rename_then_run))
+    code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", str(parent / "r"))
+    assert code != 0 and "moved or removed during the run" in err and "study" in err, err
+    assert list((tmp_path / "moved").iterdir()) == []
