@@ -400,6 +400,7 @@ def cmd_clean(args: argparse.Namespace) -> int:
     if not root.is_dir():
         raise UsageError(f"{output.display_path(root)!r} is not a folder")
     stale = output.stale_staging(root) + output.stale_cells()
+    removed = 0
     for path in stale:
         if args.dry_run:
             print(f"would remove {output.display_path(path)}")
@@ -409,6 +410,8 @@ def cmd_clean(args: argparse.Namespace) -> int:
         except OSError as e:
             raise OutputError(f"could not remove {output.display_path(path)!r}: {e.strerror or e}") from None
         print(f"removed {output.display_path(path)}")
+        removed += 1
+        _DONE_SO_FAR[:] = [f"{removed} stale folder{'s' if removed > 1 else ''} removed before it, listed above"]
     if not stale:
         cells = tempfile.gettempdir()
         print(f"no staging folders left by interrupted runs in {args.folder} (nor sweep cells in {cells})")
@@ -680,6 +683,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
 # What was completed before standard output failed, for the error message (e.g. the run folder).
 _COMPLETED: list[str] = []
+# What a command that is no run had already done when it was stopped (clean: the folders it removed).
+_DONE_SO_FAR: list[str] = []
 
 
 class _StdoutError(Exception):
@@ -742,6 +747,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     stdout, sys.stdout = sys.stdout, _GuardedStdout(sys.stdout)
     _COMPLETED.clear()
+    _DONE_SO_FAR.clear()
     try:
         code = _main(argv)
         sys.stdout.flush()
@@ -824,10 +830,11 @@ def _interruption_in(error: BaseException) -> KeyboardInterrupt | None:
 
 def _interrupted(error: KeyboardInterrupt) -> int:
     """The one line and exit code of a run stopped by Ctrl-C (130) or SIGTERM/SIGHUP (128 + N)."""
+    what = _DONE_SO_FAR[0] if _DONE_SO_FAR else "nothing written"
     if isinstance(error, Interrupted):
-        _eprint(f"{PROG}: stopped by {signal.Signals(error.signum).name}; nothing written")
+        _eprint(f"{PROG}: stopped by {signal.Signals(error.signum).name}; {what}")
         return 128 + error.signum
-    _eprint(f"{PROG}: interrupted; nothing written")
+    _eprint(f"{PROG}: interrupted; {what}")
     return 130
 
 

@@ -159,3 +159,20 @@ def test_a_parent_folder_renamed_mid_run_is_named(tmp_path, monkeypatch, capsys)
     code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", str(parent / "r"))
     assert code != 0 and "moved or removed during the run" in err and "study" in err, err
     assert list((tmp_path / "moved").iterdir()) == []
+
+
+def test_clean_stopped_after_removing_says_what_it_removed(tmp_path, monkeypatch, capsys):
+    dead = _dead_pid()
+    for suffix in ("0a1b2c3d", "0a1b2c3e"):
+        (tmp_path / f"{output.STAGING_PREFIX}{dead}-{suffix}{output.STAGING_SUFFIX}").mkdir()
+    real_rmtree, calls = shutil.rmtree, []
+
+    def rmtree_then_ctrl_c(path, *args, **kwargs):
+        calls.append(path)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        real_rmtree(path, *args, **kwargs)
+
+    monkeypatch.setattr(shutil, "rmtree", rmtree_then_ctrl_c)
+    code, _, err = cli(capsys, "clean", str(tmp_path))
+    assert code == 130 and "1 stale folder removed" in err and "nothing written" not in err, err
