@@ -568,8 +568,24 @@ def steady_window(p: HexabotParams, t: np.ndarray) -> np.ndarray:
     return (t >= start - 1e-9) & (t <= end + 1e-9)
 
 
+# A ratio is reported only where its denominator is well above what it is measured against (else null, with why).
+# The standing robot creeps at ~0.05 mm/s and its body sways a few mm within every gait cycle, so a relative speed
+# error needs a command of at least 1 mm/s (1 mrad/s for turning), and a per-metre figure 0.1 m of travel.
+LEAST_SPEED: float = 1e-3  # [m/s] or [rad/s]
+LEAST_TRAVEL: float = 0.1  # [m]
+
+
 def _relative_error(measured: float, commanded: float) -> float | None:
-    return None if commanded == 0 else (measured - commanded) / abs(commanded)
+    return None if abs(commanded) < LEAST_SPEED else (measured - commanded) / abs(commanded)
+
+
+def _per_travel(amount: float, travelled: float) -> float | None:
+    return amount / travelled if travelled >= LEAST_TRAVEL else None
+
+
+def _null_why(metric: Metric, why: str) -> Metric:
+    """`metric` with the reason appended to its doc when its value is null."""
+    return metric if metric.value is not None else dataclasses.replace(metric, doc=f"{metric.doc}; null here: {why}")
 
 
 def walking_metrics(
@@ -604,10 +620,13 @@ def walking_metrics(
         path = qpos[i0 : i1 + 1, :2] - qpos[i0, :2]
         travelled = float(path[-1] @ along)
         lateral = float(path[-1] @ across)
-        lateral_drift = lateral / travelled if travelled > 0 else None
-        heading_drift = float(np.degrees(yaw[i1] - yaw[i0]) / travelled) if travelled > 0 else None
+        lateral_drift = _per_travel(lateral, travelled)
+        heading_drift = _per_travel(float(np.degrees(yaw[i1] - yaw[i0])), travelled)
+        short = f"travelled {travelled:.3g} m along the command, under the {LEAST_TRAVEL:g} m a per-metre figure needs"
     else:
         lateral_drift = heading_drift = None
+        short = "not a straight walk (no speed commanded, or turning)"
+    slow = f"commanded under {LEAST_SPEED:g} (m/s or rad/s): the robot's own creep would dominate the ratio"
     # Height and attitude.
     height_cmd = p.stand_height + LAYOUT.foot_radius
     z = qpos[window, 2]
@@ -627,21 +646,23 @@ def walking_metrics(
         "mean_vx": Metric(mean_vx, "m/s", "mean body-frame forward speed over the steady walk"),
         "mean_vy": Metric(mean_vy, "m/s", "mean body-frame sideways speed over the steady walk"),
         "mean_yaw_rate": Metric(mean_yaw_rate, "rad/s", "mean turning rate over the steady walk"),
-        "vx_error": Metric(_relative_error(mean_vx, p.vx), "1", "(mean_vx - vx) / |vx| (null when vx = 0)"),
-        "vy_error": Metric(_relative_error(mean_vy, p.vy), "1", "(mean_vy - vy) / |vy| (null when vy = 0)"),
-        "yaw_rate_error": Metric(
-            _relative_error(mean_yaw_rate, p.yaw_rate), "1", "(mean_yaw_rate - yaw_rate) / |yaw_rate| (null when 0)"
+        "vx_error": _null_why(Metric(_relative_error(mean_vx, p.vx), "1", "(mean_vx - vx) / |vx|"), slow),
+        "vy_error": _null_why(Metric(_relative_error(mean_vy, p.vy), "1", "(mean_vy - vy) / |vy|"), slow),
+        "yaw_rate_error": _null_why(
+            Metric(_relative_error(mean_yaw_rate, p.yaw_rate), "1", "(mean_yaw_rate - yaw_rate) / |yaw_rate|"), slow
         ),
         "speed_abs_error": Metric(
             float(math.hypot(mean_vx - p.vx, mean_vy - p.vy)), "m/s", "|mean planar velocity - command|"
         ),
         "distance": Metric(distance, "m", "straight-line distance covered over the steady walk"),
-        "lateral_drift": Metric(
+        "lateral_drift": _null_why(Metric(
             None if lateral_drift is None else lateral_drift * 1000,
             "mm/m",
             "sideways deviation from the commanded direction per metre travelled (straight walks)",
+        ), short),  # fmt: skip
+        "heading_drift": _null_why(
+            Metric(heading_drift, "deg/m", "heading change per metre travelled (straight walks)"), short
         ),
-        "heading_drift": Metric(heading_drift, "deg/m", "heading change per metre travelled (straight walks)"),
         "body_height_mean": Metric(float(z.mean()), "m", "mean body height over the steady walk"),
         "body_height_sag": Metric(float(height_cmd - z.mean()), "m", "planned body height minus the mean height"),
         "body_height_ptp": Metric(float(np.ptp(z)), "m", "peak-to-peak body height over the steady walk"),
@@ -660,11 +681,11 @@ def walking_metrics(
         "slip_per_stance": Metric(
             slip_distance / touchdowns * 1000 if touchdowns else 0.0, "mm", "contact-point sliding distance per stance"
         ),
-        "cost_of_transport": Metric(
-            work / (total_mass * 9.81 * distance) if distance > 1e-6 else None,
+        "cost_of_transport": _null_why(Metric(
+            work / (total_mass * 9.81 * distance) if distance >= LEAST_TRAVEL else None,
             "1",
             "joint work |tau dq| / (m g distance) over the steady walk",
-        ),
+        ), f"covered {distance:.3g} m, under the {LEAST_TRAVEL:g} m a per-distance figure needs"),  # fmt: skip
         "peak_joint_torque": Metric(peak_torque, "N*m", "largest joint torque of the run"),
         "torque_limit_fraction": Metric(
             peak_torque / TORQUE_LIMIT, "1", f"peak_joint_torque / the {TORQUE_LIMIT} N*m limit"
@@ -715,9 +736,9 @@ def terrain_metrics(
             made_good, "m", "horizontal progress along the commanded direction over the steady walk"
         ),
         "speed_made_good": Metric(speed_made_good, "m/s", "distance_made_good / its time"),
-        "speed_made_good_error": Metric(
-            _relative_error(speed_made_good, speed), "1", "(speed_made_good - |command|) / |command| (null at 0)"
-        ),
+        "speed_made_good_error": _null_why(Metric(
+            _relative_error(speed_made_good, speed), "1", "(speed_made_good - |command|) / |command|"
+        ), f"commanded under {LEAST_SPEED:g} m/s: the robot's own creep would dominate the ratio"),  # fmt: skip
         "touchdowns": Metric(len(events), "1", "swings that ended after the settling time"),
         "touchdown_error_mean": Metric(
             float(touched.mean()) if touched.size else None, "s", "touch time - planned touchdown, mean"

@@ -1,0 +1,41 @@
+"""Issue 17: a ratio whose denominator is not meaningful is null, with the reason in its doc, never a huge number."""
+
+import json
+
+import pytest
+
+import hexabot_sim as hs
+from hexabot_sim.__main__ import main
+
+
+@pytest.mark.parametrize("sets", [{"vx": 1e-9}, {"vx": 5e-4}, {"vx": 0.0, "vy": 1e-9}])
+def test_a_walk_that_barely_moves_has_no_per_metre_or_relative_figures(tmp_path, sets):
+    out = tmp_path / "w"
+    argv = ["run", "hexabot-walk", "--set", "duration=3", "--no-plots", "--out", str(out)]
+    for name, value in sets.items():
+        argv += ["--set", f"{name}={value}"]
+    assert main(argv) == 0
+    record = json.loads((out / "run.json").read_text())
+    for name in ("lateral_drift", "heading_drift", "cost_of_transport", "vx_error", "vy_error", "yaw_rate_error"):
+        assert record["metrics"][name] is None, (name, record["metrics"][name])
+        assert "null here" in record["metric_docs"][name]
+    assert "-45" not in (out / "report.html").read_text().split("lateral_drift", 1)[1][:200]
+
+
+def test_a_real_walk_keeps_its_ratios(tmp_path):
+    r = hs.run("hexabot-walk", duration=3)
+    assert abs(r.metrics["vx_error"].value) < 0.1
+    assert r.metrics["lateral_drift"].value is not None and abs(r.metrics["lateral_drift"].value) < 50
+    assert r.metrics["cost_of_transport"].value is not None
+
+
+@pytest.mark.parametrize("theta0_deg", [1e-9, 1e-4, 1e-3])
+def test_the_energy_balance_of_a_swing_below_rounding_is_null(theta0_deg):
+    r = hs.run("pendulum-undamped", theta0_deg=theta0_deg, duration=1)
+    assert r.metrics["energy_drift_rel"].value is None
+    assert "rounding" in r.metrics["energy_drift_rel"].doc
+
+
+def test_the_energy_balance_of_a_real_swing_is_reported():
+    r = hs.run("pendulum-undamped", theta0_deg=1, duration=1)
+    assert r.metrics["energy_drift_rel"].value is not None and r.metrics["energy_drift_rel"].value < 1e-6
