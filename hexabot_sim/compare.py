@@ -6,6 +6,7 @@ import csv
 import dataclasses
 import json
 import math
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -13,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from hexabot_sim.errors import UsageError
+from hexabot_sim.params import read_bounded
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -22,6 +24,9 @@ JSON_NAME = "compare.json"
 RUN_JSON = "run.json"
 PANELS_PER_FIGURE: int = 6  # shared columns per overlay figure (overlay.png, overlay_2.png, ...)
 MAX_POINTS: int = 20_000  # points drawn per line; longer columns are thinned evenly (the CSV keeps them all)
+MAX_JSON_BYTES: int = 16 << 20  # a run.json is a few kB; one larger than this is not read
+MAX_HEADER_BYTES: int = 1 << 16  # a CSV header line is at most this long
+RELATIVE_FLOOR: float = 0.01  # a relative difference needs a reference at least this fraction of the other value
 MAX_CSV_BYTES: float = 2e9  # a run folder's CSV is at most this large (params.MAX_OUTPUT_BYTES)
 
 
@@ -45,7 +50,7 @@ def load(folder: str) -> Run:
         UsageError: with the reason, for anything that is not a complete run folder.
     """
     path = Path(folder)
-    shown = repr(folder)
+    shown = repr(printable(folder))
     if not path.is_dir():
         raise UsageError(f"{shown} is not a run folder: {'no such folder' if not path.exists() else 'not a folder'}")
     if path.name.startswith(".hexabot-sim-"):
@@ -58,9 +63,10 @@ def load(folder: str) -> Run:
                 "compare cells/cell-0000 cells/cell-0001 ...) or read its sweep.csv"
             )
         raise UsageError(f"{shown} is not a run folder: it has no {RUN_JSON}")
+    raw = read_bounded(record_path, "run record", MAX_JSON_BYTES, "a run's record is far smaller")
     try:
-        record = json.loads(record_path.read_text())
-    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as e:
+        record = json.loads(raw.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError, RecursionError) as e:
         raise UsageError(f"{shown} is not a run folder: its {RUN_JSON} cannot be read ({type(e).__name__})") from None
     if not isinstance(record, dict):
         raise UsageError(f"{shown} is not a run folder: its {RUN_JSON} is not an object")
@@ -79,7 +85,17 @@ def load(folder: str) -> Run:
     units = {
         k: v if isinstance(v, dict) else {} for k, v in ((k, units.get(k)) for k in ("params", "metrics", "columns"))
     }
-    return Run(path, path.name, record["scenario"], record["params"], record["metrics"], units, table)
+    scenario = printable(record["scenario"])
+    run = Run(path, printable(path.name), scenario, record["params"], record["metrics"], units, table)
+    names = header(run)
+    if len(names) < 1 or len(set(names)) != len(names) or not all(names):
+        raise UsageError(f"{shown}: the first line of {table.name} is not a header of distinct column names")
+    return run
+
+
+def printable(text: str) -> str:
+    """`text` (a path, possibly with bytes that are not UTF-8) as text that can be printed and written anywhere."""
+    return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
 
 
 def load_all(folders: Sequence[str]) -> list[Run]:
@@ -124,7 +140,10 @@ class Row:
         for v in self.values[1:]:
             if _is_number(first) and _is_number(v):
                 d = float(v) - float(first)
-                out.append((d, d / abs(float(first)) if float(first) != 0 else None))
+                # Relative only against a reference that is not small beside the other value (at most +-9900 %):
+                # a difference from a value near zero (1e-9 vs 0.05) is shown absolute only.
+                meaningful = abs(float(first)) >= RELATIVE_FLOOR * max(abs(float(first)), abs(float(v))) > 0
+                out.append((d, d / abs(float(first)) if meaningful else None))
             else:
                 out.append(None)
         return out
@@ -220,7 +239,7 @@ def write_csv(path: Path, runs: Sequence[Run], table: Sequence[Row]) -> None:
 def record(runs: Sequence[Run], table: Sequence[Row], shared: Sequence[str], files: Sequence[str]) -> dict:
     """compare.json: the runs, which parameters differ, the shared columns overlaid, the files."""
     return {
-        "runs": [{"label": r.label, "folder": str(r.path), "scenario": r.scenario} for r in runs],
+        "runs": [{"label": r.label, "folder": printable(str(r.path)), "scenario": r.scenario} for r in runs],
         "differing_params": [r.name for r in table if r.kind == "param" and r.differs],
         "differing_metrics": [r.name for r in table if r.kind == "metric" and r.differs],
         "shared_columns": list(shared),
@@ -233,11 +252,20 @@ def record(runs: Sequence[Run], table: Sequence[Row], shared: Sequence[str], fil
 
 
 def _read(run: Run) -> tuple[list[str], np.ndarray]:
+    shown = repr(printable(str(run.path)))
+    names = header(run)
     try:
-        data = np.loadtxt(run.csv, delimiter=",", skiprows=1, ndmin=2)  # (n, len(header))
-    except ValueError as e:
-        raise UsageError(f"{str(run.path)!r}: {run.csv.name} is not a numeric table ({e})") from None
-    return header(run), data
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # numpy warns of a table with no rows: refused below
+            data = np.loadtxt(run.csv, delimiter=",", skiprows=1, ndmin=2, encoding="utf-8")  # (n, len(header))
+    except (ValueError, UnicodeDecodeError, UserWarning) as e:
+        why = "it has no rows" if isinstance(e, UserWarning) else " ".join(str(e).split())[:120]
+        raise UsageError(f"{shown}: {run.csv.name} is not a numeric table ({why})") from None
+    except OSError as e:
+        raise UsageError(f"{shown}: {run.csv.name} cannot be read: {e.strerror or e}") from None
+    if data.shape[0] == 0 or data.shape[1] != len(names):
+        raise UsageError(f"{shown}: {run.csv.name} has no rows, or rows of another width than its header")
+    return names, data
 
 
 def shared_columns(headers: Sequence[Sequence[str]]) -> list[str]:
@@ -249,8 +277,19 @@ def shared_columns(headers: Sequence[Sequence[str]]) -> list[str]:
 
 def header(run: Run) -> list[str]:
     """The column names of a run's CSV (its first line)."""
-    with open(run.csv) as stream:
-        return stream.readline().strip().split(",")
+    shown = repr(printable(str(run.path)))
+    try:
+        with open(run.csv, "rb") as stream:
+            line = stream.readline(MAX_HEADER_BYTES + 1)
+    except OSError as e:
+        raise UsageError(f"{shown}: {run.csv.name} cannot be read: {e.strerror or e}") from None
+    try:
+        text = line.decode("utf-8")
+    except UnicodeDecodeError:
+        raise UsageError(f"{shown}: {run.csv.name} is not UTF-8 text (a binary or damaged file)") from None
+    if len(line) > MAX_HEADER_BYTES or not text.endswith("\n") or "\0" in text:
+        raise UsageError(f"{shown}: {run.csv.name} has no header line (a binary, empty or damaged file)")
+    return text.strip().split(",")
 
 
 def figures(runs: Sequence[Run]) -> dict[str, Figure]:

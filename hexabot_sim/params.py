@@ -208,38 +208,39 @@ def parse_assignments(items: list[str]) -> dict[str, str]:
     return out
 
 
-def _read_bounded(path: Path) -> bytes:
-    """At most MAX_CONFIG_BYTES of a regular file; never blocks on a FIFO or reads a device."""
+def read_bounded(
+    path: Path, what: str = "config file", limit: int = MAX_CONFIG_BYTES, why: str = "a parameter file is a few lines"
+) -> bytes:
+    """At most `limit` bytes of a regular file; never blocks on a FIFO or reads a device (UsageError naming `what`)."""
     shown = repr(str(path))  # a path is shown whole: cut short, it would not name the file
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
     except FileNotFoundError:
-        raise UsageError(f"config file {shown} not found") from None
+        raise UsageError(f"{what} {shown} not found") from None
     except IsADirectoryError:
-        raise UsageError(f"config file {shown} is a directory, expected a TOML file") from None
+        raise UsageError(f"{what} {shown} is a directory, expected a file") from None
     except (OSError, ValueError) as e:  # ValueError: a NUL byte in the name
-        raise UsageError(f"config file {shown} cannot be read: {getattr(e, 'strerror', None) or e}") from None
+        raise UsageError(f"{what} {shown} cannot be read: {getattr(e, 'strerror', None) or e}") from None
     try:
         mode = os.fstat(fd).st_mode
         if stat.S_ISDIR(mode):
-            raise UsageError(f"config file {shown} is a directory, expected a TOML file")
+            raise UsageError(f"{what} {shown} is a directory, expected a file")
         if not stat.S_ISREG(mode):
-            raise UsageError(f"config file {shown} is not a regular file (a device, FIFO or socket)")
+            raise UsageError(f"{what} {shown} is not a regular file (a device, FIFO or socket)")
         chunks, size = [], 0
-        while size <= MAX_CONFIG_BYTES:
-            chunk = os.read(fd, MAX_CONFIG_BYTES + 1 - size)
+        while size <= limit:
+            chunk = os.read(fd, limit + 1 - size)
             if not chunk:
                 break
             chunks.append(chunk)
             size += len(chunk)
     except OSError as e:
-        raise UsageError(f"config file {shown} cannot be read: {e.strerror or e}") from None
+        raise UsageError(f"{what} {shown} cannot be read: {e.strerror or e}") from None
     finally:
         os.close(fd)
-    if size > MAX_CONFIG_BYTES:
-        raise UsageError(
-            f"config file {shown} is larger than {MAX_CONFIG_BYTES // 1024} KiB; a parameter file is a few lines"
-        )
+    if size > limit:
+        shown_limit = f"{limit // 1024} KiB" if limit <= 1 << 20 else f"{limit / (1 << 20):g} MiB"
+        raise UsageError(f"{what} {shown} is larger than {shown_limit}; {why}")
     return b"".join(chunks)
 
 
@@ -254,7 +255,7 @@ def read_config(path: str | Path) -> dict[str, Any]:
         raise UsageError("--config needs a file name; got an empty one")
     path = Path(path)
     shown = repr(str(path))  # a path is shown whole: cut short, it would not name the file
-    raw = _read_bounded(path)
+    raw = read_bounded(path)
     try:
         data = tomllib.loads(raw.decode("utf-8").removeprefix("\ufeff"))  # a BOM from a Windows editor
     except UnicodeDecodeError:

@@ -1,0 +1,74 @@
+"""Issue 17: compare reads damaged run folders as untrusted input, names odd folders safely, and shows relative
+differences only where they mean something."""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+from hexabot_sim import compare
+from hexabot_sim.__main__ import main
+
+
+def cli(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    root = tmp_path_factory.mktemp("cmp")
+    for name, damping in (("a", "0"), ("b", "0.01")):
+        argv = ["run", "pendulum", "--set", "duration=0.05", "--set", f"damping={damping}", "--no-plots"]
+        assert main([*argv, "--out", str(root / name)]) == 0
+    return root
+
+
+DAMAGE = {
+    "binary csv": lambda f: (f / "timeseries.csv").write_bytes(bytes(range(256)) * 40),
+    "latin-1 csv": lambda f: (f / "timeseries.csv").write_bytes("t,\xe9\n0,1\n".encode("latin-1")),
+    "header-only csv": lambda f: (f / "timeseries.csv").write_text(
+        (f / "timeseries.csv").read_text().split("\n")[0] + "\n"
+    ),
+    "empty csv": lambda f: (f / "timeseries.csv").write_bytes(b""),
+    "ragged csv": lambda f: (f / "timeseries.csv").write_text((f / "timeseries.csv").read_text() + "1,2\n"),
+    "duplicate header": lambda f: (f / "timeseries.csv").write_text("t,t\n0,1\n"),
+    "huge run.json": lambda f: (f / "run.json").write_text('{"x": "' + "y" * (17 << 20) + '"}'),
+    "latin-1 run.json": lambda f: (f / "run.json").write_bytes(b'{"scenario": "\xe9"}'),
+    "fifo run.json": lambda f: ((f / "run.json").unlink(), os.mkfifo(f / "run.json")),
+}
+
+
+@pytest.mark.parametrize("kind", sorted(DAMAGE))
+def test_a_damaged_run_folder_is_one_line(runs, tmp_path, capsys, kind):
+    broken = tmp_path / "broken"
+    shutil.copytree(runs / "a", broken)
+    DAMAGE[kind](broken)
+    code, _, err = cli(capsys, "compare", str(broken), str(runs / "b"), "--out", str(tmp_path / "c"))
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1 and "internal error" not in err and "Traceback" not in err
+    assert "broken" in err
+    assert not (tmp_path / "c").exists()
+
+
+def test_relative_differences_only_against_a_reference_that_is_not_near_zero():
+    row = compare.Row("metric", "x", "1", (1e-9, 0.0461, 2e-9))
+    (d1, rel1), (d2, rel2) = row.differences()
+    assert rel1 is None and d1 == pytest.approx(0.0461)
+    assert rel2 == pytest.approx(1.0)
+    assert "%" not in compare._difference((d1, rel1), False)
+
+
+def test_folder_names_that_are_not_utf8_are_compared(runs, tmp_path):
+    for name in (b"r\xff", b"q\xfe"):
+        shutil.copytree(runs / "a", tmp_path / os.fsdecode(name))
+    exe = [os.fsencode(sys.executable), b"-m", b"hexabot_sim"]
+    proc = subprocess.run(exe + [b"compare", b"r\xff", b"q\xfe", b"--out", b"c\xfd"], cwd=tmp_path,
+                          capture_output=True, env={**os.environ, "MUJOCO_GL": "egl"}, timeout=120)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    record = json.loads((tmp_path / os.fsdecode(b"c\xfd") / "compare.json").read_text())
+    assert [r["label"] for r in record["runs"]] == ["r\\xff", "q\\xfe"]
