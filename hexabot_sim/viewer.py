@@ -186,10 +186,12 @@ def load_recording(folder: Path) -> Recording:
     if not xml_path.is_file():
         raise UsageError(f"{folder} has no {output.MODEL_NAME}: the replay needs the run's exact model")
     scenario, params = None, {}
-    try:
-        info = json.loads((folder / output.JSON_NAME).read_text())
+    try:  # read bounded, a regular file only: a FIFO named run.json must not block the replay
+        from hexabot_sim.params import read_bounded
+
+        info = json.loads(read_bounded(folder / output.JSON_NAME, "run record", 16 << 20, "").decode("utf-8"))
         scenario, params = str(info["scenario"]), dict(info.get("params") or {})
-    except (OSError, ValueError, KeyError, TypeError):
+    except (UsageError, ValueError, KeyError, TypeError, RecursionError):
         pass  # replay works without it (no scenario markers)
     arrays = _read_trajectory(traj_path)
     t = arrays["t"]

@@ -83,3 +83,16 @@ def test_view_refuses_an_infeasible_walk_before_the_display(monkeypatch, capsys)
     monkeypatch.delenv("DISPLAY", raising=False)
     code, _, err = cli(capsys, "view", "hexabot-walk", "--set", "vx=0.9")
     assert code == 2 and "vx" in err and "display" not in err
+
+
+def test_a_fifo_named_run_json_does_not_block_the_replay_check(run_folder, tmp_path, monkeypatch, capsys):
+    import os
+    import shutil
+
+    folder = tmp_path / "copy"
+    shutil.copytree(run_folder, folder)
+    (folder / "run.json").unlink()
+    os.mkfifo(folder / "run.json")
+    monkeypatch.delenv("DISPLAY", raising=False)
+    code, _, err = cli(capsys, "view", str(folder))  # blocked for ever before
+    assert code == 2 and "display" in err
