@@ -36,7 +36,7 @@ def parse_numbers(text: str, what: str) -> list[float]:
     except ValueError:
         raise UsageError(f"{what} must be comma-separated numbers; got {text!r}") from None
     if not all(math.isfinite(v) for v in values):
-        raise UsageError(f"{what} must be finite numbers; got {text!r}")
+        raise UsageError(f"{what} must be {'a finite number' if len(values) == 1 else 'finite numbers'}; got {text!r}")
     return values
 
 

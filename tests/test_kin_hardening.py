@@ -184,7 +184,7 @@ def test_ik_branches_reports_what_ik_drops():
         (["leg", "--set", "l2=1e308", "--q", "0,0,0"], "length 'l2' of leg must be 0.001 to 10 m; got 1e+308"),
         (["leg", "--set", "l2=1e-300", "--json"], "length 'l2' of leg must be 0.001 to 10 m; got 1e-300"),
         (["scara", "--set", "d4=1e-9"], "length 'd4' of scara must be 0 or 0.001 to 10 m; got 1e-09"),
-        (["stanford", "--set", "d6=nan"], "length 'd6' must be finite numbers"),
+        (["stanford", "--set", "d6=nan"], "length 'd6' must be a finite number"),
         (["rrp", "--set", "d1=1,2"], "length 'd1' takes one number in [m]; got '1,2'"),
         (["rrp", "--set", "d1="], "malformed --set 'd1='"),
         (["scara", "--target", "0.4,0.2", "--deg"], "scara needs --target x,y,z[,yaw] (m, deg); got 2 values"),

@@ -39,3 +39,33 @@ def test_the_energy_balance_of_a_swing_below_rounding_is_null(theta0_deg):
 def test_the_energy_balance_of_a_real_swing_is_reported():
     r = hs.run("pendulum-undamped", theta0_deg=1, duration=1)
     assert r.metrics["energy_drift_rel"].value is not None and r.metrics["energy_drift_rel"].value < 1e-6
+
+
+def test_a_kerb_refusal_shows_the_value_and_the_bound_apart():
+    from hexabot_sim.errors import UsageError
+    from hexabot_sim.scenarios import hexabot
+
+    largest = hexabot.largest_climbable_kerb(_defaults())
+    with pytest.raises((UsageError, ValueError)) as info:
+        hs.run("hexabot-walk", kerb_height=largest * 1.00001, duration=3)
+    text = str(info.value)
+    shown, bound = text.split(" mm kerb is above the largest climbable, ")
+    assert shown.split()[-1] != bound.split()[0], text
+    assert hexabot.apart(32.0004, 32.0, "down") == ("32.0004", "32")
+
+
+def _defaults():
+    from hexabot_sim import params
+    from hexabot_sim.scenarios import hexabot
+
+    return params.resolve(hexabot.HexabotParams, {})
+
+
+def test_one_non_finite_length_is_named_in_the_singular():
+    from hexabot_sim.errors import UsageError
+    from hexabot_sim.kinreport import parse_numbers
+
+    with pytest.raises(UsageError, match="must be a finite number;"):
+        parse_numbers("inf", "length 'L1'")
+    with pytest.raises(UsageError, match="must be finite numbers;"):
+        parse_numbers("1,nan", "--q")

@@ -196,16 +196,26 @@ def _cycle_problem_computed(p: HexabotParams, cmd: Command) -> str:
     return ""
 
 
-def allowed(value: float, toward: str) -> str:
+def apart(value: float, bound: float, toward: str) -> tuple[str, str]:
+    """`value` and `allowed(bound, toward)` with as many digits as it takes for the two texts to differ
+    ("a 32.004 mm kerb is above the largest climbable, 32.003 mm", not "32 mm ... 32 mm")."""
+    for digits in range(3, 18):
+        shown, limit = f"{value:.{digits}g}", allowed(bound, toward, digits)
+        if float(shown) != float(limit):
+            return shown, limit
+    return f"{value!r}", allowed(bound, toward, 17)
+
+
+def allowed(value: float, toward: str, digits: int = 3) -> str:
     """`value` to 3 significant digits, rounded so the printed number is itself allowed: "up" for a lower
     bound, "down" for an upper bound, "zero" for the largest magnitude in a direction (0.8333 printed as
     0.833 was refused as below the wave's smallest duty, 5/6)."""
     if value == 0 or not math.isfinite(value):
-        return f"{value:.3g}"
-    scale = 10.0 ** (math.floor(math.log10(abs(value))) - 2)
+        return f"{value:.{digits}g}"
+    scale = 10.0 ** (math.floor(math.log10(abs(value))) - (digits - 1))
     q = value / scale
-    digits = {"up": math.ceil(q - 1e-9), "down": math.floor(q + 1e-9), "zero": math.trunc(q)}[toward]
-    return f"{digits * scale:.3g}"
+    rounded = {"up": math.ceil(q - 1e-9), "down": math.floor(q + 1e-9), "zero": math.trunc(q)}[toward]
+    return f"{rounded * scale:.{digits}g}"
 
 
 def feasibility(p: HexabotParams) -> str:
@@ -347,9 +357,9 @@ def terrain_problem(p: HexabotParams) -> str:
             )
         largest = largest_climbable_kerb(p)
         if p.kerb_height > largest:
+            kerb_mm, largest_mm = apart(p.kerb_height * 1000, largest * 1000, "down")
             return (
-                f"a {p.kerb_height * 1000:.0f} mm kerb is above the largest climbable, "
-                f"{allowed(largest * 1000, 'down')} mm "
+                f"a {kerb_mm} mm kerb is above the largest climbable, {largest_mm} mm "
                 f"(the foot lifts step_height = {p.step_height:g} m, less a foot radius of clearance; the legs reach "
                 f"{(p.stand_height - depth_range(p)[0]) * 1000:.0f} mm above the stance); raise 'step_height'"
             )
