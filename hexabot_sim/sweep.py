@@ -6,9 +6,11 @@ import concurrent.futures
 import contextlib
 import csv
 import dataclasses
+import logging
 import math
 import multiprocessing
 import os
+import re
 import shutil
 import signal
 import sys
@@ -469,15 +471,47 @@ def dask_executor(address: str, timeout: float = 10.0) -> Iterator[tuple[concurr
         from distributed import Client
     except ImportError:
         raise UsageError("--scheduler needs the 'distributed' package: pip install \"hexabot-sim[cluster]\"") from None
+    address = scheduler_address(address)
+    for name in ("distributed", "tornado", "asyncio"):  # Dask's own log lines are not the user's business
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
     try:
         client = Client(address, timeout=timeout, set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as e:
+    except Exception as e:  # noqa: BLE001 - whatever the connection raised, it is one line about the address
         text = " ".join(str(e).split())[:200]
         raise UsageError(f"cannot reach the Dask scheduler at {address!r}: {text or type(e).__name__}") from None
     try:
-        yield client.get_executor(pure=False), sum(client.nthreads().values())
+        threads = sum(client.nthreads().values())
+        if threads == 0:
+            try:
+                client.wait_for_workers(1, timeout=WORKER_WAIT)
+            except Exception:  # noqa: BLE001 - distributed raises its own TimeoutError
+                raise UsageError(
+                    f"the Dask scheduler at {address!r} has no workers (waited {WORKER_WAIT:g} s): start some with "
+                    f"'dask worker {address}'"
+                ) from None
+            threads = sum(client.nthreads().values())
+        yield client.get_executor(pure=False), threads
     finally:
-        client.close()
+        with contextlib.suppress(Exception):
+            client.close(timeout=5)
+
+
+WORKER_WAIT: float = 30.0  # [s] how long a scheduler without workers is given to get one
+
+
+def scheduler_address(text: str) -> str:
+    """'tcp://host:port' (or 'host:port') checked: UsageError in one line for anything else."""
+    match = re.fullmatch(r"(?:tcp://)?([A-Za-z0-9._-]+|\[[0-9A-Fa-f:.]+\]):([0-9]{1,5})", text)
+    if "://" in text and not text.startswith("tcp://"):
+        scheme = text.split("://", 1)[0][:20]
+        raise UsageError(
+            f"--scheduler {scheme}:// is not supported: give a Dask scheduler's tcp://HOST:PORT address "
+            "(tls:// needs a certificate configuration this command does not take)"
+        )
+    if match is None or not 1 <= int(match.group(2)) <= 65535:
+        shown = text if len(text) <= 80 else text[:77] + "..."
+        raise UsageError(f"--scheduler {shown!r} is not an address: expected tcp://HOST:PORT, PORT from 1 to 65535")
+    return text if text.startswith("tcp://") else f"tcp://{text}"
 
 
 def stop(executor: concurrent.futures.Executor, futures: Sequence[concurrent.futures.Future]) -> None:
