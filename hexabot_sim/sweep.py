@@ -553,7 +553,7 @@ def run_cells(
         futures = [executor.submit(run_cell, job) for job in jobs]
         if progress is not None:
             progress(0, len(jobs))
-        for done, future in enumerate(concurrent.futures.as_completed(futures), start=1):
+        for done, future in enumerate(_completed(futures, len(jobs), progress), start=1):
             try:
                 result = future.result()
             except concurrent.futures.CancelledError:
@@ -576,6 +576,26 @@ def run_cells(
             else:
                 stop(executor, futures)
     return results  # type: ignore[return-value]
+
+
+HEARTBEAT: float = 15.0  # [s] while no cell finishes, the progress is called again this often (it speaks each minute)
+
+
+def _completed(
+    futures: Sequence[concurrent.futures.Future], total: int, progress: Callable[[int, int], None] | None
+) -> Iterator[concurrent.futures.Future]:
+    """The futures as they complete; while none does for HEARTBEAT seconds, `progress` hears the count again, so a
+    sweep whose cells take minutes still says where it is (at least once a minute) instead of falling silent."""
+    pending, done = set(futures), 0
+    while pending:
+        finished, pending = concurrent.futures.wait(
+            pending, timeout=HEARTBEAT, return_when=concurrent.futures.FIRST_COMPLETED
+        )
+        if not finished and progress is not None:
+            progress(done, total)
+        for future in finished:
+            done += 1
+            yield future
 
 
 def jobs(p: Plan, keep_runs: bool = False, plots: bool = True) -> list[CellJob]:

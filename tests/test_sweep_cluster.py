@@ -36,3 +36,24 @@ def test_a_scheduler_without_workers_is_one_line_after_a_bounded_wait(tmp_path, 
 def test_a_plain_address_is_given_its_protocol():
     assert sweep.scheduler_address("127.0.0.1:8786") == "tcp://127.0.0.1:8786"
     assert sweep.scheduler_address("tcp://[::1]:8786") == "tcp://[::1]:8786"
+
+
+def test_progress_speaks_while_no_cell_finishes(monkeypatch):
+    """A cell that takes longer than a heartbeat: the progress is called again meanwhile, and a log line is
+    written once PLAIN_SECONDS have passed without one (the README promises a line at least once a minute)."""
+    import concurrent.futures
+    import io
+    import time
+
+    from hexabot_sim.__main__ import SweepProgress
+
+    monkeypatch.setattr(sweep, "HEARTBEAT", 0.05)
+    monkeypatch.setattr(SweepProgress, "PLAIN_SECONDS", 0.1)
+    stream = io.StringIO()
+    progress = SweepProgress("sweep-test", stream)
+    with concurrent.futures.ThreadPoolExecutor(1) as pool:
+        futures = [pool.submit(time.sleep, 0.5)]
+        progress(0, 1)
+        assert list(sweep._completed(futures, 1, progress)) == futures
+    lines = stream.getvalue().splitlines()
+    assert len([line for line in lines if line.startswith("sweep-test: 0% (0/1 cells")]) >= 3, lines
