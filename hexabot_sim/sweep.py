@@ -475,7 +475,7 @@ def dask_executor(address: str, timeout: float = 10.0) -> Iterator[tuple[concurr
     for name in ("distributed", "tornado", "asyncio"):  # Dask's own log lines are not the user's business
         logging.getLogger(name).setLevel(logging.CRITICAL + 1)
     try:
-        client = Client(address, timeout=timeout, set_as_default=False)
+        client = _connect(Client, address, timeout)
     except Exception as e:  # noqa: BLE001 - whatever the connection raised, it is one line about the address
         text = " ".join(str(e).split())[:200]
         raise UsageError(f"cannot reach the Dask scheduler at {address!r}: {text or type(e).__name__}") from None
@@ -494,6 +494,29 @@ def dask_executor(address: str, timeout: float = 10.0) -> Iterator[tuple[concurr
     finally:
         with contextlib.suppress(Exception):
             client.close(timeout=5)
+
+
+def _connect(client_type: Any, address: str, timeout: float) -> Any:
+    """client_type(address) within 2 x `timeout` seconds: a peer that accepts the connection but never answers as
+    a Dask scheduler would block Client() until it hangs up (a daemon thread is left to it, not the user)."""
+    import threading
+
+    box: list[Any] = []
+
+    def connect() -> None:
+        try:
+            box.append(client_type(address, timeout=timeout, set_as_default=False))
+        except BaseException as e:  # noqa: BLE001 - handed over to the caller
+            box.append(e)
+
+    thread = threading.Thread(target=connect, name="hexabot-sim-dask-connect", daemon=True)
+    thread.start()
+    thread.join(2 * timeout)
+    if not box:
+        raise TimeoutError(f"no answer as a Dask scheduler within {2 * timeout:g} s (is it one?)")
+    if isinstance(box[0], BaseException):
+        raise box[0]
+    return box[0]
 
 
 WORKER_WAIT: float = 30.0  # [s] how long a scheduler without workers is given to get one

@@ -57,3 +57,24 @@ def test_progress_speaks_while_no_cell_finishes(monkeypatch):
         assert list(sweep._completed(futures, 1, progress)) == futures
     lines = stream.getvalue().splitlines()
     assert len([line for line in lines if line.startswith("sweep-test: 0% (0/1 cells")]) >= 3, lines
+
+
+def test_a_peer_that_accepts_but_is_no_scheduler_is_refused_in_bounded_time():
+    """A TCP server on loopback that accepts and says nothing: Client() alone waited until the peer hung up."""
+    import socket
+    import time
+
+    pytest.importorskip("distributed", reason="the 'cluster' extra (distributed) is not installed")
+    from hexabot_sim.errors import UsageError
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(8)
+    started = time.monotonic()
+    try:
+        with pytest.raises(UsageError, match="no answer as a Dask scheduler"):
+            with sweep.dask_executor(f"tcp://127.0.0.1:{server.getsockname()[1]}", timeout=1.0):
+                pass
+    finally:
+        server.close()
+    assert time.monotonic() - started < 10
