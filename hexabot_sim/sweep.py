@@ -576,7 +576,7 @@ def run_cells(
         futures = [executor.submit(run_cell, job) for job in jobs]
         if progress is not None:
             progress(0, len(jobs))
-        for done, future in enumerate(_completed(futures, len(jobs), progress), start=1):
+        for done, future in enumerate(_completed(futures, len(jobs), progress, executor), start=1):
             try:
                 result = future.result()
             except concurrent.futures.CancelledError:
@@ -605,17 +605,37 @@ HEARTBEAT: float = 15.0  # [s] while no cell finishes, the progress is called ag
 
 
 def _completed(
-    futures: Sequence[concurrent.futures.Future], total: int, progress: Callable[[int, int], None] | None
+    futures: Sequence[concurrent.futures.Future],
+    total: int,
+    progress: Callable[[int, int], None] | None,
+    executor: concurrent.futures.Executor | None = None,
 ) -> Iterator[concurrent.futures.Future]:
     """The futures as they complete; while none does for HEARTBEAT seconds, `progress` hears the count again, so a
-    sweep whose cells take minutes still says where it is (at least once a minute) instead of falling silent."""
+    sweep whose cells take minutes still says where it is (at least once a minute) instead of falling silent.
+
+    Raises:
+        WorkerFailed: a Dask cluster that has had no worker for WORKER_WAIT seconds, or whose scheduler is gone.
+    """
     pending, done = set(futures), 0
+    client = getattr(executor, "_client", None)  # a Dask ClientExecutor's client
+    workerless_since: float | None = None
     while pending:
         finished, pending = concurrent.futures.wait(
             pending, timeout=HEARTBEAT, return_when=concurrent.futures.FIRST_COMPLETED
         )
         if not finished and progress is not None:
             progress(done, total)
+        if not finished and client is not None:
+            try:
+                workers = len(client.nthreads())
+            except Exception:  # noqa: BLE001 - distributed's own errors: the scheduler is unreachable
+                raise WorkerFailed(f"lost the Dask scheduler at {client.scheduler.address}") from None
+            now = time.monotonic()
+            workerless_since = None if workers else (workerless_since or now)
+            if workerless_since is not None and now - workerless_since >= WORKER_WAIT:
+                raise WorkerFailed(
+                    f"the Dask cluster has had no worker for {WORKER_WAIT:g} s, with {len(pending)} cells unfinished"
+                )
         for future in finished:
             done += 1
             yield future

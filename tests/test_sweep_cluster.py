@@ -78,3 +78,29 @@ def test_a_peer_that_accepts_but_is_no_scheduler_is_refused_in_bounded_time():
     finally:
         server.close()
     assert time.monotonic() - started < 10
+
+
+class _FakeClient:
+    def __init__(self, nthreads):
+        self._nthreads = nthreads
+        self.scheduler = type("S", (), {"address": "tcp://127.0.0.1:1"})()
+
+    def nthreads(self):
+        return self._nthreads()
+
+
+@pytest.mark.parametrize("case", ["no workers", "scheduler gone"])
+def test_a_cluster_that_loses_its_workers_or_scheduler_mid_sweep_fails_in_bounded_time(monkeypatch, case):
+    """A cell that never finishes on a cluster with no worker left (or no scheduler): WorkerFailed, not a hang."""
+    import concurrent.futures
+
+    def gone():
+        raise OSError("Connection refused")
+
+    monkeypatch.setattr(sweep, "HEARTBEAT", 0.02)
+    monkeypatch.setattr(sweep, "WORKER_WAIT", 0.1)
+    executor = type("E", (), {})()
+    executor._client = _FakeClient(dict if case == "no workers" else gone)
+    never = concurrent.futures.Future()
+    with pytest.raises(sweep.WorkerFailed, match="no worker for|lost the Dask scheduler"):
+        list(sweep._completed([never], 1, None, executor))
