@@ -447,7 +447,8 @@ def cmd_view(args: argparse.Namespace) -> int:
     folder = Path(args.target)
     replaying = folder.is_dir() or os.sep in args.target or args.target in (".", "..")
     if replaying and not folder.is_dir():
-        raise UsageError(f"run folder {args.target!r} does not exist")
+        shown = os.fsencode(args.target).decode("utf-8", "backslashreplace")  # bytes that are not UTF-8 as \xNN
+        raise UsageError(f"run folder {shown!r} does not exist")
     if replaying and (args.sets or args.config):
         raise UsageError("--set and --config choose a scenario's parameters; a run folder replays its own")
     if gl.loaded_backend() is None:

@@ -96,3 +96,10 @@ def test_a_fifo_named_run_json_does_not_block_the_replay_check(run_folder, tmp_p
     monkeypatch.delenv("DISPLAY", raising=False)
     code, _, err = cli(capsys, "view", str(folder))  # blocked for ever before
     assert code == 2 and "display" in err
+
+
+def test_a_missing_folder_that_is_not_utf8_is_named_readably(capsys):
+    import os
+
+    code, _, err = cli(capsys, "view", os.fsdecode(b"no/such\xff"))
+    assert code == 2 and "no/such\\\\xff" in err and "udc" not in err, err
