@@ -8,23 +8,19 @@ Importing the package imports neither MuJoCo nor matplotlib's pyplot and never p
 import os as _os
 from typing import Any as _Any
 
+from hexabot_sim._version import __version__
+
 # MuJoCo picks its OpenGL backend when it is first imported: default to headless EGL.
 USER_MUJOCO_GL: str | None = _os.environ.get("MUJOCO_GL")  # what the user had set, for `hexabot-sim check`
 _os.environ.setdefault("MUJOCO_GL", "egl")
 
-__version__ = "0.1.0"
-
 # The API lives in hexabot_sim.api and is imported on first use, so `import hexabot_sim` stays cheap
 # and MuJoCo is not imported before the CLI has chosen its OpenGL backend.
-_API = ("run", "Result", "ScenarioInfo", "Parameter", "Columns", "Metric")
-__all__ = ["__version__", "scenarios", *_API]
+_API = ("run", "scenarios", "Result", "ScenarioInfo", "Parameter", "Columns", "Metric")
+__all__ = ["__version__", *_API]
 
 
 def __getattr__(name: str) -> _Any:
-    if name == "scenarios":  # the sub-package, callable: hexabot_sim.scenarios() is the API's list of scenarios
-        import importlib
-
-        return importlib.import_module("hexabot_sim.scenarios")
     if name in _API:
         from hexabot_sim import api
 
@@ -33,4 +29,4 @@ def __getattr__(name: str) -> _Any:
 
 
 def __dir__() -> list[str]:
-    return sorted([*globals(), "scenarios", *_API])
+    return sorted([*globals(), *_API])

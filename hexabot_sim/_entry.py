@@ -3,23 +3,11 @@
 import sys
 
 
-def quiet_interruptions() -> None:
-    """A stop request raised where Python cannot propagate it (a weakref callback of the import system, a
-    __del__) is recorded and acted on later: do not print it as "Exception ignored ... Traceback"."""
-    default = sys.unraisablehook
-
-    def hook(unraisable: "sys.UnraisableHookArgs") -> None:
-        if not isinstance(unraisable.exc_value, KeyboardInterrupt):
-            default(unraisable)
-
-    sys.unraisablehook = hook
-
-
 def console() -> None:
     """Loads the command line (numpy, MuJoCo, ...) and runs it; Ctrl-C during the loading exits 130 in one line."""
     import signal
 
-    from hexabot_sim.errors import RECEIVED_SIGNALS
+    from hexabot_sim.signals import RECEIVED_SIGNALS, quiet_interruptions
 
     def interrupted(signum: int, frame: object) -> None:
         RECEIVED_SIGNALS.append(signum)  # remembered even if an import swallows the exception
@@ -29,7 +17,7 @@ def console() -> None:
         signal.signal(signal.SIGINT, interrupted)
     quiet_interruptions()
     try:
-        from hexabot_sim.__main__ import console as run
+        from hexabot_sim.cli import console as run
 
         if RECEIVED_SIGNALS:
             raise KeyboardInterrupt

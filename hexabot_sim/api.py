@@ -13,11 +13,12 @@ from typing import Any
 
 import numpy as np
 
-from hexabot_sim import output
+from hexabot_sim import output, registry
 from hexabot_sim import params as params_mod
-from hexabot_sim import scenarios as registry
+from hexabot_sim import video as video_options
 from hexabot_sim.errors import OutputError, UsageError
-from hexabot_sim.scenarios.base import Metric
+from hexabot_sim.result import Metric
+from hexabot_sim.scenario import Scenario
 
 __all__ = ["Columns", "Metric", "Parameter", "Result", "ScenarioInfo", "run", "scenarios"]
 
@@ -59,7 +60,7 @@ class ScenarioInfo:
         return {name: p.default for name, p in self.parameters.items()}
 
 
-def _info(scenario: registry.Scenario) -> ScenarioInfo:
+def _info(scenario: Scenario) -> ScenarioInfo:
     parameters = {}
     for name, (info, default) in params_mod.infos(scenario.params_type).items():
         value = scenario.defaults.get(name, default)
@@ -129,16 +130,42 @@ def run(
             its range, a run too large; the message names what is allowed.
         hexabot_sim.errors.SimulationError: the simulation went unstable (names the time and likely cause).
     """
-    entry = registry.get(scenario)
+    registry.get(scenario)
     _check_path("config", config)
     _check_callable("progress", progress)
-    layer = {name: _plain(value) for name, value in params.items()}
     layers = [params_mod.read_config(Path(config))] if config is not None else []
-    p: Any = params_mod.resolve(entry.params_type, entry.defaults, *layers, layer)
-    started = time.perf_counter()
+    prepared = prepare(scenario, *layers, {name: _plain(value) for name, value in params.items()})
     with _mujoco_warnings():
-        result = entry.runner(entry.name, p, progress=progress)
-    return Result(entry, p, result, time.perf_counter() - started)
+        return prepared.run(progress)
+
+
+@dataclasses.dataclass(frozen=True)
+class Prepared:
+    """A scenario with its parameters resolved and checked (nothing has run yet): `run()` simulates it.
+
+    Attributes:
+        entry: The registry's entry of the scenario.
+        params: The scenario's frozen parameter dataclass, fully resolved.
+    """
+
+    entry: Scenario
+    params: Any
+
+    def run(self, progress: Callable[[int, int], None] | None = None) -> Result:
+        """Simulates the scenario (MuJoCo's warnings go to whatever handler the caller installed)."""
+        started = time.perf_counter()
+        raw = self.entry.runner(self.entry.name, self.params, progress=progress)
+        return Result(self.entry, self.params, raw, time.perf_counter() - started)
+
+
+def prepare(scenario: str, *layers: Mapping[str, Any]) -> Prepared:
+    """Resolves a scenario's parameters: its defaults, then each layer in turn (a config file's, then --set's).
+
+    Values are checked as `run` checks them (UsageError naming what is allowed); nothing is simulated. The
+    command line uses it to refuse a run (its video cost, its --out) before the simulation starts.
+    """
+    entry = registry.get(scenario)
+    return Prepared(entry, params_mod.resolve(entry.params_type, entry.defaults, *layers))
 
 
 def _check_path(name: str, value: Any, optional: bool = True) -> None:
@@ -169,7 +196,7 @@ class Result:
         wall_time: Wall time of the simulation [s].
     """
 
-    def __init__(self, scenario: registry.Scenario, params: Any, raw: Any, wall_time: float) -> None:
+    def __init__(self, scenario: Scenario, params: Any, raw: Any, wall_time: float) -> None:
         self._scenario = scenario
         self._params = params
         self.raw = raw
@@ -256,25 +283,40 @@ class Result:
         """
         _check_path("out", out)
         _check_callable("progress", progress)
-        settings = _video_settings(quality, size, fps) if video else None
+        settings = video_options.settings(quality, size, fps) if video else None
         backend, reason = None, output.NOT_REQUESTED
         if video:
-            backend, reason = _video_backend()
+            backend, reason = video_backend()
         with output.run_folder(out, self.scenario, force=force) as folder:
-            output.write_run(
-                folder.path,
-                self._scenario,
-                self._params,
-                self.raw,
-                sim_seconds=self.wall_time,
-                plots=plots,
-                video=settings,
-                backend=backend,
-                no_video_reason=reason,
-                video_progress=progress,
-            )
+            self.write_folder(folder.path, plots=plots, video=settings, backend=backend, no_video_reason=reason,
+                              video_progress=progress)  # fmt: skip
         assert folder.final is not None
         return folder.final
+
+    def write_folder(
+        self,
+        path: Path,
+        *,
+        plots: bool = True,
+        video: video_options.VideoSettings | None = None,
+        backend: str | None = None,
+        no_video_reason: str = output.NOT_REQUESTED,
+        video_progress: Callable[[int, int], None] | None = None,
+    ) -> output.Written:
+        """Writes the run's files into `path`, an empty folder made for them (`save` and the command line give
+        it their staging folder, which they publish); `backend` is the working OpenGL backend for `video`."""
+        return output.write_run(
+            path,
+            self._scenario,
+            self._params,
+            self.raw,
+            sim_seconds=self.wall_time,
+            plots=plots,
+            video=video,
+            backend=backend,
+            no_video_reason=no_video_reason,
+            video_progress=video_progress,
+        )
 
     def video(
         self,
@@ -302,10 +344,10 @@ class Result:
         """
         _check_path("path", path, optional=False)
         _check_callable("progress", progress)
-        settings = _video_settings(quality, size, fps)
+        settings = video_options.settings(quality, size, fps)
         if self.raw.camera is None or self.raw.trajectory is None:
             raise UsageError(f"{self.scenario} produces no trajectory to film")
-        backend, reason = _video_backend()
+        backend, reason = video_backend()
         if backend is None:
             raise OutputError(f"no video: {reason}")
         path = Path(path)
@@ -336,29 +378,13 @@ def _short(metric: Metric) -> str:
     return f"{report.format_value(metric.value)}{unit}"
 
 
-def _video_settings(quality: str, size: tuple[int, int] | str, fps: int) -> output.VideoSettings:
-    """Checks video options with the CLI's own rules and messages (--quality, --size, --fps)."""
-    import argparse
-
-    from hexabot_sim import render
-    from hexabot_sim.__main__ import _fps, _size
-
-    if quality not in render.QUALITY:
-        raise UsageError(f"video quality must be one of {', '.join(render.QUALITY)}; got {quality!r}")
-    text = size if isinstance(size, str) else "x".join(str(_plain(v)) for v in size)
-    try:
-        width, height = _size(text)
-        rate = _fps(str(_plain(fps)))
-    except argparse.ArgumentTypeError as e:
-        raise UsageError(f"video: {e}") from None
-    return output.VideoSettings(width=width, height=height, fps=rate, quality=quality)
-
-
-def _video_backend() -> tuple[str | None, str]:
-    """(working OpenGL backend, "") or (None, why there is no video)."""
+def video_backend(announce: Callable[[str], None] | None = None) -> tuple[str | None, str]:
+    """(working OpenGL backend, "") or (None, why there is no video); `announce` hears a fallback's notice."""
     from hexabot_sim import gl
 
-    backend, reason, _notice = gl.choose()
+    backend, reason, notice = gl.choose()
+    if notice and announce is not None:
+        announce(notice)
     if backend is not None:
         problem = gl.ffmpeg_problem()
         if problem is not None:

@@ -23,15 +23,9 @@ from typing import Any
 
 import numpy as np
 
-from hexabot_sim.errors import (
-    PUBLISHED,
-    RECEIVED_SIGNALS,
-    OutputError,
-    SimulationError,
-    UsageError,
-    signals_held,
-    stop_request,
-)
+from hexabot_sim.errors import OutputError, SimulationError, UsageError
+from hexabot_sim.signals import PUBLISHED, RECEIVED_SIGNALS, signals_held, stop_request
+from hexabot_sim.video import VideoSettings
 
 JSON_NAME = "run.json"
 MODEL_NAME = "model.xml"
@@ -429,10 +423,10 @@ def versions() -> dict[str, str]:
     import mujoco
     import scipy
 
-    import hexabot_sim
+    from hexabot_sim._version import __version__
 
     return {
-        "hexabot_sim": hexabot_sim.__version__,
+        "hexabot_sim": __version__,
         "mujoco": mujoco.__version__,
         "numpy": np.__version__,
         "scipy": scipy.__version__,
@@ -501,22 +495,6 @@ def package_style() -> Iterator[None]:
 
     with matplotlib.style.context("default"):
         yield
-
-
-@dataclasses.dataclass(frozen=True)
-class VideoSettings:
-    """How video.mp4 is rendered.
-
-    Attributes:
-        width, height: Frame size in [px] (even, checked by the caller).
-        fps: Frame rate in [1/s].
-        quality: "preview" or "high" (render.QUALITY).
-    """
-
-    width: int = 640
-    height: int = 480
-    fps: int = 30
-    quality: str = "preview"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -641,7 +619,7 @@ def write_run(
     model.xml, trajectory.npz, the figures, video.mp4, run.json and report.html.
 
     Args:
-        scenario: The registry entry (scenarios.Scenario): name, summary, figures().
+        scenario: The registry entry (scenario.Scenario): name, summary, figures().
         params: The resolved parameter object the run used.
         result: The scenario's ScenarioResult.
         sim_seconds: Wall time of the simulation [s], recorded in run.json.

@@ -17,8 +17,19 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from hexabot_sim.errors import RECEIVED_SIGNALS, stop_request
-from hexabot_sim.scenarios.base import Marker
+from hexabot_sim.signals import RECEIVED_SIGNALS, stop_request
+from hexabot_sim.video import frame_count
+
+
+@dataclasses.dataclass(frozen=True)
+class Marker:
+    """A segment drawn into every video frame (e.g. a predicted rest angle), world frame [m]."""
+
+    start: tuple[float, float, float]
+    end: tuple[float, float, float]
+    radius: float
+    rgba: tuple[float, float, float, float]
+
 
 # [s] A frame the encoder has not taken after this long: it is stuck (an encoder that never reads its
 # input would otherwise hang the run for ever). The slowest frame measured here, 4K at the high preset,
@@ -111,11 +122,6 @@ DESIGN_ASPECT: float = 4 / 3
 Progress = Callable[[int, int], None]
 # One line of the text overlay: recording row -> text (e.g. lambda i: f"theta = {deg[i]:6.1f} deg").
 OverlayLine = Callable[[int], str]
-
-
-def frame_count(duration: float, fps: float) -> int:
-    """Frames of a real-time video of `duration` seconds: one at t = 0, then one every 1 / fps."""
-    return math.floor(duration * fps + 1e-9) + 1
 
 
 def frame_indices(t: np.ndarray, fps: float) -> np.ndarray:

@@ -10,7 +10,8 @@ from collections.abc import Callable, Iterator
 import mujoco
 import numpy as np
 
-from hexabot_sim.errors import RECEIVED_SIGNALS, SimulationError, stop_request
+from hexabot_sim.errors import SimulationError
+from hexabot_sim.signals import RECEIVED_SIGNALS, stop_request
 
 # Steps between two divergence checks (warning counters, finiteness of the recorded block).
 CHECK_EVERY: int = 100

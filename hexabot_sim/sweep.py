@@ -2,30 +2,22 @@
 
 from __future__ import annotations
 
-import concurrent.futures
-import contextlib
 import csv
 import dataclasses
-import logging
 import math
-import multiprocessing
 import os
-import re
-import shutil
-import signal
-import sys
 import tempfile
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from hexabot_sim import params as params_mod
-from hexabot_sim import scenarios
-from hexabot_sim.errors import HexabotError, UsageError
-from hexabot_sim.output import CELL_PREFIX
+from hexabot_sim import pool, registry
+from hexabot_sim.errors import UsageError
+from hexabot_sim.pool import WALL_CLOCK_METRICS, CellJob, CellResult
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -47,21 +39,12 @@ ANNOTATE_MAX_CELLS: int = 100  # heatmaps up to this many cells print each value
 DECADES_FOR_LOG: float = 2.0  # positive values spanning this many decades get a log scale
 CONSTANT_RTOL: float = 1e-12  # a metric that varies less than this (round-off) is not plotted
 
-# Metrics that measure the computer, not the physics (wall time): left out of sweep.csv, whose bytes
-# must not depend on the machine, the load or the executor.
-WALL_CLOCK_METRICS: frozenset[str] = frozenset({"real_time_factor"})
 
 # Scenarios that are themselves grids of runs: a sweep sweeps their single-run scenario instead.
 NOT_SWEEPABLE: dict[str, str] = {
     "leg-sweep": "leg-sweep is itself a grid of leg-step runs; sweep leg-step instead, "
     "e.g. --grid amplitude=0.02:0.1:5 --grid omega=log:0.5:3:6",
 }
-
-
-class WorkerFailed(HexabotError):
-    """A worker could not run a cell at all (process died, package missing on a cluster worker)."""
-
-    exit_code = 1
 
 
 # ---------------------------------------------------------------------------------------------
@@ -187,7 +170,7 @@ def plan(
         UsageError: naming the bad spec, value or cell and what is allowed; if any cell cannot run,
             how many cannot, the first of them and its reason.
     """
-    scenario = scenarios.get(scenario_name)
+    scenario = registry.get(scenario_name)
     if scenario.name in NOT_SWEEPABLE:
         raise UsageError(NOT_SWEEPABLE[scenario.name])
     if not grid:
@@ -335,315 +318,33 @@ def check_cost(p: Plan, workers: int, where: str) -> float | None:
 # One cell, in a worker process (local pool or Dask worker): only plain data travels back
 
 
-@dataclasses.dataclass(frozen=True)
-class CellJob:
-    """What a worker needs to run one cell."""
-
-    index: int
-    scenario: str
-    params: Any
-    keep_run: bool  # also write the cell's run folder and send its files back
-    plots: bool = True  # the kept run folder has the scenario's figures
-
-
-@dataclasses.dataclass
-class CellResult:
-    """What one cell sends back: its scalar metrics (JSON-clean), or the error that stopped it."""
-
-    index: int
-    metrics: dict[str, Any]
-    units: dict[str, str]
-    docs: dict[str, str]
-    error: str | None
-    seconds: float  # wall time in the worker [s]
-    files: dict[str, bytes] | None = None  # --keep-runs: relative path -> content of the cell's run folder
-
-
-def _scalar(value: Any) -> tuple[bool, Any]:
-    """(is a scalar, JSON-clean value): numpy numbers become Python numbers, non-finite floats None."""
-    if isinstance(value, (np.floating, np.integer, np.bool_)):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return True, None
-    return value is None or isinstance(value, (bool, int, float, str)), value
-
-
-def _collect(metrics: Mapping[str, Any], units: Mapping[str, str], docs: Mapping[str, str]) -> tuple[dict, dict, dict]:
-    out = {}
-    for name, value in metrics.items():
-        ok, clean = _scalar(value)
-        if ok and name not in WALL_CLOCK_METRICS:
-            out[name] = clean
-    return out, {k: units.get(k, "") for k in out}, {k: docs.get(k, "") for k in out}
-
-
-def run_cell(job: CellJob) -> CellResult:
-    """Runs one cell; a cell that fails (diverges, or anything else) is a result with its message, not a crash.
-
-    With `keep_run` the cell's run folder is written by output.write_run, the writer of `hexabot-sim run`
-    (figures, no video), into a private temporary folder, and its files travel back with the result:
-    the worker may be on another machine than the sweep folder.
-    """
-    from hexabot_sim import output
-
-    started = time.perf_counter()
-    scenario = scenarios.get(job.scenario)
-    try:
-        result = scenario.runner(job.scenario, job.params)
-        metrics, units, docs = _collect(
-            {k: m.value for k, m in result.metrics.items()},
-            {k: m.unit for k, m in result.metrics.items()},
-            {k: m.doc for k, m in result.metrics.items()},
-        )
-        files = None
-        if job.keep_run:
-            sim_seconds = time.perf_counter() - started
-            with tempfile.TemporaryDirectory(prefix=f"{CELL_PREFIX}{os.getpid()}-") as tmp:
-                _CELL_FOLDERS.append(tmp)  # removed by _worker_stopped if the sweep stops this worker
-                try:
-                    folder = Path(tmp)
-                    output.write_run(folder, scenario, job.params, result, sim_seconds=sim_seconds, plots=job.plots,
-                                     no_video_reason="not made in a sweep")  # fmt: skip
-                    files = {
-                        path.relative_to(folder).as_posix(): path.read_bytes()
-                        for path in sorted(folder.rglob("*"))
-                        if path.is_file()
-                    }
-                finally:
-                    _CELL_FOLDERS.remove(tmp)
-        return CellResult(job.index, metrics, units, docs, None, time.perf_counter() - started, files)
-    except (KeyboardInterrupt, MemoryError):
-        raise
-    except HexabotError as e:
-        message = " ".join(str(e).split())
-    except Exception as e:  # one cell's failure must not cost the other cells
-        message = f"internal error: {type(e).__name__}: {' '.join(str(e).split())[:300]} (a bug, please report it)"
-    return CellResult(job.index, {}, {}, {}, message, time.perf_counter() - started)
-
-
 # ---------------------------------------------------------------------------------------------
 # Executors: a process pool here, or a Dask cluster; the sweep only sees concurrent.futures
 
 
-# A kept cell's run folder is written in the system's temporary folder, named <CELL_PREFIX><pid>-<random>;
-# `hexabot-sim clean` removes those whose process is gone (a worker killed with SIGKILL leaves one).
-_CELL_FOLDERS: list[str] = []  # the kept-run folder this worker is writing, if any
-
-
-def _worker_stopped(signum: int, frame: Any) -> None:
-    """SIGTERM/SIGHUP in a worker (the sweep stopping it): remove the cell folder it was writing, exit at once."""
-    for path in list(_CELL_FOLDERS):
-        shutil.rmtree(path, ignore_errors=True)
-    os._exit(128 + signum)
-
-
-def _worker_init() -> None:
-    """Worker processes leave Ctrl-C to the parent (which stops them) and die with it (Linux)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, _worker_stopped)
-    signal.signal(signal.SIGHUP, _worker_stopped)
-    if sys.platform.startswith("linux"):
-        try:
-            import ctypes
-
-            pr_set_pdeathsig = 1
-            ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL)
-        except (OSError, AttributeError):
-            pass
-
-
-def local_executor(workers: int) -> concurrent.futures.ProcessPoolExecutor:
-    """A pool of `workers` processes that ignore Ctrl-C and die with this process."""
-    # fork is cheap and safe here (no GL, no threads yet); spawn elsewhere.
-    methods = multiprocessing.get_all_start_methods()
-    context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-    return concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_worker_init)
-
-
-@contextlib.contextmanager
-def dask_executor(address: str, timeout: float = 10.0) -> Iterator[tuple[concurrent.futures.Executor, int]]:
-    """The Executor of a Dask distributed scheduler at `address`, and its current number of worker threads.
-
-    Raises:
-        UsageError: if `distributed` is not installed or the scheduler cannot be reached within `timeout` [s].
-    """
-    try:
-        from distributed import Client
-    except ImportError:
-        raise UsageError("--scheduler needs the 'distributed' package: pip install \"hexabot-sim[cluster]\"") from None
-    address = scheduler_address(address)
-    for name in ("distributed", "tornado", "asyncio"):  # Dask's own log lines are not the user's business
-        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
-    try:
-        client = _connect(Client, address, timeout)
-    except Exception as e:  # noqa: BLE001 - whatever the connection raised, it is one line about the address
-        text = " ".join(str(e).split())[:200]
-        raise UsageError(f"cannot reach the Dask scheduler at {address!r}: {text or type(e).__name__}") from None
-    try:
-        threads = sum(client.nthreads().values())
-        if threads == 0:
-            try:
-                client.wait_for_workers(1, timeout=WORKER_WAIT)
-            except Exception:  # noqa: BLE001 - distributed raises its own TimeoutError
-                raise UsageError(
-                    f"the Dask scheduler at {address!r} has no workers (waited {WORKER_WAIT:g} s): start some with "
-                    f"'dask worker {address}'"
-                ) from None
-            threads = sum(client.nthreads().values())
-        yield client.get_executor(pure=False), threads
-    finally:
-        with contextlib.suppress(Exception):
-            client.close(timeout=5)
-
-
-def _connect(client_type: Any, address: str, timeout: float) -> Any:
-    """client_type(address) within 2 x `timeout` seconds: a peer that accepts the connection but never answers as
-    a Dask scheduler would block Client() until it hangs up (a daemon thread is left to it, not the user)."""
-    import threading
-
-    box: list[Any] = []
-
-    def connect() -> None:
-        try:
-            box.append(client_type(address, timeout=timeout, set_as_default=False))
-        except BaseException as e:  # noqa: BLE001 - handed over to the caller
-            box.append(e)
-
-    thread = threading.Thread(target=connect, name="hexabot-sim-dask-connect", daemon=True)
-    thread.start()
-    thread.join(2 * timeout)
-    if not box:
-        raise TimeoutError(f"no answer as a Dask scheduler within {2 * timeout:g} s (is it one?)")
-    if isinstance(box[0], BaseException):
-        raise box[0]
-    return box[0]
-
-
-WORKER_WAIT: float = 30.0  # [s] how long a scheduler without workers is given to get one
-
-
-def scheduler_address(text: str) -> str:
-    """'tcp://host:port' (or 'host:port') checked: UsageError in one line for anything else."""
-    match = re.fullmatch(r"(?:tcp://)?([A-Za-z0-9._-]+|\[[0-9A-Fa-f:.]+\]):([0-9]{1,5})", text)
-    if "://" in text and not text.startswith("tcp://"):
-        scheme = text.split("://", 1)[0][:20]
-        raise UsageError(
-            f"--scheduler {scheme}:// is not supported: give a Dask scheduler's tcp://HOST:PORT address "
-            "(tls:// needs a certificate configuration this command does not take)"
-        )
-    if match is None or not 1 <= int(match.group(2)) <= 65535:
-        shown = text if len(text) <= 80 else text[:77] + "..."
-        raise UsageError(f"--scheduler {shown!r} is not an address: expected tcp://HOST:PORT, PORT from 1 to 65535")
-    return text if text.startswith("tcp://") else f"tcp://{text}"
-
-
-def stop(executor: concurrent.futures.Executor, futures: Sequence[concurrent.futures.Future]) -> None:
-    """Cancels what has not started and stops what is running: local workers are terminated at once."""
-    for future in futures:
-        future.cancel()
-    if isinstance(executor, concurrent.futures.ProcessPoolExecutor):
-        processes = list((getattr(executor, "_processes", None) or {}).values())
-        for process in processes:
-            with contextlib.suppress(OSError, ValueError):
-                process.terminate()
-        executor.shutdown(wait=True, cancel_futures=True)
-        for process in processes:
-            process.join(timeout=5)
-    else:  # Dask: cancel the tasks on the scheduler; its workers stay up for the next job
-        executor.shutdown(wait=False)
-
-
-def run_cells(
-    executor: concurrent.futures.Executor,
-    jobs: Sequence[CellJob],
-    progress: Callable[[int, int], None] | None = None,
-    on_result: Callable[[CellResult], None] | None = None,
-) -> list[CellResult]:
-    """Runs every job on the executor; results come back in job order whatever order they finish in.
-
-    `on_result` sees each result as it arrives (e.g. to write its kept run folder). On any exception
-    in the caller's thread (Ctrl-C, SIGTERM) every worker is stopped before it propagates.
-
-    Raises:
-        WorkerFailed: if a worker could not run a cell at all (it died, or cannot import hexabot_sim).
-    """
-    from hexabot_sim.errors import signals_held
-
-    results: list[CellResult | None] = [None] * len(jobs)
-    futures: list[concurrent.futures.Future] = []
-    finished = False
-    try:
-        futures = [executor.submit(run_cell, job) for job in jobs]
-        if progress is not None:
-            progress(0, len(jobs))
-        for done, future in enumerate(_completed(futures, len(jobs), progress, executor), start=1):
-            try:
-                result = future.result()
-            except concurrent.futures.CancelledError:
-                raise WorkerFailed("a cell was cancelled by the executor (cluster shut down?)") from None
-            except Exception as e:
-                text = " ".join(str(e).split())[:300]
-                hint = " (is the same hexabot-sim installed on every worker?)" if isinstance(e, ImportError) else ""
-                raise WorkerFailed(f"a worker failed: {type(e).__name__}: {text}{hint}") from None
-            if on_result is not None:
-                on_result(result)
-            result.files = None
-            results[result.index] = result
-            if progress is not None:
-                progress(done, len(jobs))
-        finished = True
-    finally:
-        with signals_held():  # a second Ctrl-C must not leave workers behind
-            if finished:
-                executor.shutdown(wait=True)
-            else:
-                stop(executor, futures)
-    return results  # type: ignore[return-value]
-
-
-HEARTBEAT: float = 15.0  # [s] while no cell finishes, the progress is called again this often (it speaks each minute)
-
-
-def _completed(
-    futures: Sequence[concurrent.futures.Future],
-    total: int,
-    progress: Callable[[int, int], None] | None,
-    executor: concurrent.futures.Executor | None = None,
-) -> Iterator[concurrent.futures.Future]:
-    """The futures as they complete; while none does for HEARTBEAT seconds, `progress` hears the count again, so a
-    sweep whose cells take minutes still says where it is (at least once a minute) instead of falling silent.
-
-    Raises:
-        WorkerFailed: a Dask cluster that has had no worker for WORKER_WAIT seconds, or whose scheduler is gone.
-    """
-    pending, done = set(futures), 0
-    client = getattr(executor, "_client", None)  # a Dask ClientExecutor's client
-    workerless_since: float | None = None
-    while pending:
-        finished, pending = concurrent.futures.wait(
-            pending, timeout=HEARTBEAT, return_when=concurrent.futures.FIRST_COMPLETED
-        )
-        if not finished and progress is not None:
-            progress(done, total)
-        if not finished and client is not None:
-            try:
-                workers = len(client.nthreads())
-            except Exception:  # noqa: BLE001 - distributed's own errors: the scheduler is unreachable
-                raise WorkerFailed(f"lost the Dask scheduler at {client.scheduler.address}") from None
-            now = time.monotonic()
-            workerless_since = None if workers else (workerless_since or now)
-            if workerless_since is not None and now - workerless_since >= WORKER_WAIT:
-                raise WorkerFailed(
-                    f"the Dask cluster has had no worker for {WORKER_WAIT:g} s, with {len(pending)} cells unfinished"
-                )
-        for future in finished:
-            done += 1
-            yield future
-
-
 def jobs(p: Plan, keep_runs: bool = False, plots: bool = True) -> list[CellJob]:
-    """One job per cell of the plan (`plots`: kept run folders get their figures)."""
-    return [CellJob(i, p.scenario, cell, keep_runs, plots) for i, cell in enumerate(p.cells)]
+    """One job per cell of the plan (`keep_runs`: each cell's run folder comes back; `plots`: with its figures)."""
+    runner = registry.get(p.scenario).runner
+    keep = kept_run if keep_runs else None
+    return [CellJob(i, p.scenario, cell, runner, keep, plots) for i, cell in enumerate(p.cells)]
+
+
+def kept_run(job: CellJob, result: Any, sim_seconds: float) -> dict[str, bytes]:
+    """A cell's run folder (--keep-runs), as relative path -> content: written in the worker by output.write_run,
+    the writer of `hexabot-sim run` (figures, no video), in a private temporary folder named <CELL_PREFIX><pid>-...,
+    since the worker may be on another machine than the sweep folder."""
+    from hexabot_sim import output
+
+    with tempfile.TemporaryDirectory(prefix=f"{output.CELL_PREFIX}{os.getpid()}-") as tmp:
+        pool.CELL_FOLDERS.append(tmp)  # removed by the worker's signal handler if the sweep stops it
+        try:
+            folder = Path(tmp)
+            output.write_run(folder, registry.get(job.scenario), job.params, result, sim_seconds=sim_seconds,
+                             plots=job.plots, no_video_reason="not made in a sweep")  # fmt: skip
+            return {path.relative_to(folder).as_posix(): path.read_bytes() for path in sorted(folder.rglob("*"))
+                    if path.is_file()}  # fmt: skip
+        finally:
+            pool.CELL_FOLDERS.remove(tmp)
 
 
 def cell_folder(index: int, count: int) -> str:
@@ -733,7 +434,7 @@ def record(p: Plan, t: Table, results: Sequence[CellResult], executor: Mapping[s
     failed = [r.index for r in results if r.error]
     return {
         "scenario": p.scenario,
-        "description": scenarios.get(p.scenario).summary,
+        "description": registry.get(p.scenario).summary,
         "grid": [{"name": a.name, "spec": a.spec, "values": list(a.values), "log": a.log} for a in p.axes],
         "cells": len(p.cells),
         "order": "row-major: the first --grid varies slowest; row i of sweep.csv is cell i",
@@ -895,9 +596,3 @@ def _heatmap(p: Plan, t: Table, name: str, values: np.ndarray, failed: np.ndarra
     return fig
 
 
-def workers_default() -> int:
-    """All cores this process may use."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):
-        return os.cpu_count() or 1

@@ -253,12 +253,12 @@ def _read_trajectory(path: Path) -> dict[str, np.ndarray]:
 def _scenario_live(name: str | None, values: dict[str, Any]) -> Any:
     """The scenario's Live hook built with these parameters, or None (its markers are optional in a replay)."""
     from hexabot_sim import params as params_mod
-    from hexabot_sim import scenarios
+    from hexabot_sim import registry
 
-    if name not in scenarios.SCENARIOS:
+    if name not in registry.SCENARIOS:
         return None
-    scenario = scenarios.SCENARIOS[name]
-    hook = getattr(scenario._module(), "live", None)
+    scenario = registry.SCENARIOS[name]
+    hook = scenario.live
     if hook is None:
         return None
     try:
@@ -270,9 +270,9 @@ def _scenario_live(name: str | None, values: dict[str, Any]) -> Any:
 
 def live_maker(name: str, p: Any) -> Callable[[], Any]:
     """Builds the scenario's Live with parameters p on each call (UsageError for a scenario that is no motion)."""
-    from hexabot_sim import scenarios
+    from hexabot_sim import registry
 
-    hook = getattr(scenarios.get(name)._module(), "live", None)
+    hook = registry.get(name).live
     if hook is None:
         raise UsageError(
             f"{name} is a grid of runs, not one motion to watch; view one point of it live, e.g. "

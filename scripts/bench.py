@@ -34,9 +34,11 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import mujoco
 
-from hexabot_sim import gl, params, render, scenarios
-from hexabot_sim.scenarios import hexabot, leg, pendulum
-from hexabot_sim.scenarios.base import at_home
+from hexabot_sim import gl, params, render, registry
+from hexabot_sim.robots.hexabot import walk as hexabot
+from hexabot_sim.robots.leg import step as leg
+from hexabot_sim.robots.pendulum import pendulum
+from hexabot_sim.result import at_home
 from hexabot_sim.simulate import simulate, step_count
 
 
@@ -69,7 +71,7 @@ def paired_loops(prepare, loop, repeat: int) -> dict[str, float]:
 
 def bench_sim_loop(repeat: int) -> dict[str, float]:
     """The pendulum scenario's simulate() (recording + divergence checks) vs bare mj_step."""
-    scenario = scenarios.get("pendulum")
+    scenario = registry.get("pendulum")
     p = params.resolve(scenario.params_type, scenario.defaults)
     model = mujoco.MjModel.from_xml_string(pendulum.build_xml(p))
     data = mujoco.MjData(model)
@@ -83,7 +85,7 @@ def bench_sim_loop(repeat: int) -> dict[str, float]:
 
 def bench_leg_loop(repeat: int) -> dict[str, float]:
     """The leg-step loop (resolved-rate controller + recording + mj_step) vs bare mj_step."""
-    scenario = scenarios.get("leg-step")
+    scenario = registry.get("leg-step")
     p = params.resolve(scenario.params_type, scenario.defaults)
     runs = []
 
@@ -99,7 +101,7 @@ def bench_leg_loop(repeat: int) -> dict[str, float]:
 
 def bench_hexabot(repeat: int, duration: float = 10.0, name: str = "hexabot-walk", **overrides) -> dict[str, float]:
     """The walking loop vs bare mj_step replaying its recorded controls (the walking robot, not a standing one)."""
-    scenario = scenarios.get(name)
+    scenario = registry.get(name)
     p = params.resolve(scenario.params_type, scenario.defaults, {"duration": duration, **overrides})
     xml = hexabot.build_xml(p)
     n = step_count(p.duration, p.timestep)
@@ -137,7 +139,7 @@ def bench_video(repeat: int) -> dict[str, float] | str:
     backend, reason, _notice = gl.choose()
     if backend is None:
         return reason
-    scenario = scenarios.get("pendulum")
+    scenario = registry.get("pendulum")
     p = params.resolve(scenario.params_type, scenario.defaults)
     result = scenario.runner("pendulum", p)
     t, qpos = result.trajectory.t, result.trajectory.qpos
@@ -156,20 +158,20 @@ def bench_video(repeat: int) -> dict[str, float] | str:
 
 def bench_sweep(repeat: int, duration: float = 5.0) -> dict[str, float]:
     """A 64-cell pendulum sweep on 2 local workers vs 1, and the per-cell cost of the Dask path vs the pool."""
-    from hexabot_sim import sweep
+    from hexabot_sim import dask_cluster, pool, sweep
 
     grid = ["damping=log:0.001:0.1:8", "stiffness=0.2:2:8"]
     plan = sweep.plan("pendulum", grid, {}, {"duration": str(duration)})
 
     def timed(executor, jobs) -> float:
         start = time.perf_counter()
-        sweep.run_cells(executor, jobs)
+        pool.run_cells(executor, jobs)
         return time.perf_counter() - start
 
     one, two = [], []
     for _ in range(repeat):  # pool start-up included: it is part of every sweep
-        one.append(timed(sweep.local_executor(1), sweep.jobs(plan)))
-        two.append(timed(sweep.local_executor(2), sweep.jobs(plan)))
+        one.append(timed(pool.local_executor(1), sweep.jobs(plan)))
+        two.append(timed(pool.local_executor(2), sweep.jobs(plan)))
     out = {"cells": len(plan.cells), "one_s": min(one), "two_s": min(two), "speedup": min(one) / min(two)}
     try:
         from distributed import LocalCluster
@@ -180,8 +182,8 @@ def bench_sweep(repeat: int, duration: float = 5.0) -> dict[str, float]:
     pool_s, dask_s = [], []
     with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None, silence_logs=50) as cluster:
         for _ in range(repeat):
-            pool_s.append(timed(sweep.local_executor(2), sweep.jobs(tiny)))
-            with sweep.dask_executor(cluster.scheduler_address) as (executor, _workers):
+            pool_s.append(timed(pool.local_executor(2), sweep.jobs(tiny)))
+            with dask_cluster.dask_executor(cluster.scheduler_address) as (executor, _workers):
                 dask_s.append(timed(executor, sweep.jobs(tiny)))
     n = len(tiny.cells)
     return out | {"tiny_cells": n, "pool_ms_per_cell": min(pool_s) / n * 1e3, "dask_ms_per_cell": min(dask_s) / n * 1e3}

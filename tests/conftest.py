@@ -20,11 +20,11 @@ def gl_backend() -> str:
 
 @pytest.fixture(autouse=True)
 def fresh_stop_state():
-    """The command line's stop-signal bookkeeping (hexabot_sim.errors) is per process: reset for every test, since
+    """The command line's stop-signal bookkeeping (hexabot_sim.signals) is per process: reset for every test, since
     many tests run commands in this one process."""
-    from hexabot_sim import errors
+    from hexabot_sim import signals
 
-    errors.RECEIVED_SIGNALS.clear()
-    errors.PENDING_SIGNALS.clear()
-    errors.HOLD[0] = 0
-    errors.PUBLISHED[0] = False
+    signals.RECEIVED_SIGNALS.clear()
+    signals.PENDING_SIGNALS.clear()
+    signals.HOLD[0] = 0
+    signals.PUBLISHED[0] = False

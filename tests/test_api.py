@@ -11,10 +11,10 @@ import pytest
 from matplotlib.figure import Figure
 
 import hexabot_sim as hs
-from hexabot_sim import scenarios as registry
+from hexabot_sim import registry
 from hexabot_sim.__main__ import main
 from hexabot_sim.errors import UsageError
-from hexabot_sim.scenarios.base import Metric
+from hexabot_sim.result import Metric
 
 ROOT = Path(__file__).resolve().parents[1]
 

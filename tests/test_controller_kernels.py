@@ -75,11 +75,11 @@ def test_kernels_work_where_no_cache_directory_is_writable():
 
 def test_kernels_compile_under_the_signal_hold(monkeypatch):
     """The controllers' loader compiles the kernels with stop signals held (see kernels.warm_up)."""
-    from hexabot_sim import errors
+    from hexabot_sim import signals
     from hexabot_sim.control import hexabot as control
 
     held = []
-    monkeypatch.setattr(kernels, "warm_up", lambda: held.append(errors.HOLD[0]))
+    monkeypatch.setattr(kernels, "warm_up", lambda: held.append(signals.HOLD[0]))
     assert control.kernels() is kernels
     assert held == [1]
 
@@ -87,13 +87,13 @@ def test_kernels_compile_under_the_signal_hold(monkeypatch):
 def test_warm_up_compiles_what_a_walk_uses():
     """After a walk on rough ground and one on the flat, each kernel the controllers call has the one signature
     warm_up compiled (a walk passing other argument types would compile again, outside the signal hold)."""
-    from hexabot_sim import params, scenarios
-    from hexabot_sim.scenarios import hexabot
-    from hexabot_sim.scenarios.base import at_home
+    from hexabot_sim import params, registry
+    from hexabot_sim.result import at_home
+    from hexabot_sim.robots.hexabot import walk as hexabot
     from hexabot_sim.simulate import simulate
 
     for name in ("hexabot-rough", "hexabot-walk"):
-        scenario = scenarios.get(name)
+        scenario = registry.get(name)
         p = params.resolve(scenario.params_type, scenario.defaults, {"duration": 3.0})
         model, data = at_home(hexabot.build_xml(p))
         simulate(model, data, 50, controller=hexabot.make_controller(p, model, data))

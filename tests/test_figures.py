@@ -8,13 +8,16 @@ import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-from hexabot_sim import params, render, scenarios
-from hexabot_sim.scenarios import leg, leg_sweep, pendulum, rrp_velocity
+from hexabot_sim import params, registry, render
+from hexabot_sim.robots.leg import step as leg
+from hexabot_sim.robots.leg import step_sweep as leg_sweep
+from hexabot_sim.robots.pendulum import pendulum
+from hexabot_sim.robots.rrp import velocity as rrp_velocity
 from hexabot_sim.simulate import site_trajectory
 
 
 def _run(name, **sets):
-    scenario = scenarios.get(name)
+    scenario = registry.get(name)
     p = params.resolve(scenario.params_type, scenario.defaults, {}, {k: str(v) for k, v in sets.items()})
     return scenario.runner(name, p)
 
@@ -161,7 +164,7 @@ def test_settling_time_is_not_reported_before_the_motion_settles():
 
 
 def test_settled_for_good_uses_the_energy_barrier():
-    from hexabot_sim.scenarios.pendulum import settled_for_good
+    from hexabot_sim.robots.pendulum.pendulum import settled_for_good
 
     def potential(theta):  # m g c = 1 J
         return 1 - math.cos(theta)

@@ -4,7 +4,6 @@ import os
 import shutil
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
@@ -145,10 +144,10 @@ def test_a_folder_name_that_is_not_utf8_is_a_legal_out(tmp_path):
 def test_a_parent_folder_renamed_mid_run_is_named(tmp_path, monkeypatch, capsys):
     """The run's parent folder renamed while it runs: the message says so (not only 'No such file or directory'),
     and no staging folder is left in the renamed folder."""
-    from hexabot_sim import scenarios
+    from hexabot_sim import registry
 
     parent = tmp_path / "study"
-    scenario = scenarios.get("pendulum")
+    scenario = registry.get("pendulum")
     runner = scenario.runner
 
     def rename_then_run(*args, **kwargs):

@@ -14,7 +14,7 @@ from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import hexabot as hx
 from hexabot_sim.kinematics import hexabot_mjcf
 from hexabot_sim.kinematics import leg as leg_kin
-from hexabot_sim.scenarios import hexabot as scenario
+from hexabot_sim.robots.hexabot import walk as scenario
 
 LEGS = hx.LEGS
 

@@ -9,8 +9,8 @@ import pytest
 
 from hexabot_sim import models
 from hexabot_sim.kinematics import leg
-from hexabot_sim.scenarios import leg as leg_scenario
-from hexabot_sim.scenarios.leg import GEOMETRY
+from hexabot_sim.robots.leg import step as leg_scenario
+from hexabot_sim.robots.leg.step import GEOMETRY
 
 JOINTS = ("coxa", "femur", "tibia")
 BODIES = ("coxa", "femur", "tibia")  # bodies whose frames are the modified-DH frames 1, 2, 3

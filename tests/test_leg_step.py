@@ -11,7 +11,7 @@ import pytest
 from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
-from hexabot_sim import models, params, scenarios
+from hexabot_sim import models, params, registry
 from hexabot_sim.__main__ import main
 from hexabot_sim.control.resolved_rate import (
     ResolvedRateController,
@@ -20,7 +20,7 @@ from hexabot_sim.control.resolved_rate import (
     sigma_min,
 )
 from hexabot_sim.kinematics import leg
-from hexabot_sim.scenarios.leg import GEOMETRY
+from hexabot_sim.robots.leg.step import GEOMETRY
 
 HIP = np.array([0.0, 0.0, 0.3])  # hip site in the world [m], axes aligned (tests/test_leg_model.py checks it)
 _MODEL = mujoco.MjModel.from_xml_path(str(models.model_path("leg")))
@@ -42,7 +42,7 @@ METRICS = (
 
 @functools.cache
 def _run(overrides: tuple):
-    scenario = scenarios.get("leg-step")
+    scenario = registry.get("leg-step")
     p = params.resolve(scenario.params_type, scenario.defaults, dict(overrides))
     return p, scenario.runner("leg-step", p)
 
@@ -53,7 +53,7 @@ def run(**overrides):
 
 
 def fresh_run(**overrides):
-    scenario = scenarios.get("leg-step")
+    scenario = registry.get("leg-step")
     p = params.resolve(scenario.params_type, scenario.defaults, overrides)
     return scenario.runner("leg-step", p)
 

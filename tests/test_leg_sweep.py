@@ -6,13 +6,13 @@ import math
 import numpy as np
 import pytest
 
-from hexabot_sim import params, scenarios
+from hexabot_sim import params, registry
 from hexabot_sim.__main__ import main
 from hexabot_sim.errors import UsageError
 
 
 def test_small_grid_matches_the_workspace_prediction():
-    s = scenarios.get("leg-sweep")
+    s = registry.get("leg-sweep")
     p = params.resolve(s.params_type, s.defaults, {"amplitudes": "0.05,0.1", "omegas": "1", "periods": "1"})
     result = s.runner("leg-sweep", p)
     c = result.columns
@@ -28,7 +28,7 @@ def test_small_grid_matches_the_workspace_prediction():
 
 
 def test_sweep_reports_cases_run_in_parallel_like_serially():
-    s = scenarios.get("leg-sweep")
+    s = registry.get("leg-sweep")
     grid = {"amplitudes": "0.08", "omegas": f"1,{math.pi / 6}", "periods": "1"}
     serial = s.runner("leg-sweep", params.resolve(s.params_type, s.defaults, grid | {"workers": "1"}))
     parallel = s.runner("leg-sweep", params.resolve(s.params_type, s.defaults, grid | {"workers": "2"}))
@@ -47,7 +47,7 @@ def test_sweep_reports_cases_run_in_parallel_like_serially():
     ],
 )
 def test_bad_grid(value, fragment):
-    s = scenarios.get("leg-sweep")
+    s = registry.get("leg-sweep")
     with pytest.raises(UsageError) as info:
         params.resolve(s.params_type, s.defaults, {"omegas": value})
     assert fragment in str(info.value)

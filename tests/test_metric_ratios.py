@@ -43,7 +43,7 @@ def test_the_energy_balance_of_a_real_swing_is_reported():
 
 def test_a_kerb_refusal_shows_the_value_and_the_bound_apart():
     from hexabot_sim.errors import UsageError
-    from hexabot_sim.scenarios import hexabot
+    from hexabot_sim.robots.hexabot import walk as hexabot
 
     largest = hexabot.largest_climbable_kerb(_defaults())
     with pytest.raises((UsageError, ValueError)) as info:
@@ -56,7 +56,7 @@ def test_a_kerb_refusal_shows_the_value_and_the_bound_apart():
 
 def _defaults():
     from hexabot_sim import params
-    from hexabot_sim.scenarios import hexabot
+    from hexabot_sim.robots.hexabot import walk as hexabot
 
     return params.resolve(hexabot.HexabotParams, {})
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from hexabot_sim import models, params
-from hexabot_sim.scenarios import pendulum
+from hexabot_sim.robots.pendulum import pendulum
 
 MODEL_FILES = sorted(p.stem for p in models.models_dir().glob("*.xml"))
 

@@ -7,12 +7,13 @@ import random
 import numpy as np
 import pytest
 
-from hexabot_sim import params, scenarios
+from hexabot_sim import params, registry
 from hexabot_sim.__main__ import main
 from hexabot_sim.control.resolved_rate import MIN_DAMPING, ResolvedRateController, ResolvedRateGains
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics.leg import LegGeometry
-from hexabot_sim.scenarios import leg, pendulum
+from hexabot_sim.robots.leg import step as leg
+from hexabot_sim.robots.pendulum import pendulum
 
 
 def refused(capsys, tmp_path, *argv, code=2):
@@ -136,7 +137,7 @@ BASE = {"LegSweepParams": {"workers": 1}}  # the memory estimate of a sweep depe
 
 
 def _bounds():
-    classes = {s.params_class: s for s in scenarios.SCENARIOS.values()}
+    classes = {s.params_class: s for s in registry.SCENARIOS.values()}
     for cls_name, scenario in sorted(classes.items()):
         cls = scenario.params_type
         for name, (info, default) in params.infos(cls).items():
@@ -187,7 +188,7 @@ def test_every_parameter_range(scenario, name, info, kind):
 
 
 def test_every_number_has_a_range_and_every_text_choices():
-    for scenario in scenarios.SCENARIOS.values():
+    for scenario in registry.SCENARIOS.values():
         for name, (info, default) in params.infos(scenario.params_type).items():
             if info.choices is not None:
                 assert default in info.choices, name
@@ -217,7 +218,7 @@ ODD = [
 
 def test_fuzz_resolve_never_crashes():
     rng = random.Random(8)
-    for scenario in scenarios.SCENARIOS.values():
+    for scenario in registry.SCENARIOS.values():
         cls = scenario.params_type
         names = list(params.infos(cls))
         for _ in range(150):

@@ -4,9 +4,9 @@ import dataclasses
 
 import pytest
 
-from hexabot_sim import params, scenarios
+from hexabot_sim import params, registry
 from hexabot_sim.errors import UsageError
-from hexabot_sim.scenarios.pendulum import PendulumParams
+from hexabot_sim.robots.pendulum.pendulum import PendulumParams
 
 
 def test_layers_apply_in_order():
@@ -15,10 +15,10 @@ def test_layers_apply_in_order():
 
 
 def test_scenario_defaults():
-    undamped = scenarios.get("pendulum-undamped")
+    undamped = registry.get("pendulum-undamped")
     p = params.resolve(undamped.params_type, undamped.defaults)
     assert p.damping == 0 and p.stiffness == 0 and p.theta0_deg == 90
-    spring = scenarios.get("pendulum")
+    spring = registry.get("pendulum")
     p = params.resolve(spring.params_type, spring.defaults)
     assert p.damping == 0.01 and p.stiffness > 0 and p.target_deg == 30
 
@@ -70,7 +70,7 @@ def test_config_file(tmp_path):
 def test_negative_zero_and_whole_numbers():
     p = params.resolve(PendulumParams, {}, {"damping": "-0", "stiffness": -0.0})
     assert str(p.damping) == "0.0" and str(p.stiffness) == "0.0"
-    from hexabot_sim.scenarios.leg import LegStepParams
+    from hexabot_sim.robots.leg.step import LegStepParams
 
     assert params.resolve(LegStepParams, {}, {"substeps": "2.0"}).substeps == 2
     with pytest.raises(UsageError, match="'substeps' must be a whole number"):
@@ -95,7 +95,7 @@ def test_missing_config_file(tmp_path):
 
 
 def test_every_parameter_has_unit_and_doc():
-    for scenario in scenarios.SCENARIOS.values():
+    for scenario in registry.SCENARIOS.values():
         for name, (info, _) in params.infos(scenario.params_type).items():
             assert info.doc, name
         assert dataclasses.is_dataclass(scenario.params_type)

@@ -12,12 +12,12 @@ from pendulum_reference import (
     spring_rest_angle,
 )
 
-from hexabot_sim import params, scenarios
-from hexabot_sim.scenarios import pendulum
+from hexabot_sim import params, registry
+from hexabot_sim.robots.pendulum import pendulum
 
 
 def run(name, **overrides):
-    scenario = scenarios.get(name)
+    scenario = registry.get(name)
     p = params.resolve(scenario.params_type, scenario.defaults, overrides)
     return p, scenario.runner(name, p)
 

@@ -5,7 +5,8 @@ import json
 
 import numpy as np
 
-from hexabot_sim.__main__ import ProgressBar, main
+from hexabot_sim.cli import main
+from hexabot_sim.cli.progress import ProgressBar
 
 
 def test_frame_indices_are_real_time():

@@ -11,24 +11,10 @@ import numpy as np
 import pytest
 
 import hexabot_sim as hs
-from hexabot_sim import report
-from hexabot_sim import scenarios as registry
+from hexabot_sim import registry, report
 
 # The shortest runs that each scenario accepts.
-SHORT: dict[str, dict] = {
-    "pendulum-undamped": {"duration": 0.5},
-    "pendulum-damped": {"duration": 0.5},
-    "pendulum": {"duration": 0.5},
-    "leg-step": {"duration": 0.5, "mode": "kinematic"},
-    "leg-sweep": {"amplitudes": [0.02, 0.05], "omegas": [1, 2], "workers": 1},
-    "hexabot-walk": {"duration": 1.6},
-    "hexabot-turn": {"duration": 1.6},
-    "hexabot-crab": {"duration": 1.6},
-    "hexabot-slope": {"duration": 1.6},
-    "hexabot-rough": {"duration": 1.6},
-    "hexabot-kerb": {"duration": 1.6},
-    "rrp-velocity": {"duration": 1.0},
-}
+SHORT: dict[str, dict] = {name: dict(s.smoke) for name, s in registry.SCENARIOS.items()}  # each scenario's short run
 
 
 class _Page(HTMLParser):

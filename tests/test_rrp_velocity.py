@@ -5,14 +5,14 @@ import json
 import numpy as np
 import pytest
 
-from hexabot_sim import params, scenarios
+from hexabot_sim import params, registry
 from hexabot_sim.__main__ import main
 from hexabot_sim.kinematics.robots import rrp_report_pose
 
 
 @pytest.fixture(scope="module")
 def result():
-    s = scenarios.get("rrp-velocity")
+    s = registry.get("rrp-velocity")
     return s.runner("rrp-velocity", params.resolve(s.params_type, s.defaults))
 
 

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import pytest
 
-from hexabot_sim import output, params, scenarios
+from hexabot_sim import output, params, registry
 from hexabot_sim.__main__ import main
 from hexabot_sim.errors import OutputError, UsageError
-from hexabot_sim.scenarios.pendulum import PendulumParams
+from hexabot_sim.robots.pendulum.pendulum import PendulumParams
 
 FAST = ["--set", "duration=0.05", "--no-plots"]
 
@@ -96,7 +96,7 @@ def test_non_empty_out_needs_force_and_force_replaces_it(tmp_path, capsys):
 def test_file_created_in_out_during_the_run_is_never_deleted(tmp_path, monkeypatch, capsys):
     """`run ... --out out &` then the user writes out/thesis.tex: the run must not delete it."""
     out = tmp_path / "out"
-    scenario = scenarios.get("pendulum")
+    scenario = registry.get("pendulum")
     real_runner = scenario.runner
 
     def runner_meanwhile_user_writes(*args, **kwargs):
@@ -297,7 +297,7 @@ def test_staging_left_by_a_killed_run_is_ignored_and_cleaned(tmp_path, capsys):
 
 
 def test_unexpected_exception_is_one_line_and_debug_shows_it(tmp_path, monkeypatch, capsys):
-    scenario = scenarios.get("pendulum")
+    scenario = registry.get("pendulum")
 
     def broken(*args, **kwargs):
         raise ZeroDivisionError("float division by zero")
@@ -480,7 +480,7 @@ def test_force_leaves_a_folder_that_changed_during_the_run_alone(tmp_path, monke
     out = tmp_path / "out"
     out.mkdir()
     (out / "old.txt").write_text("old")
-    scenario = scenarios.get("pendulum")
+    scenario = registry.get("pendulum")
     real_runner = scenario.runner
 
     def runner_meanwhile_user_writes(*args, **kwargs):
@@ -497,7 +497,7 @@ def test_force_leaves_a_folder_that_changed_during_the_run_alone(tmp_path, monke
 def test_parent_moved_during_the_run_leaves_nothing(tmp_path, monkeypatch, capsys):
     parent = tmp_path / "pp"
     parent.mkdir()
-    scenario = scenarios.get("pendulum")
+    scenario = registry.get("pendulum")
     real_runner = scenario.runner
 
     def runner_meanwhile_parent_moves(*args, **kwargs):
@@ -523,8 +523,8 @@ def test_signals_are_held_during_publish_even_with_other_threads():
     """A signal during a held block (publish, clean-up) stops the run only once the block is done."""
     import threading
 
-    from hexabot_sim.__main__ import _raise_interrupted
-    from hexabot_sim.errors import Interrupted
+    from hexabot_sim.signals import Interrupted
+    from hexabot_sim.signals import raise_interrupted as _raise_interrupted
 
     seen = []
     stop = threading.Event()
@@ -664,7 +664,7 @@ def test_an_encoder_failure_on_a_full_disk_fails_the_run(tmp_path, monkeypatch, 
 
     monkeypatch.setattr(render, "render_video", broken)
     monkeypatch.setattr(output, "_disk_full", lambda folder: full)
-    result = scenarios.get("pendulum").runner("pendulum", params.resolve(PendulumParams, {}, {"duration": 0.2}))
+    result = registry.get("pendulum").runner("pendulum", params.resolve(PendulumParams, {}, {"duration": 0.2}))
     folder = tmp_path / "r"
     folder.mkdir()
     settings = output.VideoSettings()

@@ -12,7 +12,8 @@ from pathlib import Path
 import pytest
 
 from hexabot_sim import sweep
-from hexabot_sim.__main__ import SweepProgress, main
+from hexabot_sim.cli import main
+from hexabot_sim.cli.progress import SweepProgress
 from hexabot_sim.errors import UsageError
 
 # 2 x 2 pendulum cells of 0.5 s; stiffness 1e6 at a 10 ms step diverges (README: sqrt(k/I) = 1.8e4 rad/s).
@@ -219,10 +220,10 @@ def test_a_stopped_worker_removes_the_cell_folder_it_was_writing(tmp_path):
     worker (10 of 12 interrupted sweeps left ~1 MB cell folders behind, found by fuzzing)."""
     code = (
         "import os, signal, tempfile, time\n"
-        "from hexabot_sim import sweep\n"
-        "sweep._worker_init()\n"
-        f"tmp = tempfile.mkdtemp(prefix=f'{{sweep.CELL_PREFIX}}{{os.getpid()}}-', dir={str(tmp_path)!r})\n"
-        "sweep._CELL_FOLDERS.append(tmp)\n"
+        "from hexabot_sim import pool\n"
+        "pool._worker_init()\n"
+        f"tmp = tempfile.mkdtemp(prefix=f'hexabot-sim-cell-{{os.getpid()}}-', dir={str(tmp_path)!r})\n"
+        "pool.CELL_FOLDERS.append(tmp)\n"
         "open(os.path.join(tmp, 'timeseries.csv'), 'w').write('t\\n0\\n')\n"
         "os.kill(os.getpid(), signal.SIGTERM)\n"
         "time.sleep(30)\n"

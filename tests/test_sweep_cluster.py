@@ -3,7 +3,7 @@ are one line on stderr within a bounded wait."""
 
 import pytest
 
-from hexabot_sim import sweep
+from hexabot_sim import dask_cluster, pool
 from hexabot_sim.__main__ import main
 
 GRID = ["--grid", "damping=0,0.01", "--set", "duration=0.05", "--no-plots"]
@@ -24,7 +24,7 @@ def test_an_address_that_is_no_dask_scheduler_is_one_line(tmp_path, capsys, addr
 
 def test_a_scheduler_without_workers_is_one_line_after_a_bounded_wait(tmp_path, capsys, monkeypatch):
     distributed = pytest.importorskip("distributed", reason="the 'cluster' extra (distributed) is not installed")
-    monkeypatch.setattr(sweep, "WORKER_WAIT", 1.0)
+    monkeypatch.setattr(pool, "WORKER_WAIT", 1.0)
     with distributed.LocalCluster(n_workers=0, processes=True, dashboard_address=None, silence_logs=50) as cluster:
         code = main(["sweep", "pendulum", *GRID, "--scheduler", cluster.scheduler_address, "--out",
                      str(tmp_path / "s")])  # fmt: skip
@@ -34,8 +34,8 @@ def test_a_scheduler_without_workers_is_one_line_after_a_bounded_wait(tmp_path, 
 
 
 def test_a_plain_address_is_given_its_protocol():
-    assert sweep.scheduler_address("127.0.0.1:8786") == "tcp://127.0.0.1:8786"
-    assert sweep.scheduler_address("tcp://[::1]:8786") == "tcp://[::1]:8786"
+    assert dask_cluster.scheduler_address("127.0.0.1:8786") == "tcp://127.0.0.1:8786"
+    assert dask_cluster.scheduler_address("tcp://[::1]:8786") == "tcp://[::1]:8786"
 
 
 def test_progress_speaks_while_no_cell_finishes(monkeypatch):
@@ -45,16 +45,16 @@ def test_progress_speaks_while_no_cell_finishes(monkeypatch):
     import io
     import time
 
-    from hexabot_sim.__main__ import SweepProgress
+    from hexabot_sim.cli.progress import SweepProgress
 
-    monkeypatch.setattr(sweep, "HEARTBEAT", 0.05)
+    monkeypatch.setattr(pool, "HEARTBEAT", 0.05)
     monkeypatch.setattr(SweepProgress, "PLAIN_SECONDS", 0.1)
     stream = io.StringIO()
     progress = SweepProgress("sweep-test", stream)
-    with concurrent.futures.ThreadPoolExecutor(1) as pool:
-        futures = [pool.submit(time.sleep, 0.5)]
+    with concurrent.futures.ThreadPoolExecutor(1) as executor:
+        futures = [executor.submit(time.sleep, 0.5)]
         progress(0, 1)
-        assert list(sweep._completed(futures, 1, progress)) == futures
+        assert list(pool._completed(futures, 1, progress)) == futures
     lines = stream.getvalue().splitlines()
     assert len([line for line in lines if line.startswith("sweep-test: 0% (0/1 cells")]) >= 3, lines
 
@@ -73,7 +73,7 @@ def test_a_peer_that_accepts_but_is_no_scheduler_is_refused_in_bounded_time():
     started = time.monotonic()
     try:
         with pytest.raises(UsageError, match="no answer as a Dask scheduler"):
-            with sweep.dask_executor(f"tcp://127.0.0.1:{server.getsockname()[1]}", timeout=1.0):
+            with dask_cluster.dask_executor(f"tcp://127.0.0.1:{server.getsockname()[1]}", timeout=1.0):
                 pass
     finally:
         server.close()
@@ -97,10 +97,10 @@ def test_a_cluster_that_loses_its_workers_or_scheduler_mid_sweep_fails_in_bounde
     def gone():
         raise OSError("Connection refused")
 
-    monkeypatch.setattr(sweep, "HEARTBEAT", 0.02)
-    monkeypatch.setattr(sweep, "WORKER_WAIT", 0.1)
+    monkeypatch.setattr(pool, "HEARTBEAT", 0.02)
+    monkeypatch.setattr(pool, "WORKER_WAIT", 0.1)
     executor = type("E", (), {})()
     executor._client = _FakeClient(dict if case == "no workers" else gone)
     never = concurrent.futures.Future()
-    with pytest.raises(sweep.WorkerFailed, match="no worker for|lost the Dask scheduler"):
-        list(sweep._completed([never], 1, None, executor))
+    with pytest.raises(pool.WorkerFailed, match="no worker for|lost the Dask scheduler"):
+        list(pool._completed([never], 1, None, executor))

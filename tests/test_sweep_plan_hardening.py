@@ -6,10 +6,10 @@ import warnings
 
 import pytest
 
-from hexabot_sim import sweep
+from hexabot_sim import dask_cluster, sweep
 from hexabot_sim.__main__ import main
 from hexabot_sim.errors import UsageError
-from hexabot_sim.scenarios import hexabot
+from hexabot_sim.robots.hexabot import walk as hexabot
 
 FIXED = ["--set", "duration=0.05", "--set", "timestep=0.01", "--no-plots"]
 
@@ -125,7 +125,7 @@ def test_the_cost_refusal_on_the_command_line(tmp_path, capsys, monkeypatch):
 
 def test_the_cost_refusal_with_a_scheduler_counts_its_workers(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(sweep, "MAX_SWEEP_SECONDS", 1e-6, raising=False)
-    monkeypatch.setattr(sweep, "dask_executor", lambda address: contextlib.nullcontext((None, 7)))
+    monkeypatch.setattr(dask_cluster, "dask_executor", lambda address: contextlib.nullcontext((None, 7)))
     line = refused(tmp_path, capsys, "pendulum", "--grid", "damping=0,1", "--scheduler", "tcp://x:1", *FIXED)
     assert "on Dask scheduler tcp://x:1 (7 worker threads))" in line
 

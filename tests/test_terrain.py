@@ -12,7 +12,7 @@ from hexabot_sim import params
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import hexabot as hx
 from hexabot_sim.kinematics.hexabot_terrain import TERRAIN_SQUARE, Terrain
-from hexabot_sim.scenarios import hexabot as scenario
+from hexabot_sim.robots.hexabot import walk as scenario
 
 SLOPE = {"slope_deg": 10.0, "touchdown": "sensed", "level_body": "on", "duration": 10.0}
 

@@ -9,6 +9,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from hexabot_sim.render import Marker
 from hexabot_sim.simulate import Trajectory
 
 Progress = Callable[[int, int], None]  # (done, total): scenarios report long work through it
@@ -21,16 +22,6 @@ class Metric:
     value: Any  # float, int, str, bool, None or a list of those
     unit: str
     doc: str
-
-
-@dataclasses.dataclass(frozen=True)
-class Marker:
-    """A segment drawn into every video frame (e.g. a predicted rest angle), world frame [m]."""
-
-    start: tuple[float, float, float]
-    end: tuple[float, float, float]
-    radius: float
-    rgba: tuple[float, float, float, float]
 
 
 @dataclasses.dataclass

@@ -1,4 +1,4 @@
-"""The reports' amplitude and frequency studies: a grid of leg-step runs on the sweep engine, with their figures."""
+"""The reports' amplitude and frequency studies: a grid of leg-step runs on the cell pool, with their figures."""
 
 from __future__ import annotations
 
@@ -10,11 +10,11 @@ from typing import TYPE_CHECKING, Any
 import mujoco
 import numpy as np
 
-from hexabot_sim import sweep
+from hexabot_sim import pool
 from hexabot_sim.errors import SimulationError
 from hexabot_sim.params import CSV_BYTES_PER_VALUE, check_budget, param
-from hexabot_sim.scenarios import leg
-from hexabot_sim.scenarios.base import Metric, Progress, ScenarioResult
+from hexabot_sim.result import Metric, Progress, ScenarioResult
+from hexabot_sim.robots.leg import step as leg
 from hexabot_sim.simulate import step_count
 
 if TYPE_CHECKING:
@@ -101,12 +101,12 @@ class LegSweepParams(leg.LegParams):
 
 
 def run(name: str, p: LegSweepParams, progress: Progress | None = None) -> ScenarioResult:
-    """Runs every (amplitude, omega) cell as a leg-step run on the sweep engine and tabulates the deviations."""
+    """Runs every (amplitude, omega) cell as a leg-step run on the cell pool and tabulates the deviations."""
     cells = [(a, w) for a in p.amplitudes for w in p.omegas]
-    workers = min(p.workers or sweep.workers_default(), len(cells))
-    jobs = [sweep.CellJob(i, "leg-step", p.cell(a, w), keep_run=False) for i, (a, w) in enumerate(cells)]
-    # Ctrl-C or SIGTERM in the parent stops all workers (sweep.run_cells); nothing partial is returned.
-    done = sweep.run_cells(sweep.local_executor(workers), jobs, progress)
+    workers = min(p.workers or pool.workers_default(), len(cells))
+    jobs = [pool.CellJob(i, "leg-step", p.cell(a, w), leg.run) for i, (a, w) in enumerate(cells)]
+    # Ctrl-C or SIGTERM in the parent stops all workers (pool.run_cells); nothing partial is returned.
+    done = pool.run_cells(pool.local_executor(workers), jobs, progress)
     for cell in done:
         if cell.error:  # this study's table needs every cell: a failed one fails the run, naming the cell
             a, w = cells[cell.index]

@@ -16,7 +16,7 @@ from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.kinematics import robots
 from hexabot_sim.params import check_duration, check_run_cost, param
-from hexabot_sim.scenarios.base import Live, Marker, Metric, Progress, ScenarioResult
+from hexabot_sim.result import Live, Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import Controller, simulate, site_trajectory, step_count
 
 if TYPE_CHECKING:

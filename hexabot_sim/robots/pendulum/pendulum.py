@@ -12,7 +12,7 @@ import numpy as np
 
 from hexabot_sim import models, render
 from hexabot_sim.params import check_duration, check_run_cost, param
-from hexabot_sim.scenarios.base import Live, Marker, Metric, Progress, ScenarioResult, at_home
+from hexabot_sim.result import Live, Marker, Metric, Progress, ScenarioResult, at_home
 from hexabot_sim.simulate import simulate, step_count
 
 if TYPE_CHECKING:

@@ -12,7 +12,7 @@ from hexabot_sim import models, render
 from hexabot_sim.kinematics import robots
 from hexabot_sim.kinematics.mjcf import to_mjcf
 from hexabot_sim.params import check_duration, check_run_cost, param
-from hexabot_sim.scenarios.base import Live, Metric, Progress, ScenarioResult
+from hexabot_sim.result import Live, Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import Trajectory, step_count
 
 if TYPE_CHECKING:

@@ -17,7 +17,7 @@ from hexabot_sim.control.resolved_rate import ResolvedRateGains
 from hexabot_sim.kinematics import hexabot as hx
 from hexabot_sim.kinematics.hexabot_terrain import HFIELD_CELL, HFIELD_MARGIN, HFIELD_MAX_POINTS, Terrain
 from hexabot_sim.params import check_run_cost, param
-from hexabot_sim.scenarios.base import Live, Metric, Progress, ScenarioResult, at_home
+from hexabot_sim.result import Live, Metric, Progress, ScenarioResult, at_home
 from hexabot_sim.simulate import simulate, step_count
 
 INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")

@@ -1,0 +1,229 @@
+"""The commands that run one thing: list, check, kin, run, clean, view (a shell over the Python API)."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from hexabot_sim import api, registry, video
+from hexabot_sim import params as params_mod
+from hexabot_sim.cli.common import COMPLETED, DONE_SO_FAR, PROG, eprint
+from hexabot_sim.cli.progress import ProgressBar
+from hexabot_sim.errors import OutputError, UsageError
+
+
+def cmd_list() -> int:
+    for scenario in api.scenarios().values():
+        print(f"{scenario.name}\n  {scenario.summary}")
+        rows = []
+        for name, p in scenario.parameters.items():
+            value = p.default
+            text = ",".join(f"{v:.6g}" for v in value) if isinstance(value, tuple) else str(value)
+            unit = f"[{p.unit}]" if p.unit else ""
+            rows.append((name, text, unit, f"{p.doc}; {p.allowed}"))
+        widths = [min(max(len(row[k]) for row in rows), cap) for k, cap in ((0, 30), (1, 24), (2, 14))]
+        for name, text, unit, doc in rows:
+            print(f"    {name:<{widths[0]}} = {text:<{widths[1]}} {unit:<{widths[2]}} {doc}")
+        print()
+    return 0
+
+
+def cmd_check() -> int:
+    import hexabot_sim
+    from hexabot_sim import gl
+
+    print(f"python        {sys.version.split()[0]}")
+    try:
+        import mujoco
+    except ImportError as e:
+        print(f"mujoco        NOT importable: {e}")
+        return 1
+    print(f"mujoco        {mujoco.__version__} ({mujoco.__file__})")
+    working = []
+    for backend in ("egl", "osmesa", "glfw"):
+        reason = gl.probe(backend)
+        working += [backend] if reason is None else []
+        print(f"gl {backend:<10} {'works' if reason is None else 'fails: ' + reason.split(': ', 1)[-1]}")
+    ffmpeg_problem = gl.ffmpeg_problem()
+    if ffmpeg_problem is None:
+        import imageio_ffmpeg
+
+        print(f"ffmpeg        {imageio_ffmpeg.get_ffmpeg_exe()}")
+    else:
+        print(f"ffmpeg        NOT working: {ffmpeg_problem}")
+    video = "available" if working and ffmpeg_problem is None else "unavailable (CSV and plots still work)"
+    user_gl = hexabot_sim.USER_MUJOCO_GL
+    print(f"video         {video}; MUJOCO_GL {'not set' if user_gl is None else '= ' + repr(user_gl)}")
+    return 0
+
+
+def cmd_kin(args: argparse.Namespace) -> int:
+    import json
+
+    from hexabot_sim import kinreport
+
+    sets = params_mod.parse_assignments(args.sets)
+    report = kinreport.report(args.robot, sets, args.q, args.target, degrees=args.deg, symbolic=args.symbolic)
+    for warning in report["warnings"]:
+        eprint(f"{PROG}: warning: {warning}")
+    print(json.dumps(report, indent=2, allow_nan=False) if args.json else kinreport.text(report))
+    return 0
+
+
+def _format(value: Any, unit: str) -> str:
+    if value is None:
+        return "n/a"
+    if isinstance(value, float):
+        return f"{value:.8g}{' ' + unit if unit and unit != '1' else ''}"
+    return f"{value}{' ' + unit if unit and unit != '1' else ''}"
+
+
+def _layers(args: argparse.Namespace) -> list[dict[str, Any]]:
+    """The parameter layers a command line gives over the scenario's defaults: --config's, then --set's."""
+    sets = params_mod.parse_assignments(args.sets)
+    return [params_mod.read_config(args.config) if args.config is not None else {}, sets]
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    registry.get(args.scenario)
+    layers = _layers(args)
+
+    from hexabot_sim import output
+
+    # The OpenGL backend must be chosen before MuJoCo is imported (scenario modules import it).
+    backend, no_video_reason = None, output.NOT_REQUESTED
+    settings = video.VideoSettings(*args.size, fps=args.fps, quality=args.quality) if args.video else None
+    if settings is not None:
+        backend, no_video_reason = api.video_backend(announce=lambda notice: eprint(f"{PROG}: {notice}"))
+    prepared = api.prepare(args.scenario, *layers)
+    if settings is not None:
+        video.check_cost(settings, getattr(prepared.params, "duration", None))
+    if args.out is not None:
+        output.check_not_input(args.out, [args.config] if args.config is not None else [])
+        output.check_out(args.out, force=args.force)  # before the simulation, not after it
+    with _mujoco_warnings_to_stderr():
+        return _execute(args, prepared, settings, backend, no_video_reason)
+
+
+def _mujoco_warnings_to_stderr() -> contextlib.AbstractContextManager[None]:
+    """MuJoCo's warnings as one line each on stderr (never appended to MUJOCO_LOG.TXT in the user's folder)."""
+    from hexabot_sim.simulate import mujoco_warnings
+
+    return mujoco_warnings(lambda message: eprint(f"{PROG}: MuJoCo warning: {message}"))
+
+
+def _execute(
+    args: argparse.Namespace,
+    prepared: api.Prepared,
+    settings: video.VideoSettings | None,
+    backend: str | None,
+    no_video_reason: str,
+) -> int:
+    """Runs the scenario into its run folder (the staging folder is made first), then prints the summary."""
+    from hexabot_sim import output
+
+    name = prepared.entry.name
+    started = time.perf_counter()
+    with output.run_folder(args.out, name, force=args.force) as run:
+        r = prepared.run(progress=ProgressBar(name))
+        result = r.raw
+        sim_seconds = time.perf_counter() - started
+        if not args.no_plots:
+            from hexabot_sim import plots
+
+            plots.use_agg()  # the CLI draws off-screen; importing the package never picks a backend
+        written = r.write_folder(run.path, plots=not args.no_plots, video=settings, backend=backend,
+                                 no_video_reason=no_video_reason, video_progress=ProgressBar("video"))  # fmt: skip
+        files, made, video_seconds = written.files, written.video, written.video_seconds
+        no_video_reason = made.get("reason", no_video_reason)
+    assert run.final is not None
+    total_seconds = time.perf_counter() - started
+
+    timing = f"simulated in {sim_seconds:.2f} s" if result.trajectory is not None else f"ran in {sim_seconds:.2f} s"
+    if result.trajectory is not None:
+        timing = f"{result.trajectory.t[-1]:.6g} s {timing}"
+    if video_seconds:
+        timing += f", video in {video_seconds:.2f} s"
+    timing += f", {total_seconds:.2f} s in all"
+    if args.video and not made["written"]:
+        eprint(f"{PROG}: no video: {no_video_reason}")
+    COMPLETED[:] = [f"the run folder {output.display_path(run.final)} is complete"]
+    print(f"{name}: {timing} -> {output.display_path(run.final)}")
+    for key in result.summary:
+        metric = result.metrics[key]
+        print(f"  {key:<26} {_format(metric.value, metric.unit)}")
+    print(f"  files: {', '.join(files)}")
+    return 0
+
+
+def cmd_clean(args: argparse.Namespace) -> int:
+    from hexabot_sim import output
+
+    if not args.folder:
+        raise UsageError("clean needs a folder name (default: runs); got an empty one")
+    root = Path(args.folder)
+    if not root.is_dir():
+        raise UsageError(f"{output.display_path(root)!r} is not a folder")
+    stale = output.stale_staging(root) + output.stale_cells()
+    removed = 0
+    for path in stale:
+        if args.dry_run:
+            print(f"would remove {output.display_path(path)}")
+            continue
+        try:
+            shutil.rmtree(path)
+        except OSError as e:
+            raise OutputError(f"could not remove {output.display_path(path)!r}: {e.strerror or e}") from None
+        print(f"removed {output.display_path(path)}")
+        removed += 1
+        DONE_SO_FAR[:] = [f"{removed} stale folder{'s' if removed > 1 else ''} removed before it, listed above"]
+    if not stale:
+        cells = tempfile.gettempdir()
+        print(f"no staging folders left by interrupted runs in {args.folder} (nor sweep cells in {cells})")
+    return 0
+
+
+def cmd_view(args: argparse.Namespace) -> int:
+    """`view NAME` (live) or `view RUN_DIR` (replay) in MuJoCo's viewer: a window, so GLFW and a display."""
+    from hexabot_sim import gl, viewer
+
+    folder = Path(args.target)
+    replaying = folder.is_dir() or os.sep in args.target or args.target in (".", "..")
+    if replaying and not folder.is_dir():
+        shown = os.fsencode(args.target).decode("utf-8", "backslashreplace")  # bytes that are not UTF-8 as \xNN
+        raise UsageError(f"run folder {shown!r} does not exist")
+    if replaying and (args.sets or args.config):
+        raise UsageError("--set and --config choose a scenario's parameters; a run folder replays its own")
+    if gl.loaded_backend() is None:
+        os.environ["MUJOCO_GL"] = "glfw"  # MuJoCo binds its OpenGL at import: the window's, not EGL's
+    # Bad input (the folder, or every parameter as a run would check it) is reported before the display is looked at.
+    recording = viewer.load_recording(folder) if replaying else None
+    make = None
+    if not replaying:
+        prepared = api.prepare(args.target, *_layers(args))
+        make = viewer.live_maker(
+            prepared.entry.name, prepared.params
+        )  # a grid scenario is refused before the window opens
+    problem = viewer.display_problem()
+    if problem is not None:
+        raise UsageError(f"cannot open the viewer: {problem}")
+    options = {"speed": args.speed, "paused": args.paused, "quit_after": args.quit_after}
+
+    def announce(text: str) -> None:
+        eprint(f"{PROG}: {text}")
+
+    with _mujoco_warnings_to_stderr():
+        if recording is not None:
+            summary = viewer.replay(recording, announce=announce, **options)
+        else:
+            assert make is not None
+            summary = viewer.live(make, prepared.entry.name, announce=announce, **options)
+    print(summary)
+    return 0

@@ -1,0 +1,25 @@
+"""What every command shares: the program's name, one-line messages on stderr, what is done so far."""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+
+PROG = "hexabot-sim"
+
+# What was completed before standard output failed, for the error message (e.g. the run folder).
+COMPLETED: list[str] = []
+
+# What a command that is no run had already done when it was stopped (clean: the folders it removed).
+DONE_SO_FAR: list[str] = []
+
+
+def eprint(text: str) -> None:
+    """One line on stderr; a closed or full stderr must not change the exit code (nothing else can be told)."""
+    try:
+        print(text, file=sys.stderr, flush=True)
+    except UnicodeEncodeError:  # e.g. a path in a non-UTF-8 locale
+        with contextlib.suppress(OSError, ValueError):
+            print(text.encode("ascii", "backslashreplace").decode(), file=sys.stderr, flush=True)
+    except (OSError, ValueError):
+        pass

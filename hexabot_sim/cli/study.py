@@ -1,0 +1,130 @@
+"""The commands over many runs: sweep (a grid of runs on a local pool or a Dask cluster) and compare."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import sys
+import time
+from typing import Any
+
+from hexabot_sim import params as params_mod
+from hexabot_sim import registry
+from hexabot_sim.cli.common import COMPLETED, PROG
+from hexabot_sim.cli.progress import SweepProgress
+from hexabot_sim.errors import UsageError
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from hexabot_sim import dask_cluster, output, pool, sweep
+
+    sets = params_mod.parse_assignments(args.sets)
+    config = params_mod.read_config(args.config) if args.config is not None else {}
+    if args.scheduler is not None and args.workers is not None:
+        raise UsageError("--workers is for the local pool; with --scheduler the cluster's workers run the cells")
+    name = f"sweep-{registry.get(args.scenario).name}"
+    checking = SweepProgress(f"{name}: checking")  # speaks only if checking the cells takes seconds
+    plan = sweep.plan(args.scenario, args.grid, config, sets, checking)  # every cell validated: nothing runs before
+    if args.out is not None:
+        output.check_not_input(args.out, [args.config] if args.config is not None else [])
+        output.check_out(args.out, force=args.force)
+    if args.scheduler is not None:
+        executors: Any = dask_cluster.dask_executor(args.scheduler)  # connects now: an unreachable scheduler writes nothing
+    else:
+        workers = min(args.workers or pool.workers_default(), len(plan.cells))
+        sweep.check_cost(plan, workers, f"{workers} local process{'es' if workers > 1 else ''}")
+        executors = contextlib.nullcontext((pool.local_executor(workers), workers))
+    started = time.perf_counter()
+    with executors as (executor, workers), output.run_folder(args.out, name, force=args.force) as run:
+        where = f"Dask scheduler {args.scheduler} ({workers} worker threads)" if args.scheduler else None
+        if where:  # the cluster's size is known once connected (the staging folder goes with the refusal)
+            sweep.check_cost(plan, workers, where)
+        where = where or f"{workers} local process{'es' if workers > 1 else ''}"
+        kept = 0
+
+        def keep(result: pool.CellResult) -> None:
+            nonlocal kept
+            if result.files:
+                folder = run.path / sweep.cell_folder(result.index, len(plan.cells))
+                folder.mkdir(parents=True)
+                for relative, content in result.files.items():
+                    (folder / relative).parent.mkdir(parents=True, exist_ok=True)
+                    (folder / relative).write_bytes(content)
+                kept += 1
+
+        jobs = sweep.jobs(plan, args.keep_runs, plots=not args.no_plots)
+        results = pool.run_cells(executor, jobs, SweepProgress(name), keep)
+        wall = time.perf_counter() - started
+        table = sweep.table(plan, results)
+        sweep.write_csv(run.path / sweep.CSV_NAME, table)
+        files = [sweep.CSV_NAME, sweep.JSON_NAME]
+        if not args.no_plots:
+            from hexabot_sim import plots
+
+            plots.use_agg()
+            with output.package_style():
+                files += output.write_figures(sweep.figures(plan, table), run.path)
+        executor_record = {"kind": "dask" if args.scheduler else "local processes", "workers": workers}
+        executor_record |= {"scheduler": args.scheduler} if args.scheduler else {}
+        record = sweep.record(plan, table, results, executor_record, wall)
+        record |= {"files": files, "kept_runs": f"{sweep.CELLS_DIR}/ ({kept} folders)" if args.keep_runs else None}
+        record["versions"] = output.versions()
+        record["files"] = [*files, "report.html"]
+        output.write_json(run.path / sweep.JSON_NAME, record)
+        from hexabot_sim import params as params_info
+        from hexabot_sim import report
+
+        docs = {name: info.doc for name, (info, _) in params_info.infos(type(plan.base)).items()}
+        (run.path / "report.html").write_text(report.sweep_page(record, docs, run.path))
+    assert run.final is not None
+    total = time.perf_counter() - started
+    failed = [r for r in results if r.error]
+    shape = " x ".join(f"{len(a.values)} {a.name}" for a in plan.axes)
+    COMPLETED[:] = [f"the sweep folder {output.display_path(run.final)} is complete"]
+    if failed:
+        first = failed[0]
+        values = plan.cell_values(first.index)
+        label = ", ".join(f"{n} = {sweep._text(v)}" for n, v in zip(table.swept, values, strict=True))
+        print(
+            f"{PROG}: warning: {len(failed)} of {len(results)} cells failed (rows with an 'error' in "
+            f"{sweep.CSV_NAME}); the first, {label}: {first.error}",
+            file=sys.stderr,
+        )
+    cell_time = sum(r.seconds for r in results)
+    print(
+        f"{name}: {len(results)} cells ({shape}) on {where} in {total:.2f} s "
+        f"(cells {cell_time:.2f} s in all) -> {output.display_path(run.final)}"
+    )
+    print(f"  cells ok: {len(results) - len(failed)}, failed: {len(failed)}")
+    figures = [f for f in files if f.endswith(".png")]
+    print(f"  files: {sweep.CSV_NAME}, {sweep.JSON_NAME}, {len(figures)} figures" + (
+        f", {sweep.CELLS_DIR}/ ({kept} run folders)" if args.keep_runs else ""))  # fmt: skip
+    return 0
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
+    from hexabot_sim import compare, output
+
+    runs = compare.load_all(args.runs)  # refuses anything that is not a run folder, before writing
+    if args.out is not None:
+        output.check_not_input(args.out, args.runs)
+        output.check_out(args.out, force=args.force)
+    table = compare.rows(runs)
+    shared = compare.shared_columns([compare.header(r) for r in runs])
+    with output.run_folder(args.out, "compare", force=args.force) as run:
+        compare.write_csv(run.path / compare.CSV_NAME, runs, table)
+        files = [compare.CSV_NAME, compare.JSON_NAME]
+        if not args.no_plots:
+            from hexabot_sim import plots
+
+            plots.use_agg()
+            with output.package_style():
+                files += output.write_figures(compare.figures(runs), run.path)
+        output.write_json(run.path / compare.JSON_NAME, compare.record(runs, table, shared, files))
+    assert run.final is not None
+    COMPLETED[:] = [f"the compare folder {output.display_path(run.final)} is complete"]
+    print(compare.text(runs, table), end="")
+    overlaid = f"{len(shared) - 1} shared columns overlaid" if len(shared) > 1 else "no shared columns to overlay"
+    print(f"compare: {len(runs)} runs, {overlaid} -> {output.display_path(run.final)}")
+    print(f"  files: {', '.join(files)}")
+    return 0

@@ -1,0 +1,89 @@
+"""A Dask distributed scheduler as the sweep's executor: connecting, checked addresses, one-line failures."""
+
+from __future__ import annotations
+
+import concurrent.futures
+import contextlib
+import logging
+import re
+from collections.abc import Iterator
+from typing import Any
+
+from hexabot_sim import pool
+from hexabot_sim.errors import UsageError
+
+
+@contextlib.contextmanager
+def dask_executor(address: str, timeout: float = 10.0) -> Iterator[tuple[concurrent.futures.Executor, int]]:
+    """The Executor of a Dask distributed scheduler at `address`, and its current number of worker threads.
+
+    Raises:
+        UsageError: if `distributed` is not installed or the scheduler cannot be reached within `timeout` [s].
+    """
+    try:
+        from distributed import Client
+    except ImportError:
+        raise UsageError("--scheduler needs the 'distributed' package: pip install \"hexabot-sim[cluster]\"") from None
+    address = scheduler_address(address)
+    for name in ("distributed", "tornado", "asyncio"):  # Dask's own log lines are not the user's business
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+    try:
+        client = _connect(Client, address, timeout)
+    except Exception as e:
+        text = " ".join(str(e).split())[:200]
+        raise UsageError(f"cannot reach the Dask scheduler at {address!r}: {text or type(e).__name__}") from None
+    try:
+        threads = sum(client.nthreads().values())
+        if threads == 0:
+            try:
+                client.wait_for_workers(1, timeout=pool.WORKER_WAIT)
+            except Exception:
+                raise UsageError(
+                    f"the Dask scheduler at {address!r} has no workers (waited {pool.WORKER_WAIT:g} s): start some with "
+                    f"'dask worker {address}'"
+                ) from None
+            threads = sum(client.nthreads().values())
+        yield client.get_executor(pure=False), threads
+    finally:
+        with contextlib.suppress(Exception):
+            client.close(timeout=5)
+
+
+def _connect(client_type: Any, address: str, timeout: float) -> Any:
+    """client_type(address) within 2 x `timeout` seconds: a peer that accepts the connection but never answers as
+    a Dask scheduler would block Client() until it hangs up (a daemon thread is left to it, not the user)."""
+    import threading
+
+    box: list[Any] = []
+
+    def connect() -> None:
+        try:
+            box.append(client_type(address, timeout=timeout, set_as_default=False))
+        except BaseException as e:
+            box.append(e)
+
+    thread = threading.Thread(target=connect, name="hexabot-sim-dask-connect", daemon=True)
+    thread.start()
+    thread.join(2 * timeout)
+    if not box:
+        raise TimeoutError(f"no answer as a Dask scheduler within {2 * timeout:g} s (is it one?)")
+    if isinstance(box[0], BaseException):
+        raise box[0]
+    return box[0]
+
+
+
+
+def scheduler_address(text: str) -> str:
+    """'tcp://host:port' (or 'host:port') checked: UsageError in one line for anything else."""
+    match = re.fullmatch(r"(?:tcp://)?([A-Za-z0-9._-]+|\[[0-9A-Fa-f:.]+\]):([0-9]{1,5})", text)
+    if "://" in text and not text.startswith("tcp://"):
+        scheme = text.split("://", 1)[0][:20]
+        raise UsageError(
+            f"--scheduler {scheme}:// is not supported: give a Dask scheduler's tcp://HOST:PORT address "
+            "(tls:// needs a certificate configuration this command does not take)"
+        )
+    if match is None or not 1 <= int(match.group(2)) <= 65535:
+        shown = text if len(text) <= 80 else text[:77] + "..."
+        raise UsageError(f"--scheduler {shown!r} is not an address: expected tcp://HOST:PORT, PORT from 1 to 65535")
+    return text if text.startswith("tcp://") else f"tcp://{text}"

@@ -1,0 +1,60 @@
+"""Report 000"s Hexabot: six DH legs on a free body, walking on flat ground, slopes, rough ground, a kerb."""
+
+from hexabot_sim.scenario import Scenario
+
+SCENARIOS = (
+    Scenario(
+        "hexabot-walk",
+        "the six-legged hexabot walks on flat ground: tripod/ripple/wave gait, any direction (report 000)",
+        "hexabot_sim.robots.hexabot.walk",
+        "HexabotParams",
+        defaults={},
+        smoke={"duration": 1.6},
+    ),
+    Scenario(
+        "hexabot-turn",
+        "the hexabot turns on the spot at 0.3 rad/s (tripod gait)",
+        "hexabot_sim.robots.hexabot.walk",
+        "HexabotParams",
+        defaults={"vx": 0.0, "yaw_rate": 0.3},
+        smoke={"duration": 1.6},
+    ),
+    Scenario(
+        "hexabot-crab",
+        "the hexabot walks sideways (crab walk) at 0.1 m/s to its left",
+        "hexabot_sim.robots.hexabot.walk",
+        "HexabotParams",
+        defaults={"vx": 0.0, "vy": 0.1},
+        smoke={"duration": 1.6},
+    ),
+    Scenario(
+        "hexabot-slope",
+        "the hexabot walks up a 10 deg slope at 0.1 m/s, its body kept level from the IMU (sensed touchdown)",
+        "hexabot_sim.robots.hexabot.walk",
+        "HexabotParams",
+        defaults={"slope_deg": 10.0, "touchdown": "sensed", "level_body": "on", "duration": 10.0},
+        smoke={"duration": 1.6},
+    ),
+    Scenario(
+        "hexabot-rough",
+        "the hexabot walks over 1 cm rough ground (seeded heightfield) at 0.1 m/s, its feet finding the ground",
+        "hexabot_sim.robots.hexabot.walk",
+        "HexabotParams",
+        defaults={"roughness": 0.01, "touchdown": "sensed"},
+        smoke={"duration": 1.6},
+    ),
+    Scenario(
+        "hexabot-kerb",
+        "the hexabot climbs a 3 cm kerb 0.5 m ahead (feet lifted 4 cm, sensed touchdown, level body)",
+        "hexabot_sim.robots.hexabot.walk",
+        "HexabotParams",
+        defaults={
+            "kerb_height": 0.03,
+            "step_height": 0.04,
+            "touchdown": "sensed",
+            "level_body": "on",
+            "duration": 14.0,
+        },
+        smoke={"duration": 1.6},
+    ),
+)

@@ -1,0 +1,82 @@
+"""Stop requests (Ctrl-C, SIGTERM, SIGHUP): what was received, holds over publishing, the command line's handler."""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import sys
+from collections.abc import Iterator
+from typing import Any
+
+# Signals the command line received (Ctrl-C, SIGTERM, SIGHUP), newest last. A library may catch the
+# exception a signal raised in the middle of an import (and fall back silently): the run checks this
+# before it publishes anything, so a stop request is never lost.
+RECEIVED_SIGNALS: list[int] = []
+# While HOLD[0] > 0 (publishing, cleaning up) the command line's handler only records a signal in
+# PENDING_SIGNALS; the hold raises it when it ends (see signals_held).
+HOLD: list[int] = [0]
+PENDING_SIGNALS: list[int] = []
+# True once the run folder is published: a stop request after that comes too late to stop anything, so the
+# command line's handler only records it (the run completes and says so) and no hold raises it.
+PUBLISHED: list[bool] = [False]
+
+
+def stop_request(signum: int) -> KeyboardInterrupt:
+    """The exception a stop signal raises: KeyboardInterrupt for Ctrl-C, Interrupted(N) for SIGTERM/SIGHUP."""
+    return KeyboardInterrupt() if signum == signal.SIGINT else Interrupted(signum)
+
+
+@contextlib.contextmanager
+def signals_held() -> Iterator[None]:
+    """Delays Ctrl-C, SIGTERM and SIGHUP until the block is done, then raises the stop request.
+
+    Works with the command line's handler (raise_interrupted below), which only records a signal while
+    a hold is on: no handler is swapped, and the kernel may hand the signal to any thread. (Outside
+    the command line Python's own Ctrl-C handler is in force and the hold does nothing.)
+    """
+    HOLD[0] += 1
+    try:
+        yield
+    finally:
+        HOLD[0] -= 1
+        if HOLD[0] == 0 and PENDING_SIGNALS and not PUBLISHED[0]:
+            signum = PENDING_SIGNALS[-1]
+            PENDING_SIGNALS.clear()
+            raise stop_request(signum)
+
+
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C, SIGTERM or SIGHUP: the run stops, cleans up and exits with 128 + the signal number."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+
+def raise_interrupted(signum: int, frame: Any) -> None:
+    """Ctrl-C, SIGTERM and SIGHUP stop the run; while a publish or clean-up is held, only after it."""
+    RECEIVED_SIGNALS.append(signum)
+    if HOLD[0] > 0 or PUBLISHED[0]:  # held, or too late: the results are published
+        PENDING_SIGNALS.append(signum)
+        return
+    raise stop_request(signum)
+
+
+def reset() -> None:
+    """Forgets every stop request (a new command called from Python starts clean)."""
+    RECEIVED_SIGNALS.clear()
+    PENDING_SIGNALS.clear()
+    PUBLISHED[0] = False
+
+
+def quiet_interruptions() -> None:
+    """A stop request raised where Python cannot propagate it (a weakref callback of the import system, a
+    __del__) is recorded and acted on later: do not print it as "Exception ignored ... Traceback"."""
+    default = sys.unraisablehook
+
+    def hook(unraisable: sys.UnraisableHookArgs) -> None:
+        if not isinstance(unraisable.exc_value, KeyboardInterrupt):
+            default(unraisable)
+
+    sys.unraisablehook = hook

@@ -1,0 +1,48 @@
+"""The package's layers are a contract (pyproject.toml [tool.importlinter]): no import runs up, no cycle."""
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+pytest.importorskip("importlinter", reason="import-linter (the 'test' extra) checks the layers")
+
+
+def lint(root: Path) -> subprocess.CompletedProcess:
+    code = "import sys; from importlinter.cli import lint_imports_command; sys.exit(lint_imports_command())"
+    return subprocess.run(
+        [sys.executable, "-c", code, "--config", str(root / "pyproject.toml"), "--no-cache"],
+        cwd=root,
+        env={"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin"},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+def test_the_layer_contracts_are_kept():
+    done = lint(ROOT)
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-2000:]
+    assert "0 broken" in done.stdout
+
+
+@pytest.mark.parametrize(
+    ("module", "line", "contract"),
+    [
+        ("errors.py", "from hexabot_sim import cli", "layers"),  # an import that runs up
+        ("robots/leg/step.py", "from hexabot_sim.robots.hexabot import walk", "robots are independent"),
+        ("kinematics/dh.py", "import mujoco", "kinematics is pure numpy"),
+    ],
+)
+def test_a_broken_contract_is_caught(tmp_path, module, line, contract):
+    """The check bites: a copy of the package with one forbidden import fails it, naming the contract."""
+    shutil.copytree(ROOT / "hexabot_sim", tmp_path / "hexabot_sim", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
+    path = tmp_path / "hexabot_sim" / module
+    path.write_text(path.read_text() + f"\n{line}  # noqa\n")
+    done = lint(tmp_path)
+    assert done.returncode != 0
+    assert f"{contract}" in done.stdout and "BROKEN" in done.stdout, done.stdout[-3000:]
