@@ -1,4 +1,4 @@
-"""Regenerates the figures and the video frame shown in README.md (docs/*.png).
+"""Regenerates the figures and the video frame shown in README.md and the pages in docs/ (docs/*.png).
 
 Usage: python scripts/make_docs_figures.py [--hexabot | --terrain]   (only the walking hexabot's / the terrain's)
 """

@@ -16,7 +16,7 @@ from hexabot_sim.cli import main
 from hexabot_sim.cli.progress import SweepProgress
 from hexabot_sim.errors import UsageError
 
-# 2 x 2 pendulum cells of 0.5 s; stiffness 1e6 at a 10 ms step diverges (README: sqrt(k/I) = 1.8e4 rad/s).
+# 2 x 2 pendulum cells of 0.5 s; stiffness 1e6 at a 10 ms step diverges (docs/cli.md: sqrt(k/I) = 1.8e4 rad/s).
 GRID = ["--grid", "damping=0,0.05", "--grid", "stiffness=0.5,1e6"]
 FIXED = ["--set", "duration=0.5", "--set", "timestep=0.01"]
 

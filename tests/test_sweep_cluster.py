@@ -40,7 +40,7 @@ def test_a_plain_address_is_given_its_protocol():
 
 def test_progress_speaks_while_no_cell_finishes(monkeypatch):
     """A cell that takes longer than a heartbeat: the progress is called again meanwhile, and a log line is
-    written once PLAIN_SECONDS have passed without one (the README promises a line at least once a minute)."""
+    written once PLAIN_SECONDS have passed without one (docs/studies.md promises a line at least once a minute)."""
     import concurrent.futures
     import io
     import time

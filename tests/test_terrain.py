@@ -221,7 +221,8 @@ def test_standing_still_on_the_slope_does_not_slide():
 # Issue 10: on 1 cm rough ground, for any of 5 seeds, tripod, ripple and wave at 0.05-0.1 m/s walk 20 s
 # without a fall, within 10 % of the speed and 3 deg of roll and pitch. Every gait walks every seed; each
 # seed has its own speed and levelling, so each gait covers both ends of the speed range with the body
-# levelled and following the ground (README: the full seeds x gaits x speeds x levelling grid).
+# levelled and following the ground (the full seeds x gaits x speeds x levelling grid: docs/hexabot.md,
+# "1 cm rough ground, every seed").
 ROUGH_SEEDS: dict[int, tuple[float, str]] = {0: (0.1, "off"), 1: (0.05, "on"), 2: (0.1, "on"), 3: (0.05, "off"),
                                              4: (0.075, "off")}  # fmt: skip
 ROUGH_CASES = [(gait, seed, *ROUGH_SEEDS[seed]) for gait in ("tripod", "ripple", "wave") for seed in ROUGH_SEEDS]
@@ -268,7 +269,8 @@ def test_rough_ground_no_fall_speed_and_attitude(rough_runs, case):
     assert len(gaps) > 50
     assert np.abs(gaps).max() < 1e-3  # penetration well below 1 mm
     # Load sharing, measured: the tripod's three stance feet fix the body, so all of them carry it; with four or
-    # five feet down (ripple, wave) the position-controlled legs leave some unloaded part of the time (README).
+    # five feet down (ripple, wave) the position-controlled legs leave some unloaded part of the time
+    # (docs/hexabot.md, "Load sharing").
     # Measured 0.92-0.94, 0.68-0.73 and 0.55-0.57.
     assert r["stance_loaded_fraction"] >= {"tripod": 0.85, "ripple": 0.6, "wave": 0.5}[case[0]], r
 
