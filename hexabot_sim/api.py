@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from hexabot_sim import output, registry
+from hexabot_sim import gl, output, registry
 from hexabot_sim import params as params_mod
 from hexabot_sim import video as video_options
 from hexabot_sim.errors import OutputError, UsageError
@@ -286,7 +286,7 @@ class Result:
         settings = video_options.settings(quality, size, fps) if video else None
         backend, reason = None, output.NOT_REQUESTED
         if video:
-            backend, reason = video_backend()
+            backend, reason = gl.video_backend()
         with output.run_folder(out, self.scenario, force=force) as folder:
             self.write_folder(folder.path, plots=plots, video=settings, backend=backend, no_video_reason=reason,
                               video_progress=progress)  # fmt: skip
@@ -347,7 +347,7 @@ class Result:
         settings = video_options.settings(quality, size, fps)
         if self.raw.camera is None or self.raw.trajectory is None:
             raise UsageError(f"{self.scenario} produces no trajectory to film")
-        backend, reason = video_backend()
+        backend, reason = gl.video_backend()
         if backend is None:
             raise OutputError(f"no video: {reason}")
         path = Path(path)
@@ -376,17 +376,3 @@ def _short(metric: Metric) -> str:
 
     unit = "" if metric.unit in ("", "1") or metric.value is None else f" {metric.unit}"
     return f"{report.format_value(metric.value)}{unit}"
-
-
-def video_backend(announce: Callable[[str], None] | None = None) -> tuple[str | None, str]:
-    """(working OpenGL backend, "") or (None, why there is no video); `announce` hears a fallback's notice."""
-    from hexabot_sim import gl
-
-    backend, reason, notice = gl.choose()
-    if notice and announce is not None:
-        announce(notice)
-    if backend is not None:
-        problem = gl.ffmpeg_problem()
-        if problem is not None:
-            return None, problem
-    return backend, reason

@@ -39,8 +39,8 @@ def dask_executor(address: str, timeout: float = 10.0) -> Iterator[tuple[concurr
                 client.wait_for_workers(1, timeout=pool.WORKER_WAIT)
             except Exception:
                 raise UsageError(
-                    f"the Dask scheduler at {address!r} has no workers (waited {pool.WORKER_WAIT:g} s): start some with "
-                    f"'dask worker {address}'"
+                    f"the Dask scheduler at {address!r} has no workers (waited {pool.WORKER_WAIT:g} s): start some "
+                    f"with 'dask worker {address}'"
                 ) from None
             threads = sum(client.nthreads().values())
         yield client.get_executor(pure=False), threads

@@ -11,6 +11,7 @@ import os
 import subprocess
 import sys
 import tempfile
+from collections.abc import Callable
 
 BACKENDS: tuple[str, ...] = ("egl", "osmesa")
 PROBE_TIMEOUT: float = 60.0  # [s] software GL can be slow to start on a loaded machine
@@ -103,3 +104,16 @@ def ffmpeg_problem() -> str | None:
     if proc.returncode != 0 or not proc.stdout.startswith(b"ffmpeg"):
         return f"{exe!r} is not a working ffmpeg (exit code {proc.returncode})"
     return None
+
+
+def video_backend(announce: Callable[[str], None] | None = None) -> tuple[str | None, str]:
+    """(working OpenGL backend, "") or (None, why there is no video: no OpenGL, no ffmpeg); `announce` hears a
+    fallback's notice. Call it before MuJoCo is imported: the backend it chooses is the one MuJoCo binds."""
+    backend, reason, notice = choose()
+    if notice and announce is not None:
+        announce(notice)
+    if backend is not None:
+        problem = ffmpeg_problem()
+        if problem is not None:
+            return None, problem
+    return backend, reason

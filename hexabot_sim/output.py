@@ -25,14 +25,13 @@ import numpy as np
 
 from hexabot_sim.errors import OutputError, SimulationError, UsageError
 from hexabot_sim.signals import PUBLISHED, RECEIVED_SIGNALS, signals_held, stop_request
-from hexabot_sim.video import VideoSettings
+from hexabot_sim.video import NOT_REQUESTED, VideoSettings
 
 JSON_NAME = "run.json"
 MODEL_NAME = "model.xml"
 VIDEO_NAME = "video.mp4"
 TRAJECTORY_NAME = "trajectory.npz"
 REPORT_NAME = "report.html"
-NOT_REQUESTED = "not requested (add --video)"  # run.json's video reason when no video was asked for
 
 
 # Every run is written into a hidden staging folder next to its destination and renamed into

@@ -12,6 +12,7 @@ from hexabot_sim.params import MAX_SECONDS
 # Video frames: H.264 in yuv420p needs even sides; beyond 4:1 a frame shows a sliver of the scene.
 MIN_SIDE, MAX_SIZE, MAX_ASPECT = 64, (3840, 2160), 4.0
 MAX_FPS: int = 240  # [1/s]
+NOT_REQUESTED = "not requested (add --video)"  # run.json's video reason when no video was asked for
 PRESETS: tuple[str, ...] = ("preview", "high")  # render.QUALITY holds what each one sets
 
 # Seconds to render and encode one video frame here: a fixed part plus a part per megapixel (software

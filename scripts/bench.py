@@ -34,11 +34,11 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import mujoco
 
-from hexabot_sim import gl, params, render, registry
-from hexabot_sim.robots.hexabot import walk as hexabot
+from hexabot_sim import gl, params, registry, render
+from hexabot_sim.result import at_home
+from hexabot_sim.robots.hexabot import scene as hexabot_scene
 from hexabot_sim.robots.leg import step as leg
 from hexabot_sim.robots.pendulum import pendulum
-from hexabot_sim.result import at_home
 from hexabot_sim.simulate import simulate, step_count
 
 
@@ -103,15 +103,15 @@ def bench_hexabot(repeat: int, duration: float = 10.0, name: str = "hexabot-walk
     """The walking loop vs bare mj_step replaying its recorded controls (the walking robot, not a standing one)."""
     scenario = registry.get(name)
     p = params.resolve(scenario.params_type, scenario.defaults, {"duration": duration, **overrides})
-    xml = hexabot.build_xml(p)
+    xml = hexabot_scene.build_xml(p)
     n = step_count(p.duration, p.timestep)
     loop_s, bare_s = [], []
     model, data = at_home(xml)
-    hexabot.make_controller(p, model, data)(model, data)  # compiles the numba kernels (or loads them) untimed
+    hexabot_scene.make_controller(p, model, data)(model, data)  # compiles the numba kernels (or loads them) untimed
     for _ in range(repeat):
         # The whole loop: controller (gait targets, 6 resolved-rate steps), mj_step, recording, checks.
         model, data = at_home(xml)
-        controller = hexabot.make_controller(p, model, data)  # what a run uses
+        controller = hexabot_scene.make_controller(p, model, data)  # what a run uses
         start = time.perf_counter()
         traj = simulate(model, data, n, controller=controller, record_ctrl=True)
         loop_s.append(time.perf_counter() - start)

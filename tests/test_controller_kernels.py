@@ -89,14 +89,14 @@ def test_warm_up_compiles_what_a_walk_uses():
     warm_up compiled (a walk passing other argument types would compile again, outside the signal hold)."""
     from hexabot_sim import params, registry
     from hexabot_sim.result import at_home
-    from hexabot_sim.robots.hexabot import walk as hexabot
+    from hexabot_sim.robots.hexabot import scene as hexabot_scene
     from hexabot_sim.simulate import simulate
 
     for name in ("hexabot-rough", "hexabot-walk"):
         scenario = registry.get(name)
         p = params.resolve(scenario.params_type, scenario.defaults, {"duration": 3.0})
-        model, data = at_home(hexabot.build_xml(p))
-        simulate(model, data, 50, controller=hexabot.make_controller(p, model, data))
+        model, data = at_home(hexabot_scene.build_xml(p))
+        simulate(model, data, 50, controller=hexabot_scene.make_controller(p, model, data))
     for kernel in (kernels.servo, kernels.targets, kernels.ground_step):
         assert len(kernel.signatures) == 1, (kernel, kernel.signatures)
 

@@ -14,13 +14,15 @@ from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import hexabot as hx
 from hexabot_sim.kinematics import hexabot_mjcf
 from hexabot_sim.kinematics import leg as leg_kin
+from hexabot_sim.robots.hexabot import parameters as hexabot_parameters
+from hexabot_sim.robots.hexabot import scene as hexabot_scene
 from hexabot_sim.robots.hexabot import walk as scenario
 
 LEGS = hx.LEGS
 
 
 def walk(**overrides):
-    p = params.resolve(scenario.HexabotParams, {}, overrides)
+    p = params.resolve(hexabot_parameters.HexabotParams, {}, overrides)
     return scenario.run("hexabot-walk", p)
 
 
@@ -171,7 +173,7 @@ def test_planned_stance_moves_with_the_ramped_command_and_targets_stay_smooth(cm
     ground-fixed velocity -s(t) (v + w x p) (the body twist scaled by the ramp, by finite differences),
     and chunk boundaries leave no mark (the same walk planned in other chunks is the same)."""
     dt, settle, ramp_time = 0.002, 0.5, 1.0
-    planner = GaitPlanner(GAITS["tripod"], 1.0, 0.03, scenario.neutral(params.resolve(scenario.HexabotParams, {}, {})),
+    planner = GaitPlanner(GAITS["tripod"], 1.0, 0.03, hexabot_parameters.neutral(params.resolve(hexabot_parameters.HexabotParams, {}, {})),
                           dt, start_time=settle)  # fmt: skip
 
     def scale(t):
@@ -219,7 +221,7 @@ def test_stance_plane_fit_is_least_squares_and_refuses_collinear_feet():
 def test_command_columns_show_the_settle_and_the_ramp():
     result = walk(vx=0.1, vy=0.05, duration=2.0, period=1.0)
     t = result.columns["t"]
-    factor = np.clip((t - scenario.SETTLE_TIME) / 1.0, 0.0, 1.0)  # the ramp lasts one gait period
+    factor = np.clip((t - hexabot_parameters.SETTLE_TIME) / 1.0, 0.0, 1.0)  # the ramp lasts one gait period
     np.testing.assert_allclose(result.columns["cmd_vx"], 0.1 * factor, atol=1e-12)
     np.testing.assert_allclose(result.columns["cmd_vy"], 0.05 * factor, atol=1e-12)
     assert not result.columns["cmd_yaw_rate"].any()
@@ -252,7 +254,9 @@ def test_gait_timing_matches_the_plan(forward_walk):
     planned = result.extras["planned_stance"][window]
     assert (measured == planned).mean() > 0.95
     # A planned swing never carries load in its middle half (no foot drags through its swing).
-    phase = np.mod((result.columns["t"][window, None] - scenario.SETTLE_TIME) + np.array(GAITS["tripod"].offsets), 1.0)
+    phase = np.mod(
+        (result.columns["t"][window, None] - hexabot_parameters.SETTLE_TIME) + np.array(GAITS["tripod"].offsets), 1.0
+    )
     mid_swing = (phase > 0.625) & (phase < 0.875)
     assert not (measured & mid_swing).any()
 
@@ -351,9 +355,15 @@ def test_a_yaw_rate_that_underflows_walks_straight():
 
 
 def test_perturbations_are_seeded():
-    a = scenario._perturbations(params.resolve(scenario.HexabotParams, {}, {"trim_error_deg": 1, "seed": 3}))
-    b = scenario._perturbations(params.resolve(scenario.HexabotParams, {}, {"trim_error_deg": 1, "seed": 3}))
-    c = scenario._perturbations(params.resolve(scenario.HexabotParams, {}, {"trim_error_deg": 1, "seed": 4}))
+    a = hexabot_scene._perturbations(
+        params.resolve(hexabot_parameters.HexabotParams, {}, {"trim_error_deg": 1, "seed": 3})
+    )
+    b = hexabot_scene._perturbations(
+        params.resolve(hexabot_parameters.HexabotParams, {}, {"trim_error_deg": 1, "seed": 3})
+    )
+    c = hexabot_scene._perturbations(
+        params.resolve(hexabot_parameters.HexabotParams, {}, {"trim_error_deg": 1, "seed": 4})
+    )
     assert all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
     assert not np.array_equal(a[0], c[0])
     assert np.abs(a[0]).max() <= math.radians(1.0)
@@ -381,7 +391,7 @@ def test_perturbations_are_seeded():
 )
 def test_infeasible_commands_are_refused_up_front(overrides, fragment):
     with pytest.raises(UsageError, match=None) as info:
-        params.resolve(scenario.HexabotParams, {}, overrides)
+        params.resolve(hexabot_parameters.HexabotParams, {}, overrides)
     assert fragment in str(info.value)
 
 
@@ -408,7 +418,7 @@ def test_the_values_a_refusal_suggests_are_accepted(overrides, pattern, fix):
     import re
 
     with pytest.raises(UsageError) as refused:
-        params.resolve(scenario.HexabotParams, {}, overrides)
+        params.resolve(hexabot_parameters.HexabotParams, {}, overrides)
     found = re.search(pattern, str(refused.value))
     assert found, str(refused.value)
     if fix == "command":  # "vx = 0.0561 m/s, vy = 0.336 m/s": the components not named are 0
@@ -416,14 +426,14 @@ def test_the_values_a_refusal_suggests_are_accepted(overrides, pattern, fix):
         suggested |= {name: float(v) for name, v in re.findall(r"(\w+) = (\S+) ", found.group(1))}
     else:
         suggested = {fix: float(found.group(1)) / (1000 if fix == "kerb_height" else 1)}
-    params.resolve(scenario.HexabotParams, {}, {**overrides, **suggested})  # no UsageError
+    params.resolve(hexabot_parameters.HexabotParams, {}, {**overrides, **suggested})  # no UsageError
 
 
 def test_refused_largest_feasible_command_is_feasible():
     with pytest.raises(UsageError) as info:
-        params.resolve(scenario.HexabotParams, {}, {"vx": 0.6})
+        params.resolve(hexabot_parameters.HexabotParams, {}, {"vx": 0.6})
     largest = float(str(info.value).split("vx = ")[1].split(" m/s")[0])
-    params.resolve(scenario.HexabotParams, {}, {"vx": largest * 0.999})
+    params.resolve(hexabot_parameters.HexabotParams, {}, {"vx": largest * 0.999})
 
 
 # --- the run folder and metrics recomputed independently ---------------------------------------------
@@ -440,7 +450,7 @@ def test_cli_run_folder_and_metrics_recomputed_from_the_trajectory(tmp_path, cap
     assert {"velocity.png", "body.png", "slip.png"} <= names
     header = (out / "timeseries.csv").read_text().splitlines()[0].split(",")
     assert header[:7] == ["t", "x", "y", "z", "roll", "pitch", "yaw"]
-    assert len(header) == scenario.CSV_COLUMNS  # the run-cost estimate counts these
+    assert len(header) == hexabot_parameters.CSV_COLUMNS  # the run-cost estimate counts these
     assert {f"contact_{leg}" for leg in LEGS} <= set(header)
     assert {f"q_{leg}_{j}" for leg in LEGS for j in hx.JOINTS} <= set(header)
 
@@ -451,7 +461,7 @@ def test_cli_run_folder_and_metrics_recomputed_from_the_trajectory(tmp_path, cap
     t, qpos, qvel, ctrl = traj["t"], traj["qpos"], traj["qvel"], traj["ctrl"]
     assert ctrl.shape == (len(t), 36)
     metrics = record["metrics"]
-    period, settle = record["params"]["period"], scenario.SETTLE_TIME
+    period, settle = record["params"]["period"], hexabot_parameters.SETTLE_TIME
     cycles = math.floor((t[-1] - settle - 2 * period) / period + 1e-9)
     i0 = np.searchsorted(t, settle + 2 * period - 1e-9)
     i1 = np.searchsorted(t, settle + (2 + cycles) * period - 1e-9)
@@ -486,7 +496,7 @@ def test_cli_run_folder_and_metrics_recomputed_from_the_trajectory(tmp_path, cap
             slips.append(math.hypot(v[0], v[1]))
             loads.append(force[0])
     slips, loads = np.array(slips), np.array(loads)
-    loaded = loads > scenario.LOADED_FRACTION * weight / 6
+    loaded = loads > hexabot_parameters.LOADED_FRACTION * weight / 6
     assert slips[loaded].mean() == pytest.approx(metrics["slip_mean"], rel=1e-6)
     assert metrics["fell"] is False and qpos[:, 2].min() > 0.05
     assert record["units"]["metrics"]["lateral_drift"] == "mm/m"
@@ -512,4 +522,4 @@ def test_rolling_feet_correction_is_what_makes_the_speed_right(monkeypatch):
 
 def test_an_hour_long_walk_is_refused_with_the_estimate():
     with pytest.raises(UsageError, match="GB in memory"):
-        params.resolve(scenario.HexabotParams, {}, {"duration": 3600})
+        params.resolve(hexabot_parameters.HexabotParams, {}, {"duration": 3600})

@@ -43,22 +43,22 @@ def test_the_energy_balance_of_a_real_swing_is_reported():
 
 def test_a_kerb_refusal_shows_the_value_and_the_bound_apart():
     from hexabot_sim.errors import UsageError
-    from hexabot_sim.robots.hexabot import walk as hexabot
+    from hexabot_sim.robots.hexabot import parameters as hexabot_parameters
 
-    largest = hexabot.largest_climbable_kerb(_defaults())
+    largest = hexabot_parameters.largest_climbable_kerb(_defaults())
     with pytest.raises((UsageError, ValueError)) as info:
         hs.run("hexabot-walk", kerb_height=largest * 1.00001, duration=3)
     text = str(info.value)
     shown, bound = text.split(" mm kerb is above the largest climbable, ")
     assert shown.split()[-1] != bound.split()[0], text
-    assert hexabot.apart(32.0004, 32.0, "down") == ("32.0004", "32")
+    assert hexabot_parameters.apart(32.0004, 32.0, "down") == ("32.0004", "32")
 
 
 def _defaults():
     from hexabot_sim import params
-    from hexabot_sim.robots.hexabot import walk as hexabot
+    from hexabot_sim.robots.hexabot import parameters as hexabot_parameters
 
-    return params.resolve(hexabot.HexabotParams, {})
+    return params.resolve(hexabot_parameters.HexabotParams, {})
 
 
 def test_one_non_finite_length_is_named_in_the_singular():

@@ -9,7 +9,7 @@ import pytest
 from hexabot_sim import dask_cluster, sweep
 from hexabot_sim.__main__ import main
 from hexabot_sim.errors import UsageError
-from hexabot_sim.robots.hexabot import walk as hexabot
+from hexabot_sim.robots.hexabot import parameters as hexabot_parameters
 
 FIXED = ["--set", "duration=0.05", "--set", "timestep=0.01", "--no-plots"]
 
@@ -53,7 +53,15 @@ def test_a_value_is_checked_against_every_cell_not_the_defaults():
 
 def test_infeasible_cells_are_counted_and_the_first_named(tmp_path, capsys):
     line = refused(
-        tmp_path, capsys, "hexabot-walk", "--grid", "gait=tripod,ripple,wave", "--grid", "vx=0.05,0.3", "--set", "duration=3"
+        tmp_path,
+        capsys,
+        "hexabot-walk",
+        "--grid",
+        "gait=tripod,ripple,wave",
+        "--grid",
+        "vx=0.05,0.3",
+        "--set",
+        "duration=3",
     )
     assert "2 of 6 grid cells cannot run; the first, gait = ripple, vx = 0.3: the legs cannot deliver" in line
     assert "every value can run in some cell" in line
@@ -101,8 +109,8 @@ def test_checking_progress_on_the_command_line(tmp_path, capsys, monkeypatch):
 
 def test_the_walk_checks_a_gait_cycle_once_for_all_cells_that_share_it(monkeypatch):
     computed = []
-    plan_cycle = hexabot._plan_cycle
-    monkeypatch.setattr(hexabot, "_plan_cycle", lambda p, cmd, *a: computed.append(cmd) or plan_cycle(p, cmd, *a))
+    plan_cycle = hexabot_parameters._plan_cycle
+    monkeypatch.setattr(hexabot_parameters, "_plan_cycle", lambda p, cmd, *a: computed.append(cmd) or plan_cycle(p, cmd, *a))
     p = sweep.plan("hexabot-walk", ["duration=3:4:10", "seed=1:10:10"], {}, {"vx": "0.0625", "period": "0.95"})
     assert len(p.cells) == 100 and len(computed) <= 2  # standing and walking, not 200
 

@@ -12,13 +12,16 @@ from hexabot_sim import params
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import hexabot as hx
 from hexabot_sim.kinematics.hexabot_terrain import TERRAIN_SQUARE, Terrain
+from hexabot_sim.robots.hexabot import metrics as hexabot_metrics
+from hexabot_sim.robots.hexabot import parameters as hexabot_parameters
+from hexabot_sim.robots.hexabot import scene as hexabot_scene
 from hexabot_sim.robots.hexabot import walk as scenario
 
 SLOPE = {"slope_deg": 10.0, "touchdown": "sensed", "level_body": "on", "duration": 10.0}
 
 
 def resolve(**overrides):
-    return params.resolve(scenario.HexabotParams, {}, overrides)
+    return params.resolve(hexabot_parameters.HexabotParams, {}, overrides)
 
 
 def walk(**overrides):
@@ -30,7 +33,7 @@ def value(result, name):
 
 
 def compiled(p):
-    model = mujoco.MjModel.from_xml_string(scenario.build_xml(p))
+    model = mujoco.MjModel.from_xml_string(hexabot_scene.build_xml(p))
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     return model, data
@@ -50,7 +53,7 @@ def test_heightfield_is_seeded_and_has_the_asked_amplitude():
     # The compiled model holds the same field (float32, normalised by MuJoCo), row 0 at the -y edge.
     p = resolve(roughness=0.01, seed=4)
     model, _ = compiled(p)
-    norm, _, size = scenario.terrain(p).hfield_levels()
+    norm, _, size = hexabot_parameters.terrain(p).hfield_levels()
     stored = model.hfield_data.reshape(model.hfield_nrow[0], model.hfield_ncol[0])
     assert np.abs(stored - norm).max() < 1e-6
     assert model.hfield_size[0][2] == pytest.approx(size)
@@ -65,7 +68,7 @@ def test_slope_normal_is_what_was_asked(heading, uphill):
     expected = np.array([-math.sin(a) * uphill[0], -math.sin(a) * uphill[1], math.cos(a)])
     assert np.abs(normal - expected).max() < 1e-12
     # The robot walks along +x: uphill rises ahead, across rises to its left.
-    ground = scenario.terrain(p)
+    ground = hexabot_parameters.terrain(p)
     assert ground.height(0.1, 0.0) - ground.height(0.0, 0.0) == pytest.approx(0.1 * math.tan(a) * uphill[0])
     assert ground.height(0.0, 0.1) - ground.height(0.0, 0.0) == pytest.approx(0.1 * math.tan(a) * uphill[1])
 
@@ -78,7 +81,7 @@ def test_slope_normal_is_what_was_asked(heading, uphill):
 def test_ground_height_agrees_with_mujoco_ray_casting(overrides):
     p = resolve(**overrides)
     model, data = compiled(p)
-    ground = scenario.terrain(p)
+    ground = hexabot_parameters.terrain(p)
     x0, x1, y0, y1 = ground.extent
     rng = np.random.default_rng(11)
     terrain_only = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)  # group 0: floor, heightfield, kerb
@@ -163,10 +166,10 @@ def test_impossible_ground_is_refused_in_one_line(overrides, fragment):
 
 def test_largest_climbable_kerb_is_predicted_and_ten_percent_more_refused():
     p = resolve(kerb_height=0.03, step_height=0.04)
-    largest = scenario.largest_climbable_kerb(p)
+    largest = hexabot_parameters.largest_climbable_kerb(p)
     # The swing clears step_height less a foot radius; the legs can reach much higher (95 mm) at this stance.
     assert largest == pytest.approx(0.04 - hx.DEFAULT_LAYOUT.foot_radius)
-    assert scenario.depth_range(p)[0] < p.stand_height - largest
+    assert hexabot_parameters.depth_range(p)[0] < p.stand_height - largest
     with pytest.raises(UsageError, match=f"largest climbable, {largest * 1000:.3g} mm"):
         resolve(kerb_height=1.1 * largest, step_height=0.04)
 
@@ -277,13 +280,13 @@ def test_rough_ground_no_fall_speed_and_attitude(rough_runs, case):
 
 def test_the_acceleration_limit_never_clips_the_planned_gait():
     # The tripod's plan stays under the 200 rad/s^2 that smooths the feedback (a foot stopped by a kerb).
-    assert scenario.acceleration_limit(resolve()) == scenario.ACCELERATION_LIMIT
+    assert hexabot_scene.acceleration_limit(resolve()) == hexabot_parameters.ACCELERATION_LIMIT
     # The wave's 1/6-period swing needs more: the limit follows its plan, so the wave keeps its speed.
     p = resolve(gait="wave", vx=0.095, duration=8.0)
-    hip, dt = scenario._plan_cycle(p, p.command())
+    hip, dt = hexabot_parameters._plan_cycle(p, p.command())
     q, _ = hx.ik_hip_batch(hx.DEFAULT_LAYOUT, hip)
     peak = np.abs(np.diff(q, 2, axis=0)).max() / dt**2
-    assert peak > 300 and scenario.acceleration_limit(p) >= peak
+    assert peak > 300 and hexabot_scene.acceleration_limit(p) >= peak
     assert abs(value(scenario.run("hexabot-walk", p), "vx_error")) <= 0.015  # clipped at 200: -5 %
 
 
@@ -293,7 +296,7 @@ def test_sensed_touchdown_on_flat_ground_keeps_the_walk():
     assert value(r, "touchdown_error_max") <= 0.02
     assert value(r, "early_touchdowns") == value(r, "late_touchdowns") == value(r, "feet_without_ground") == 0
     # Every foot the plan has down carries load (the CSV's contact columns against the plan, counted here).
-    window = scenario.steady_window(r.params, r.columns["t"])
+    window = hexabot_metrics.steady_window(r.params, r.columns["t"])
     planned = r.extras["planned_stance"][window]
     loaded = np.stack([r.columns[f"contact_{leg}"] for leg in hx.LEGS], axis=1)[window] > 0.5
     assert value(r, "stance_loaded_fraction") == pytest.approx((loaded & planned).sum() / planned.sum(), abs=1e-12)
@@ -315,5 +318,5 @@ def test_the_cameras_near_plane_stays_at_the_robots_scale(overrides):
     """MuJoCo sizes a scene from its geoms: the 20 m kerb or floor ring made it 28-67 m and the renderer's near
     plane (znear x extent) 0.3-0.7 m, which cut away the ground in front of the chase camera (seen in a frame)."""
     model, _ = compiled(resolve(**overrides))
-    assert model.stat.extent == scenario.SCENE_EXTENT
+    assert model.stat.extent == hexabot_parameters.SCENE_EXTENT
     assert model.vis.map.znear * model.stat.extent <= 0.05  # [m]

@@ -10,16 +10,21 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from hexabot_sim import api, registry, video
 from hexabot_sim import params as params_mod
+from hexabot_sim import registry, video
 from hexabot_sim.cli.common import COMPLETED, DONE_SO_FAR, PROG, eprint
 from hexabot_sim.cli.progress import ProgressBar
 from hexabot_sim.errors import OutputError, UsageError
 
+if TYPE_CHECKING:  # the API imports MuJoCo, whose OpenGL backend each command chooses first
+    from hexabot_sim import api
+
 
 def cmd_list() -> int:
+    from hexabot_sim import api
+
     for scenario in api.scenarios().values():
         print(f"{scenario.name}\n  {scenario.summary}")
         rows = []
@@ -95,13 +100,15 @@ def cmd_run(args: argparse.Namespace) -> int:
     registry.get(args.scenario)
     layers = _layers(args)
 
-    from hexabot_sim import output
+    from hexabot_sim import gl
 
-    # The OpenGL backend must be chosen before MuJoCo is imported (scenario modules import it).
-    backend, no_video_reason = None, output.NOT_REQUESTED
+    # The OpenGL backend must be chosen before MuJoCo is imported (the API and the scenarios import it).
+    backend, no_video_reason = None, video.NOT_REQUESTED
     settings = video.VideoSettings(*args.size, fps=args.fps, quality=args.quality) if args.video else None
     if settings is not None:
-        backend, no_video_reason = api.video_backend(announce=lambda notice: eprint(f"{PROG}: {notice}"))
+        backend, no_video_reason = gl.video_backend(announce=lambda notice: eprint(f"{PROG}: {notice}"))
+    from hexabot_sim import api, output
+
     prepared = api.prepare(args.scenario, *layers)
     if settings is not None:
         video.check_cost(settings, getattr(prepared.params, "duration", None))
@@ -192,7 +199,7 @@ def cmd_clean(args: argparse.Namespace) -> int:
 
 def cmd_view(args: argparse.Namespace) -> int:
     """`view NAME` (live) or `view RUN_DIR` (replay) in MuJoCo's viewer: a window, so GLFW and a display."""
-    from hexabot_sim import gl, viewer
+    from hexabot_sim import api, gl, viewer
 
     folder = Path(args.target)
     replaying = folder.is_dir() or os.sep in args.target or args.target in (".", "..")

@@ -29,7 +29,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         output.check_not_input(args.out, [args.config] if args.config is not None else [])
         output.check_out(args.out, force=args.force)
     if args.scheduler is not None:
-        executors: Any = dask_cluster.dask_executor(args.scheduler)  # connects now: an unreachable scheduler writes nothing
+        # Connects now: an unreachable scheduler writes nothing.
+        executors: Any = dask_cluster.dask_executor(args.scheduler)
     else:
         workers = min(args.workers or pool.workers_default(), len(plan.cells))
         sweep.check_cost(plan, workers, f"{workers} local process{'es' if workers > 1 else ''}")

@@ -1,0 +1,237 @@
+"""The walking hexabot's figures: path, gait diagram, velocity, body attitude, slip, terrain."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from hexabot_sim.kinematics import hexabot as hx
+from hexabot_sim.kinematics.hexabot_terrain import Terrain
+from hexabot_sim.result import ScenarioResult
+from hexabot_sim.robots.hexabot.metrics import Contacts
+from hexabot_sim.robots.hexabot.parameters import LAYOUT, SETTLE_TIME, walking_direction
+
+LEG_COLOURS = {
+    "lf": "tab:blue",
+    "lm": "tab:orange",
+    "lr": "tab:green",
+    "rf": "tab:red",
+    "rm": "tab:purple",
+    "rr": "tab:brown",
+}
+
+
+def _title(result: ScenarioResult, text: str) -> str:
+    p = result.params
+    return (
+        f"{result.scenario}: {text}\n{p.gait} gait, period {p.period:g} s, command vx {p.vx:g} m/s, "
+        f"vy {p.vy:g} m/s, yaw rate {p.yaw_rate:g} rad/s"
+    )
+
+
+def _moving_mean(values: np.ndarray, n: int) -> np.ndarray:
+    """Centred moving mean over n samples (edges: shorter windows)."""
+    n = max(1, min(n, len(values)))
+    kernel = np.ones(n)
+    return np.convolve(values, kernel, "same") / np.convolve(np.ones_like(values), kernel, "same")
+
+
+def figures(result: ScenarioResult) -> dict[str, Any]:
+    """Path with footprints, gait diagram, commanded vs achieved velocity, body height and attitude, foot slip."""
+    from hexabot_sim import plots
+
+    p, c = result.params, result.columns
+    contacts: Contacts = result.extras["contacts"]
+    t = c["t"]
+    out: dict[str, Any] = {}
+
+    # Path seen from above, with the footprints (where each foot touched down) and the heading.
+    points = np.concatenate([np.c_[c["x"], c["y"]], contacts.point[..., :2].reshape(-1, 2)])
+    points = points[np.isfinite(points).all(axis=1)]
+    span_x, span_y = np.ptp(points, axis=0) + 0.1
+    height = float(np.clip(7.0 * span_y / span_x, 3.0, 8.0))  # equal axes, a frame that fits the walk
+    fig, ax = plots.figure(figsize=(10, height + 1.2))
+    ax.plot(c["x"], c["y"], color="k", lw=1.5, label="body (plate centre)")
+    loaded = np.stack([c[f"contact_{leg}"] for leg in hx.LEGS], axis=1) > 0.5
+    for i, leg in enumerate(hx.LEGS):
+        down = np.flatnonzero(np.diff(loaded[:, i].astype(int)) == 1) + 1
+        pts = contacts.point[down, i]
+        ax.plot(pts[:, 0], pts[:, 1], "o", ms=3.5, mfc="none", color=LEG_COLOURS[leg], label=f"{leg} touchdowns")
+    every = max(1, round(p.period / p.timestep))
+    heading = c["yaw"][::every]
+    ax.quiver(
+        c["x"][::every], c["y"][::every], np.cos(heading), np.sin(heading),
+        angles="xy", scale_units="xy", scale=12, width=0.004, color="0.4", label="heading (every period)",
+    )  # fmt: skip
+    ax.plot(c["x"][0], c["y"][0], "g^", ms=9, label="start")
+    ax.plot(c["x"][-1], c["y"][-1], "rs", ms=8, label="end")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.margins(0.03)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(True, alpha=0.3)
+    plots.legend_right(ax)
+    fig.suptitle(_title(result, "path seen from above"), fontsize=plots.TITLE_FONTSIZE)
+    out["path"] = fig
+
+    # Gait diagram: measured stance (loaded foot) as bars, the plan as thin lines, over four cycles.
+    planned = result.extras["planned_stance"]
+    start = SETTLE_TIME + 2 * p.period
+    show = (t >= start) & (t <= start + 4 * p.period)
+    if not show.any():
+        show = t >= 0
+    fig, ax = plots.figure(figsize=(9, 4.5))
+    for i, leg in enumerate(hx.LEGS):
+        y = len(hx.LEGS) - 1 - i
+        ts = t[show]
+        ax.fill_between(ts, y - 0.35, y + 0.35, where=loaded[show, i], step="post", color=LEG_COLOURS[leg], alpha=0.8,
+                        label="stance (foot loaded)" if i == 0 else None)  # fmt: skip
+        ax.fill_between(ts, y + 0.38, y + 0.45, where=planned[show, i], step="post", color="k",
+                        label="planned stance" if i == 0 else None)  # fmt: skip
+    ax.set_yticks(range(len(hx.LEGS)), list(reversed(hx.LEGS)))
+    ax.set_xlabel("t [s]")
+    ax.set_xlim(t[show][0], t[show][-1])
+    plots.legend_above(ax, ncol=2)
+    fig.suptitle(_title(result, "gait diagram (bars: measured stance; black: plan)"), fontsize=plots.TITLE_FONTSIZE)
+    out["gait_diagram"] = fig
+
+    # Commanded vs achieved body velocity (body frame), raw and averaged over one gait period.
+    fig, axes = plots.figure(3, 1, figsize=(9, 8), sharex=True)
+    n = max(1, round(p.period / p.timestep))
+    for ax, key, cmd, label, unit in (
+        (axes[0], "vx_body", "cmd_vx", "forward speed", "m/s"),
+        (axes[1], "vy_body", "cmd_vy", "sideways speed", "m/s"),
+        (axes[2], "yaw_rate", "cmd_yaw_rate", "yaw rate", "rad/s"),
+    ):
+        ax.plot(t, c[key], color="0.75", lw=0.6, label="measured")
+        ax.plot(t, _moving_mean(c[key], n), color="tab:blue", lw=1.5, label="measured, mean over one period")
+        ax.plot(t, c[cmd], **plots.TARGET_STYLE, label="command (with ramp and heading hold)")
+        ax.set_ylabel(f"{label} [{unit}]")
+        ax.grid(True, alpha=0.3)
+    plots.legend_above(axes[0])
+    axes[-1].set_xlabel("t [s]")
+    fig.suptitle(_title(result, "commanded vs achieved velocity (body frame)"), fontsize=plots.TITLE_FONTSIZE)
+    out["velocity"] = fig
+
+    # Body height and attitude.
+    fig, axes = plots.figure(2, 1, figsize=(9, 6), sharex=True)
+    planned_h = (p.stand_height + LAYOUT.foot_radius) * 1000
+    axes[0].plot(t, c["z"] * 1000, color="tab:blue", label="body height")
+    axes[0].axhline(planned_h, **plots.TARGET_STYLE, label="planned height")
+    axes[0].set_ylabel("height [mm]")
+    plots.plain(axes[0])
+    plots.min_span(axes[0], 2.0)
+    axes[1].plot(t, np.degrees(c["roll"]), label="roll")
+    axes[1].plot(t, np.degrees(c["pitch"]), label="pitch")
+    axes[1].set_ylabel("attitude [deg]")
+    plots.min_span(axes[1], 0.5)
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+        plots.legend_right(ax)
+    axes[-1].set_xlabel("t [s]")
+    fig.suptitle(_title(result, "body height and attitude"), fontsize=plots.TITLE_FONTSIZE)
+    out["body"] = fig
+
+    # Foot slip: contact-point speed of the loaded feet.
+    fig, ax = plots.figure(figsize=(9, 4.5))
+    for i, leg in enumerate(hx.LEGS):
+        slip = np.where(loaded[:, i], contacts.slip[:, i] * 1000, np.nan)
+        ax.plot(t, slip, lw=0.8, color=LEG_COLOURS[leg], label=leg)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("contact-point speed while loaded [mm/s]")
+    ax.grid(True, alpha=0.3)
+    plots.legend_right(ax)
+    m = result.metrics
+    fig.suptitle(
+        _title(
+            result,
+            f"foot slip: mean {m['slip_mean'].value * 1000:.3g} mm/s, {m['slip_per_stance'].value:.3g} mm per stance",
+        ),
+        fontsize=plots.TITLE_FONTSIZE,
+    )
+    out["slip"] = fig
+    ground: Terrain = result.extras["terrain"]
+    if not ground.flat:
+        out["terrain"] = _terrain_figure(result, ground)
+    return out
+
+
+def _foot_centres(result: ScenarioResult, every: int) -> tuple[np.ndarray, np.ndarray]:
+    """Rows (k,) of the recording, one in `every`, and the world position of each foot centre there (k, 6, 3)."""
+    model, traj = result.model, result.trajectory
+    data = mujoco.MjData(model)
+    sites = [model.site(f"{leg}_foot").id for leg in hx.LEGS]
+    rows = np.arange(0, len(traj.t), every)
+    feet = np.empty((len(rows), 6, 3))
+    for k, row in enumerate(rows):
+        data.qpos[:] = traj.qpos[row]
+        mujoco.mj_kinematics(model, data)
+        feet[k] = data.site_xpos[sites]
+    return rows, feet
+
+
+def _terrain_figure(result: ScenarioResult, ground: Terrain) -> Any:
+    """Side view: the ground under the body and the body's height; per leg, the ground along that foot's own track,
+    the sole's path over it and the touchdowns (contact points), so every point is drawn over the ground under it."""
+    from hexabot_sim import plots
+
+    p, c = result.params, result.columns
+    contacts: Contacts = result.extras["contacts"]
+    t = c["t"]
+    # Horizontal axis: distance along the commanded direction for a straight walk, else time.
+    straight = math.hypot(p.vx, p.vy) > 0 and p.yaw_rate == 0
+    along = walking_direction(p)
+
+    def axis(xy: np.ndarray, times: np.ndarray) -> np.ndarray:
+        return xy @ along if straight else times
+
+    rows, feet = _foot_centres(result, max(1, round(0.01 / p.timestep)))  # every 10 ms
+    r = LAYOUT.foot_radius
+    fig, axes = plots.figure(
+        1 + len(hx.LEGS), 1, figsize=(10, 11), sharex=True, gridspec_kw={"height_ratios": [1.6] + [1.0] * 6}
+    )
+    ax = axes[0]
+    s_body = axis(np.c_[c["x"], c["y"]], t)
+    under = ground.height(c["x"], c["y"]) * 1000
+    floor = float(min(under.min(), (feet[..., 2].min() - r) * 1000)) - 15.0  # [mm] bottom of the ground fill
+    ax.fill_between(s_body, under, floor, color="0.82", label="ground under the body")
+    ax.plot(s_body, c["z"] * 1000, color="k", lw=1.2, label="body origin (plate centre)")
+    ax.set_ylabel("height [mm]")
+    plots.legend_above(ax, ncol=2)
+    loaded = np.stack([c[f"contact_{leg}"] for leg in hx.LEGS], axis=1) > 0.5
+    low, high = np.inf, -np.inf
+    for i, leg in enumerate(hx.LEGS):
+        ax = axes[1 + i]
+        s_foot = axis(feet[:, i, :2], t[rows])
+        g = ground.height(feet[:, i, 0], feet[:, i, 1]) * 1000
+        sole = (feet[:, i, 2] - r) * 1000
+        ax.plot(s_foot, g, color="0.35", lw=1.6, label="ground under the foot (along its own track)")
+        ax.plot(s_foot, sole, color=LEG_COLOURS[leg], lw=0.8, label="sole (foot centre - radius)")
+        down = np.flatnonzero(np.diff(loaded[:, i].astype(int)) == 1) + 1
+        pts = contacts.point[down, i]
+        ok = np.isfinite(pts).all(axis=1)
+        ax.plot(axis(pts[ok, :2], t[down][ok]), pts[ok, 2] * 1000, "o", ms=4, mfc=LEG_COLOURS[leg], mec="k", mew=0.5,
+                label="touchdown (contact point)")  # fmt: skip
+        ax.set_ylabel(f"{leg} [mm]")
+        low, high = min(low, g.min(), sole.min()), max(high, g.max(), sole.max())
+        ax.grid(True, alpha=0.3)
+    margin = 0.05 * (high - low) + 2.0
+    for ax in axes[1:]:
+        ax.set_ylim(low - margin, high + margin)
+    axes[0].grid(True, alpha=0.3)
+    plots.legend_above(axes[1], ncol=3)
+    axes[-1].set_xlabel("distance along the commanded direction [m]" if straight else "t [s]")
+    if p.slope_deg:
+        kind = f"{p.slope_deg:g} deg slope ({p.slope_heading})"
+    elif p.roughness:
+        kind = f"roughness {p.roughness * 1000:g} mm, seed {p.seed}"
+    else:
+        kind = f"{p.kerb_height * 1000:g} mm kerb at {p.kerb_distance:g} m"
+    fig.suptitle(
+        _title(result, f"terrain: {kind}, touchdown {p.touchdown}, level_body {p.level_body}"),
+        fontsize=plots.TITLE_FONTSIZE,
+    )
+    return fig

@@ -1,0 +1,316 @@
+"""What a hexabot walk measured: speed, drift, slip, attitude, contacts and terrain figures of merit."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import mujoco
+import numpy as np
+
+from hexabot_sim.control.hexabot import HexabotController
+from hexabot_sim.kinematics import hexabot as hx
+from hexabot_sim.kinematics.hexabot_terrain import Terrain
+from hexabot_sim.result import Metric
+from hexabot_sim.robots.hexabot.parameters import (
+    FALL_TILT_DEG,
+    LAYOUT,
+    LOADED_FRACTION,
+    SETTLE_TIME,
+    TORQUE_LIMIT,
+    HexabotParams,
+    largest_climbable_kerb,
+    walking_direction,
+)
+
+
+def rpy_from_quat(quat: np.ndarray) -> np.ndarray:
+    """Roll, pitch, yaw (..., 3) [rad] (z-y-x Euler angles) of unit quaternions (..., 4) (w, x, y, z)."""
+    w, x, y, z = (quat[..., i] for i in range(4))
+    roll = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+    pitch = np.arcsin(np.clip(2 * (w * y - z * x), -1.0, 1.0))
+    yaw = np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return np.stack([roll, pitch, yaw], axis=-1)
+
+
+@dataclasses.dataclass(frozen=True)
+class Contacts:
+    """Per recorded row: foot loads, contact-point slip, joint torques, body-ground contact."""
+
+    load: np.ndarray  # (n, 6) normal force of each foot [N]
+    slip: np.ndarray  # (n, 6) horizontal speed of the foot's material point at its contact [m/s]
+    point: np.ndarray  # (n, 6, 3) contact point [m] (NaN where the foot is off the ground)
+    torque: np.ndarray  # (n, 18) joint actuator torque [N m]
+    body_contact: np.ndarray  # (n,) the plate touches the ground
+
+    def loaded(self, total_mass: float) -> np.ndarray:
+        """(n, 6) the feet that carry load: more than LOADED_FRACTION of a sixth of the robot's weight."""
+        return self.load > LOADED_FRACTION * total_mass * 9.81 / 6
+
+
+def replay_contacts(
+    model: mujoco.MjModel, t: np.ndarray, qpos: np.ndarray, qvel: np.ndarray, ctrl: np.ndarray
+) -> Contacts:
+    """Recomputes contacts, slip and torques at every recorded row with mj_forward (the recorded state in)."""
+    data = mujoco.MjData(model)
+    n = len(t)
+    foot_geoms = {model.geom(f"{leg}_foot").id: i for i, leg in enumerate(hx.LEGS)}
+    tibia = [model.body(f"{leg}_tibia").id for leg in hx.LEGS]
+    torso_geom = model.geom("torso").id
+    load = np.zeros((n, 6))
+    slip = np.zeros((n, 6))
+    point = np.full((n, 6, 3), np.nan)
+    torque = np.empty((n, 18))
+    body_contact = np.zeros(n, dtype=bool)
+    force = np.zeros(6)
+    jacp = np.zeros((3, model.nv))  # (3, nv)
+    for k in range(n):
+        data.qpos[:], data.qvel[:], data.ctrl[:] = qpos[k], qvel[k], ctrl[min(k + 1, n - 1)]
+        data.time = t[k]
+        mujoco.mj_forward(model, data)
+        torque[k] = data.qfrc_actuator[6:24]
+        for c in range(data.ncon):
+            contact = data.contact[c]
+            leg = foot_geoms.get(contact.geom1, foot_geoms.get(contact.geom2))
+            if contact.geom1 == torso_geom or contact.geom2 == torso_geom:
+                body_contact[k] = True
+            if leg is None:
+                continue
+            mujoco.mj_contactForce(model, data, c, force)
+            load[k, leg] += force[0]
+            # Velocity of the foot's material point at the contact: the tibia body's Jacobian at that point.
+            mujoco.mj_jac(model, data, jacp, None, contact.pos, tibia[leg])
+            v = jacp @ data.qvel
+            slip[k, leg] = math.hypot(v[0], v[1])
+            point[k, leg] = contact.pos
+    return Contacts(load=load, slip=slip, point=point, torque=torque, body_contact=body_contact)
+
+
+def steady_window(p: HexabotParams, t: np.ndarray) -> np.ndarray:
+    """Rows of the steady walk: after settling, the ramp and one more period, whole cycles to the end."""
+    start = SETTLE_TIME + 2 * p.period
+    cycles = math.floor((t[-1] - start) / p.period + 1e-9)
+    if cycles < 1:  # a short run: whatever follows the ramp
+        start, end = SETTLE_TIME + p.period, t[-1]
+    else:
+        end = start + cycles * p.period
+    return (t >= start - 1e-9) & (t <= end + 1e-9)
+
+
+# A ratio is reported only where its denominator is well above what it is measured against (else null, with why).
+# The standing robot creeps at ~0.05 mm/s and its body sways a few mm within every gait cycle, so a relative speed
+# error needs a command of at least 1 mm/s (1 mrad/s for turning), and a per-metre figure 0.1 m of travel.
+LEAST_SPEED: float = 1e-3  # [m/s] or [rad/s]
+
+LEAST_TRAVEL: float = 0.1  # [m]
+
+
+def _relative_error(measured: float, commanded: float) -> float | None:
+    return None if abs(commanded) < LEAST_SPEED else (measured - commanded) / abs(commanded)
+
+
+def _per_travel(amount: float, travelled: float) -> float | None:
+    return amount / travelled if travelled >= LEAST_TRAVEL else None
+
+
+def _null_why(metric: Metric, why: str) -> Metric:
+    """`metric` with the reason appended to its doc when its value is null."""
+    return metric if metric.value is not None else dataclasses.replace(metric, doc=f"{metric.doc}; null here: {why}")
+
+
+def walking_metrics(
+    p: HexabotParams, t: np.ndarray, qpos: np.ndarray, qvel: np.ndarray, contacts: Contacts, total_mass: float
+) -> dict[str, Metric]:
+    """The walking metrics of a run, from its recorded state and contacts."""
+    window = steady_window(p, t)
+    dt = p.timestep
+    rpy = rpy_from_quat(qpos[:, 3:7])
+    yaw = np.unwrap(rpy[:, 2])
+    w = np.flatnonzero(window)
+    i0, i1 = w[0], w[-1]
+    duration = t[i1] - t[i0]
+    # Body-frame velocity: world displacement over the window, rotated into the mean heading... per step.
+    vel_world = np.diff(qpos[:, :2], axis=0) / np.diff(t)[:, None]  # (n-1, 2)
+    mid_yaw = 0.5 * (yaw[1:] + yaw[:-1])
+    c, s = np.cos(mid_yaw), np.sin(mid_yaw)
+    v_body = np.stack([c * vel_world[:, 0] + s * vel_world[:, 1], -s * vel_world[:, 0] + c * vel_world[:, 1]], -1)
+    steps = slice(i0, i1)
+    mean_vx, mean_vy = (float(v) for v in v_body[steps].mean(axis=0))
+    mean_yaw_rate = float((yaw[i1] - yaw[i0]) / duration)
+    # Drift: along / across the commanded direction in the world, over the window.
+    disp = qpos[i1, :2] - qpos[i0, :2]
+    distance = float(np.hypot(*disp))
+    speed_cmd = math.hypot(p.vx, p.vy)
+    if speed_cmd > 0 and p.yaw_rate == 0:
+        heading0 = yaw[0]
+        along = np.array([p.vx, p.vy]) / speed_cmd
+        along = np.array([math.cos(heading0) * along[0] - math.sin(heading0) * along[1],
+                          math.sin(heading0) * along[0] + math.cos(heading0) * along[1]])  # fmt: skip
+        across = np.array([-along[1], along[0]])
+        path = qpos[i0 : i1 + 1, :2] - qpos[i0, :2]
+        travelled = float(path[-1] @ along)
+        lateral = float(path[-1] @ across)
+        lateral_drift = _per_travel(lateral, travelled)
+        heading_drift = _per_travel(float(np.degrees(yaw[i1] - yaw[i0])), travelled)
+        short = f"travelled {travelled:.3g} m along the command, under the {LEAST_TRAVEL:g} m a per-metre figure needs"
+    else:
+        lateral_drift = heading_drift = None
+        short = "not a straight walk (no speed commanded, or turning)"
+    slow = f"commanded under {LEAST_SPEED:g} (m/s or rad/s): the robot's own creep would dominate the ratio"
+    # Height and attitude.
+    height_cmd = p.stand_height + LAYOUT.foot_radius
+    z = qpos[window, 2]
+    roll, pitch = np.degrees(rpy[window, 0]), np.degrees(rpy[window, 1])
+    # Slip of loaded feet, per stance.
+    loaded = contacts.loaded(total_mass)
+    slip_loaded = contacts.slip[window][loaded[window]]
+    slip_distance = float((contacts.slip[window] * loaded[window]).sum() * dt)
+    touchdowns = int((np.diff(loaded[window].astype(int), axis=0) == 1).sum())
+    # Energy: positive and negative joint work both cost (hobby servos do not recover energy).
+    power = np.abs(contacts.torque * qvel[:, 6:24]).sum(axis=1)
+    work = float(power[window].sum() * dt)
+    tilt = np.degrees(np.arccos(np.clip(1 - 2 * (qpos[:, 4] ** 2 + qpos[:, 5] ** 2), -1.0, 1.0)))
+    fell = bool(contacts.body_contact.any() or (tilt > FALL_TILT_DEG).any())
+    peak_torque = float(np.abs(contacts.torque).max())
+    return {
+        "mean_vx": Metric(mean_vx, "m/s", "mean body-frame forward speed over the steady walk"),
+        "mean_vy": Metric(mean_vy, "m/s", "mean body-frame sideways speed over the steady walk"),
+        "mean_yaw_rate": Metric(mean_yaw_rate, "rad/s", "mean turning rate over the steady walk"),
+        "vx_error": _null_why(Metric(_relative_error(mean_vx, p.vx), "1", "(mean_vx - vx) / |vx|"), slow),
+        "vy_error": _null_why(Metric(_relative_error(mean_vy, p.vy), "1", "(mean_vy - vy) / |vy|"), slow),
+        "yaw_rate_error": _null_why(
+            Metric(_relative_error(mean_yaw_rate, p.yaw_rate), "1", "(mean_yaw_rate - yaw_rate) / |yaw_rate|"), slow
+        ),
+        "speed_abs_error": Metric(
+            float(math.hypot(mean_vx - p.vx, mean_vy - p.vy)), "m/s", "|mean planar velocity - command|"
+        ),
+        "distance": Metric(distance, "m", "straight-line distance covered over the steady walk"),
+        "lateral_drift": _null_why(
+            Metric(
+                None if lateral_drift is None else lateral_drift * 1000,
+                "mm/m",
+                "sideways deviation from the commanded direction per metre travelled (straight walks)",
+            ),
+            short,
+        ),
+        "heading_drift": _null_why(
+            Metric(heading_drift, "deg/m", "heading change per metre travelled (straight walks)"), short
+        ),
+        "body_height_mean": Metric(float(z.mean()), "m", "mean body height over the steady walk"),
+        "body_height_sag": Metric(float(height_cmd - z.mean()), "m", "planned body height minus the mean height"),
+        "body_height_ptp": Metric(float(np.ptp(z)), "m", "peak-to-peak body height over the steady walk"),
+        "roll_ptp": Metric(float(np.ptp(roll)), "deg", "peak-to-peak body roll over the steady walk"),
+        "pitch_ptp": Metric(float(np.ptp(pitch)), "deg", "peak-to-peak body pitch over the steady walk"),
+        "slip_mean": Metric(
+            float(slip_loaded.mean()) if slip_loaded.size else 0.0,
+            "m/s",
+            "mean speed of the loaded feet's contact points (material point of the foot)",
+        ),
+        "slip_p95": Metric(
+            float(np.percentile(slip_loaded, 95)) if slip_loaded.size else 0.0,
+            "m/s",
+            "95th percentile of the loaded feet's contact-point speed",
+        ),
+        "slip_per_stance": Metric(
+            slip_distance / touchdowns * 1000 if touchdowns else 0.0, "mm", "contact-point sliding distance per stance"
+        ),
+        "cost_of_transport": _null_why(
+            Metric(
+                work / (total_mass * 9.81 * distance) if distance >= LEAST_TRAVEL else None,
+                "1",
+                "joint work |tau dq| / (m g distance) over the steady walk",
+            ),
+            f"covered {distance:.3g} m, under the {LEAST_TRAVEL:g} m a per-distance figure needs",
+        ),
+        "peak_joint_torque": Metric(peak_torque, "N*m", "largest joint torque of the run"),
+        "torque_limit_fraction": Metric(
+            peak_torque / TORQUE_LIMIT, "1", f"peak_joint_torque / the {TORQUE_LIMIT} N*m limit"
+        ),
+        "fell": Metric(fell, "", f"the plate touched the ground or tilted beyond {FALL_TILT_DEG:g} deg"),
+    }
+
+
+TOUCHDOWN_TOLERANCE: float = 0.02  # [s] a touchdown further than this from the plan counts as early or late
+
+
+def terrain_metrics(
+    p: HexabotParams,
+    ground: Terrain,
+    t: np.ndarray,
+    qpos: np.ndarray,
+    controller: HexabotController,
+    bearing: np.ndarray,
+    planned: np.ndarray,
+) -> dict[str, Metric]:
+    """Attitude relative to gravity, height above the local ground, progress, touchdowns, levelling limits,
+    and how often the feet the plan has in stance (`planned`, (n, 6)) carry load (`bearing`: loaded and planned)."""
+    window = steady_window(p, t)
+    rpy = np.degrees(rpy_from_quat(qpos[window, 3:7]))  # z-y-x angles: roll and pitch are relative to gravity
+    roll, pitch = rpy[:, 0], rpy[:, 1]
+    above = qpos[window, 2] - ground.height(qpos[window, 0], qpos[window, 1])
+    w = np.flatnonzero(window)
+    i0, i1 = w[0], w[-1]
+    along = walking_direction(p)
+    made_good = float((qpos[i1, :2] - qpos[i0, :2]) @ along)
+    speed = math.hypot(p.vx, p.vy)
+    speed_made_good = made_good / (t[i1] - t[i0])
+    events = [e for e in getattr(controller, "events", []) if e.planned > SETTLE_TIME]
+    touched = np.array([e.touched - e.planned for e in events if math.isfinite(e.touched)])
+    updates = getattr(controller, "updates", 0)
+    bearing, planned = bearing[window], planned[window]
+    per_leg = bearing.sum(axis=0) / np.maximum(planned.sum(axis=0), 1)
+    return {
+        "roll_peak": Metric(float(np.abs(roll).max()), "deg", "largest |body roll| relative to gravity (steady walk)"),
+        "pitch_peak": Metric(float(np.abs(pitch).max()), "deg", "largest |body pitch| relative to gravity"),
+        "roll_rms": Metric(float(np.sqrt(np.mean(roll**2))), "deg", "RMS body roll relative to gravity"),
+        "pitch_rms": Metric(float(np.sqrt(np.mean(pitch**2))), "deg", "RMS body pitch relative to gravity"),
+        "height_above_ground_mean": Metric(
+            float(above.mean()), "m", "body origin above the ground straight under it (mean over the steady walk)"
+        ),
+        "height_above_ground_ptp": Metric(float(np.ptp(above)), "m", "peak-to-peak height above the local ground"),
+        "distance_made_good": Metric(
+            made_good, "m", "horizontal progress along the commanded direction over the steady walk"
+        ),
+        "speed_made_good": Metric(speed_made_good, "m/s", "distance_made_good / its time"),
+        "speed_made_good_error": _null_why(
+            Metric(_relative_error(speed_made_good, speed), "1", "(speed_made_good - |command|) / |command|"),
+            f"commanded under {LEAST_SPEED:g} m/s: the robot's own creep would dominate the ratio",
+        ),
+        "touchdowns": Metric(len(events), "1", "swings that ended after the settling time"),
+        "touchdown_error_mean": Metric(
+            float(touched.mean()) if touched.size else None, "s", "touch time - planned touchdown, mean"
+        ),
+        "touchdown_error_max": Metric(
+            float(np.abs(touched).max()) if touched.size else None, "s", "largest |touch time - planned touchdown|"
+        ),
+        "early_touchdowns": Metric(
+            int((touched < -TOUCHDOWN_TOLERANCE).sum()),
+            "1",
+            f"feet that touched more than {TOUCHDOWN_TOLERANCE * 1000:g} ms before the plan",
+        ),
+        "late_touchdowns": Metric(
+            int((touched > TOUCHDOWN_TOLERANCE).sum()),
+            "1",
+            f"feet that touched more than {TOUCHDOWN_TOLERANCE * 1000:g} ms after the plan",
+        ),
+        "feet_without_ground": Metric(
+            len(events) - int(touched.size), "1", "swings that found no ground by the end of the leg's reach"
+        ),
+        "stance_loaded_fraction": Metric(
+            float(bearing.sum() / max(planned.sum(), 1)),
+            "1",
+            f"share of the planned stance time in which the feet carry load (> {LOADED_FRACTION:g} of a sixth of "
+            "the weight), all feet",
+        ),
+        "stance_loaded_fraction_min": Metric(
+            float(per_leg.min()), "1", "stance_loaded_fraction of the foot that carries load least often"
+        ),
+        "level_clipped_fraction": Metric(
+            controller.clipped_updates / updates if updates else 0.0,
+            "1",
+            "fraction of stance-height updates clipped to the legs' workspace",
+        ),
+        "largest_climbable_kerb": Metric(
+            largest_climbable_kerb(p), "m", "highest kerb this gait can climb (step height and workspace)"
+        ),
+    }

@@ -1,0 +1,387 @@
+"""The walking hexabot's parameters and what it can walk: ranges, gait feasibility, terrain refusals."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+
+from hexabot_sim.control.gait import GAITS, Command, Gait, GaitPlanner
+from hexabot_sim.kinematics import hexabot as hx
+from hexabot_sim.kinematics.hexabot_terrain import HFIELD_CELL, HFIELD_MARGIN, HFIELD_MAX_POINTS, Terrain
+from hexabot_sim.params import check_run_cost, param
+from hexabot_sim.simulate import step_count
+
+INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")
+
+LAYOUT = hx.DEFAULT_LAYOUT
+
+SETTLE_TIME: float = 0.5  # [s] standing on the neutral stance before the gait clock starts
+
+SPEED_MARGIN: float = 0.9  # planned joint speeds must stay below this fraction of max_joint_speed
+
+LOADED_FRACTION: float = 0.05  # a foot counts as loaded above this fraction of the robot's weight
+
+TORQUE_LIMIT: float = 1.5  # [N m] the joints' actuatorfrcrange (models/hexabot.xml)
+
+CSV_COLUMNS: int = 37  # columns of timeseries.csv
+
+# Cost of a run for params.check_run_cost, measured on the 2-core development machine (10 s vs 60 s
+# walks): seconds per physics step (controller + mj_step: 25 us in bench.py, with a margin for a loaded
+# machine), seconds per recorded row (contact replay, derived columns; the CSV is counted apart), peak
+# bytes per recorded row.
+RUN_COST: tuple[float, float, float] = (30e-6, 40e-6, 2000.0)
+
+# Seconds per physics step with terrain or the ground-finding controller (rough ground: 42-44 us in bench.py).
+TERRAIN_STEP_SECONDS: float = 50e-6
+
+KERB_PLATE_CLEARANCE: float = 0.005  # [m] a kerb stays this far below the plate's underside at the stand height
+
+MEASURE_TIME: float = 0.1  # [s] shortest walk after the ramp that the metrics are measured over
+
+FALL_TILT_DEG: float = 45.0  # body tilt beyond which the robot has fallen over
+
+# NoSlip iterations on uneven ground. MuJoCo's soft friction lets a foot under a steady tangential
+# load creep: the standing robot slid down a 10 deg slope at 0.9-1.8 mm/s with the defaults. Two
+# NoSlip passes (MuJoCo's remedy for slow slippage, run after the main solve) bring that to 0.005 mm/s
+# and 0.001-0.004 mm/s on 1 cm rough ground; impratio=100 did it too (0.009 mm/s) but its elliptic
+# cones took 6.7 Newton iterations and 73 line searches a step: bare mj_step 69 us on rough ground
+# against 31.5 us with NoSlip (median of 15 walks, 3 gaits x 5 seeds). The flat floor keeps the
+# defaults (its published results were measured with them; there is no steady tangential load there).
+TERRAIN_NOSLIP_ITERATIONS: int = 2
+
+SCENE_EXTENT: float = 2.0  # [m] <statistic extent> of a scene with terrain (what MuJoCo computes for the flat one)
+
+SLOPE_CAMERA_DISTANCE: float = 0.9  # [m] the slope video's camera: beside the body, across the slope
+
+SLOPE_CAMERA_HEIGHT: float = 0.08  # [m] above the body's centre of mass (low: the ground's tilt shows)
+
+# Limit on the commanded joint acceleration (resolved-rate step). It smooths what the position feedback
+# asks when a foot is stopped short (a kerb's edge, a bump): with 400 rad/s^2 the 3 cm kerb walk stumbled
+# (16 deg of roll), with 200 it climbs. But it must never clip the gait's own plan: the wave gait's 1/6-period
+# swing needs 266 rad/s^2 at 0.05 m/s and 364 at 0.095 m/s (period 1 s). Clipped at 200, the wave at
+# 0.095 m/s lost 5.0 % of its speed on flat ground (-0.6 % unclipped), and 6.8..8.5 % with up to 2.8 deg of
+# pitch on 1 cm rough ground (-2.0..-3.6 %, <= 1.2 deg unclipped; measured). A servo's 1.5 N*m gives a swinging leg
+# 336, 414 and 479 rad/s^2 (coxa, femur, tibia: torque over the mass-matrix diagonal, armature included).
+ACCELERATION_LIMIT: float = 200.0  # [rad/s^2] the limit, unless the planned cycle needs more
+
+ACCELERATION_HEADROOM: float = 1.2  # the limit is at least this times the planned cycle's peak joint acceleration
+
+
+@dataclasses.dataclass(frozen=True)
+class HexabotParams:
+    """Parameters of the walking-hexabot scenarios (body frame: x forward, y left, z up)."""
+
+    gait: str = param("tripod", "", "which legs swing when", choices=tuple(GAITS))
+    vx: float = param(0.1, "m/s", "commanded forward speed", ge=-1.0, le=1.0, typo=("mm/s", 1e-3))
+    vy: float = param(0.0, "m/s", "commanded sideways speed (left positive)", ge=-1.0, le=1.0, typo=("mm/s", 1e-3))
+    yaw_rate: float = param(0.0, "rad/s", "commanded turning rate (counter-clockwise positive)", ge=-3.0, le=3.0)
+    period: float = param(1.0, "s", "gait cycle: every leg swings once per period", ge=0.2, le=10.0)
+    duty: float = param(0.0, "1", "stance fraction of the cycle; 0 = the gait's own (1/2, 2/3, 5/6)", ge=0.0, lt=1.0)
+    step_height: float = param(0.03, "m", "foot lift at mid-swing", ge=0.002, le=0.1, typo=("mm", 1e-3))
+    stand_height: float = param(
+        0.09, "m", "foot depth below the hips while standing (body height - foot radius)", ge=0.02, le=0.19,
+        typo=("mm", 1e-3),
+    )  # fmt: skip
+    friction: float = param(1.0, "1", "foot-floor friction coefficient", ge=0.05, le=3.0)
+    heading_hold: str = param("off", "", "correct the yaw rate from the IMU's heading", choices=("off", "on"))
+    trim_error_deg: float = param(0.0, "deg", "servo zero errors, uniform in +-this (seeded)", ge=0.0, le=10.0)
+    com_offset: float = param(
+        0.0, "m", "centre-of-mass offset of the body, in a seeded direction", ge=0.0, le=0.05, typo=("mm", 1e-3)
+    )
+    friction_spread: float = param(0.0, "1", "foot friction varies by +-this fraction (seeded)", ge=0.0, le=0.9)
+    seed: int = param(0, "1", "random seed of the perturbations and of the rough terrain", ge=0, le=2**32 - 1)
+    max_joint_speed: float = param(
+        10.0, "rad/s", "joint speed limit (a standard digital hobby servo: 0.1 s/60 deg)", gt=0.0, le=50.0
+    )
+    task_gain: float = param(50.0, "1/s", "K: feedback on each foot's position error", ge=0.0, le=200.0)
+    duration: float = param(20.0, "s", "simulated time", gt=0.0, le=3600.0)
+    timestep: float = param(
+        0.002, "s", "physics and control step (the feet's contact time constant is 6 ms)", ge=1e-4, le=0.002
+    )
+    integrator: str = param("implicitfast", "", "MuJoCo integrator", choices=INTEGRATORS)
+    slope_deg: float = param(0.0, "deg", "floor tilt (0: flat)", ge=0.0, le=45.0)
+    slope_heading: str = param(
+        "uphill", "", "the walking direction relative to the slope", choices=("uphill", "downhill", "across")
+    )
+    roughness: float = param(
+        0.0, "m", "peak height of a seeded heightfield of ~5 cm bumps (0: none)", ge=0.0, le=0.05, typo=("mm", 1e-3)
+    )
+    kerb_height: float = param(
+        0.0, "m", "a step up across the path (0: none)", ge=0.0, le=0.1, typo=("mm", 1e-3)
+    )  # fmt: skip
+    kerb_distance: float = param(0.5, "m", "distance of the kerb's edge ahead of the start", ge=0.3, le=100.0)
+    touchdown: str = param(
+        "planned", "", "swing ends at the planned phase, or when the foot's touch sensor fires (sensed)",
+        choices=("planned", "sensed"),
+    )  # fmt: skip
+    level_body: str = param("off", "", "keep the body level from the IMU (on) or follow the ground (off)",
+                            choices=("off", "on"))  # fmt: skip
+
+    def __post_init__(self) -> None:
+        if self.duty and not self.gait_duty_range()[0] <= self.duty < 1.0:
+            lo = self.gait_duty_range()[0]
+            raise ValueError(
+                f"parameter 'duty' for the {self.gait} gait must be {allowed(lo, 'up')} to < 1 (or 0); got {self.duty}"
+            )
+        shortest = SETTLE_TIME + self.period + MEASURE_TIME
+        if self.duration < shortest - 1e-9:
+            raise ValueError(
+                f"parameter 'duration' must be at least the settling time, one period (the ramp) and "
+                f"{MEASURE_TIME:g} s to measure the walk: {shortest:.15g} s; got {self.duration}"
+            )
+        n = step_count(self.duration, self.timestep)
+        step_s, row_s, row_bytes = RUN_COST
+        if self.on_ground() or self.slope_deg or self.roughness or self.kerb_height:
+            step_s = TERRAIN_STEP_SECONDS
+        check_run_cost(n, n + 1, CSV_COLUMNS, step_s, row_s, row_bytes, "lower 'duration' or raise 'timestep'")
+        problem = feasibility(self)
+        if problem:
+            raise ValueError(problem)
+        problem = terrain_problem(self)
+        if problem:
+            raise ValueError(problem)
+
+    def gait_duty_range(self) -> tuple[float, float]:
+        """Smallest duty that keeps the robot statically supported with this gait's phase pattern."""
+        base = GAITS[self.gait].duty
+        return base, 1.0
+
+    def the_gait(self) -> Gait:
+        g = GAITS[self.gait]
+        return g if not self.duty else dataclasses.replace(g, duty=self.duty)
+
+    def command(self) -> Command:
+        return Command(self.vx, self.vy, self.yaw_rate)
+
+    def on_ground(self) -> bool:
+        """The run uses the ground-finding controller (sensed touchdown or a levelled body)."""
+        return self.touchdown == "sensed" or self.level_body == "on"
+
+
+def neutral(p: HexabotParams) -> np.ndarray:
+    """Neutral foot centres (6, 3) in the body frame for the run's stand height."""
+    layout = dataclasses.replace(LAYOUT, stand_height=p.stand_height)
+    return layout.neutral_feet_body()
+
+
+def _plan_cycle(p: HexabotParams, cmd: Command, samples: int = 240) -> tuple[np.ndarray, float]:
+    """Targets (n, 6, 3) in the hip frames over two steady gait cycles, and their time step."""
+    dt = p.period / samples
+    planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), dt)
+    chunks = [planner.plan(cmd, planner.max_chunk)]
+    while planner.time < 3 * p.period - 1e-9:
+        chunks.append(planner.plan(cmd, planner.max_chunk)[1:])
+    body = np.concatenate(chunks)[int(samples * 1.0) :]  # drop the first cycle (start-up from neutral)
+    hip = np.einsum("lji,klj->kli", LAYOUT.hip_rotations(), body - LAYOUT.hip_positions())
+    return hip, dt
+
+
+# _cycle_problem's answers by what the cycle depends on: a sweep checks each gait for each of its other values.
+_CYCLE_PROBLEMS: dict[tuple[Any, ...], str] = {}
+
+CYCLE_CACHE_SIZE: int = 1 << 14
+
+
+def _cycle_problem(p: HexabotParams, cmd: Command) -> str:
+    """'' if every leg can follow the planned cycle, else why not (reach, joint range or joint speed)."""
+    key = (p.gait, p.duty, p.period, p.step_height, p.stand_height, p.max_joint_speed, cmd)
+    problem = _CYCLE_PROBLEMS.get(key)
+    if problem is None:
+        if len(_CYCLE_PROBLEMS) >= CYCLE_CACHE_SIZE:
+            _CYCLE_PROBLEMS.clear()
+        problem = _CYCLE_PROBLEMS[key] = _cycle_problem_computed(p, cmd)
+    return problem
+
+
+def _cycle_problem_computed(p: HexabotParams, cmd: Command) -> str:
+    hip, dt = _plan_cycle(p, cmd)
+    q, ok = hx.ik_hip_batch(LAYOUT, hip)
+    if not ok.all():
+        leg = hx.LEGS[int(np.argwhere(~ok)[0][1])]
+        return f"foot {leg} would leave its reachable workspace or joint ranges"
+    speed = np.abs(np.diff(q, axis=0)).max() / dt
+    if speed > SPEED_MARGIN * p.max_joint_speed:
+        return f"joints would turn at {speed:.3g} rad/s, above {SPEED_MARGIN:g} x max_joint_speed"
+    return ""
+
+
+def apart(value: float, bound: float, toward: str) -> tuple[str, str]:
+    """`value` and `allowed(bound, toward)` with as many digits as it takes for the two texts to differ
+    ("a 32.004 mm kerb is above the largest climbable, 32.003 mm", not "32 mm ... 32 mm")."""
+    for digits in range(3, 18):
+        shown, limit = f"{value:.{digits}g}", allowed(bound, toward, digits)
+        if float(shown) != float(limit):
+            return shown, limit
+    return f"{value!r}", allowed(bound, toward, 17)
+
+
+def allowed(value: float, toward: str, digits: int = 3) -> str:
+    """`value` to 3 significant digits, rounded so the printed number is itself allowed: "up" for a lower
+    bound, "down" for an upper bound, "zero" for the largest magnitude in a direction (0.8333 printed as
+    0.833 was refused as below the wave's smallest duty, 5/6)."""
+    if value == 0 or not math.isfinite(value):
+        return f"{value:.{digits}g}"
+    scale = 10.0 ** (math.floor(math.log10(abs(value))) - (digits - 1))
+    q = value / scale
+    rounded = {"up": math.ceil(q - 1e-9), "down": math.floor(q + 1e-9), "zero": math.trunc(q)}[toward]
+    return f"{rounded * scale:.{digits}g}"
+
+
+def feasibility(p: HexabotParams) -> str:
+    """'' if the legs can deliver the command, else a one-line reason with the largest feasible command."""
+    if not math.isfinite(p.vx + p.vy + p.yaw_rate):
+        return "vx, vy and yaw_rate must be finite"
+    standing = _cycle_problem(p, Command())
+    if standing:
+        faster = " (or raise 'max_joint_speed')" if standing.startswith("joints would turn") else ""
+        return (
+            f"even stepping in place is infeasible with the {p.gait} gait at period {p.period:g} s "
+            f"(stand_height {p.stand_height:g} m, step_height {p.step_height:g} m): {standing}; "
+            f"lengthen 'period' or lower 'step_height'{faster}"
+        )
+    cmd = p.command()
+    problem = _cycle_problem(p, cmd)
+    if not problem:
+        return ""
+    lo, hi = 0.0, 1.0  # bisect the largest feasible fraction of the command
+    for _ in range(30):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if not _cycle_problem(p, cmd.scaled(mid)) else (lo, mid)
+    best = cmd.scaled(lo)
+    named = (("vx", best.vx, "m/s"), ("vy", best.vy, "m/s"), ("yaw_rate", best.yaw_rate, "rad/s"))
+    parts = [f"{name} = {allowed(value, 'zero')} {unit}" for name, value, unit in named if value]
+    duty = p.the_gait().duty
+    stride = math.hypot(p.vx, p.vy) * duty * p.period
+    if problem.startswith("joints would turn"):
+        # The swing covers the stance's stride in (1 - duty) / duty of its time, whatever the period.
+        advice = (
+            f"the {p.gait} gait's swing moves the foot over the ground {duty / (1 - duty):.2g}x as fast as the body at "
+            "any period (a longer one only slows the lift): a gait with less stance is faster"
+            + (" (ripple, tripod)" if p.gait == "wave" else " (tripod)" if p.gait == "ripple" else "")
+        )
+    else:
+        advice = "a shorter 'period' shortens the stride"
+    return (
+        f"the legs cannot deliver this command at period {p.period:g} s (stride {stride:.3g} m): {problem}; "
+        f"the largest feasible in this direction is {', '.join(parts) or 'standing still'}; {advice}"
+    )
+
+
+def walking_direction(p: HexabotParams) -> np.ndarray:
+    """Horizontal unit vector (2,) of the commanded walk in the world at the start (+x when standing or turning)."""
+    speed = math.hypot(p.vx, p.vy)
+    return np.array([p.vx, p.vy]) / speed if speed > 0 else np.array([1.0, 0.0])
+
+
+def terrain(p: HexabotParams) -> Terrain:
+    """The run's ground: slope direction from the walking direction, heightfield over the walk's area."""
+    along = walking_direction(p)
+    uphill = {"uphill": along, "downhill": -along, "across": np.array([-along[1], along[0]])}[p.slope_heading]
+    speed = math.hypot(p.vx, p.vy)
+    if p.yaw_rate:  # an arc (or turning on the spot): a box about the start holding the circle
+        half = min(speed * p.duration, 2 * speed / abs(p.yaw_rate)) + HFIELD_MARGIN
+        extent = (-half, half, -half, half)
+    else:
+        end = np.array([p.vx, p.vy]) * p.duration
+        extent = (
+            min(0.0, end[0]) - HFIELD_MARGIN, max(0.0, end[0]) + HFIELD_MARGIN,
+            min(0.0, end[1]) - HFIELD_MARGIN, max(0.0, end[1]) + HFIELD_MARGIN,
+        )  # fmt: skip
+    extent = tuple(round(v / HFIELD_CELL) * HFIELD_CELL for v in extent)
+    return Terrain(
+        slope_deg=p.slope_deg, uphill=(float(uphill[0]), float(uphill[1])), roughness=p.roughness, seed=p.seed,
+        extent=extent, kerb_height=p.kerb_height, kerb_distance=p.kerb_distance,
+        along=(float(along[0]), float(along[1])),
+    )  # fmt: skip
+
+
+def depth_range(p: HexabotParams) -> tuple[float, float]:
+    """(smallest, largest) depth [m] of the stance feet below the hips that keeps every planned target reachable.
+
+    The steady cycle of the command (stance and swing, with the lift) is shifted up and down as a whole:
+    the stance depth may move by as much as every target of the cycle stays inside the reach and the
+    joint ranges (bisection to 0.1 mm).
+    """
+    hip, _ = _plan_cycle(p, p.command())
+
+    def ok(shift: float) -> bool:
+        shifted = hip.copy()
+        shifted[..., 2] += shift
+        return bool(hx.ik_hip_batch(LAYOUT, shifted)[1].all())
+
+    limits = []
+    for sign in (1.0, -1.0):
+        lo, hi = 0.0, p.stand_height + 0.2
+        while hi - lo > 1e-4:
+            mid = (lo + hi) / 2
+            lo, hi = (mid, hi) if ok(sign * mid) else (lo, mid)
+        limits.append(lo)
+    return p.stand_height - limits[0], p.stand_height + limits[1]
+
+
+def largest_climbable_kerb(p: HexabotParams) -> float:
+    """Highest kerb [m] the walk can climb: a swing clears it and the legs can hold the cycle raised by it.
+
+    Clearing: the foot lifts step_height above the ground it left, and its centre must pass the kerb's
+    edge at least a foot radius above it (measured: a 30 mm kerb with step_height 0.03 m made the
+    robot stumble, 15 deg of roll; with 0.04 m it walked up cleanly). Holding: the whole planned cycle
+    raised by the kerb height stays inside the reach and the joint ranges (depth_range).
+    """
+    return min(p.step_height - LAYOUT.foot_radius, p.stand_height - depth_range(p)[0])
+
+
+def terrain_problem(p: HexabotParams) -> str:
+    """'' if the ground can be walked as asked, else a one-line reason."""
+    features = [name for name in ("slope_deg", "roughness", "kerb_height") if getattr(p, name)]
+    if len(features) > 1:
+        return f"one terrain feature at a time: {', '.join(features)} are set; keep one, set the others to 0"
+    if p.slope_deg:
+        tan = math.tan(math.radians(p.slope_deg))
+        if tan > p.friction:
+            return (
+                f"a {p.slope_deg:g} deg slope needs a friction coefficient of at least tan(slope) = "
+                f"{allowed(tan, 'up')} to hold the feet; friction is {p.friction:g} (the steepest slope it holds is "
+                f"{allowed(math.degrees(math.atan(p.friction)), 'down')} deg)"
+            )
+        if p.level_body == "on":
+            # A level body on a slope: the stance feet reach down or up by x tan(slope) (x along the uphill).
+            reach = float(np.abs(neutral(p)[:, :2] @ terrain(p).uphill).max()) * tan
+            lo, hi = depth_range(p)
+            if p.stand_height - reach < lo or p.stand_height + reach > hi:
+                steepest = math.degrees(math.atan(min(p.stand_height - lo, hi - p.stand_height) / (reach / tan)))
+                return (
+                    f"a level body on a {p.slope_deg:g} deg slope needs the feet {reach * 1000:.0f} mm above and "
+                    f"below the neutral stance, beyond the legs' workspace (stance depth {lo:.3f} to {hi:.3f} m with "
+                    f"this gait); the steepest levelled slope is {allowed(steepest, 'down')} deg "
+                    "(or set level_body=off)"
+                )
+    if p.kerb_height:
+        underside = p.stand_height + LAYOUT.foot_radius - LAYOUT.plate[2]  # the plate's underside above the ground
+        if p.kerb_height > underside - KERB_PLATE_CLEARANCE:
+            return (
+                f"a {p.kerb_height * 1000:.0f} mm kerb would hit the plate: at stand_height {p.stand_height:g} m its "
+                f"underside is {underside * 1000:.0f} mm above the ground, and the kerb must stay "
+                f"{KERB_PLATE_CLEARANCE * 1000:g} mm below it (at most "
+                f"{allowed((underside - KERB_PLATE_CLEARANCE) * 1000, 'down')} mm); raise 'stand_height'"
+            )
+        largest = largest_climbable_kerb(p)
+        if p.kerb_height > largest:
+            kerb_mm, largest_mm = apart(p.kerb_height * 1000, largest * 1000, "down")
+            return (
+                f"a {kerb_mm} mm kerb is above the largest climbable, {largest_mm} mm "
+                f"(the foot lifts step_height = {p.step_height:g} m, less a foot radius of clearance; the legs reach "
+                f"{(p.stand_height - depth_range(p)[0]) * 1000:.0f} mm above the stance); raise 'step_height'"
+            )
+    if p.roughness:
+        t = terrain(p)
+        x0, x1, y0, y1 = t.extent
+        points = ((x1 - x0) / HFIELD_CELL + 1) * ((y1 - y0) / HFIELD_CELL + 1)
+        if points > HFIELD_MAX_POINTS:
+            return (
+                f"the rough ground under this walk would be a {x1 - x0:.3g} x {y1 - y0:.3g} m heightfield of "
+                f"{points:.3g} points (at most {HFIELD_MAX_POINTS:.3g}); shorten 'duration' or lower the speed"
+            )
+    return ""

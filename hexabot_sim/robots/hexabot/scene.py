@@ -1,0 +1,144 @@
+"""The walking hexabot's scene: MJCF of robot and ground, perturbations, and its controller."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from hexabot_sim import models
+from hexabot_sim.control.gait import GaitPlanner
+from hexabot_sim.control.hexabot import GroundController, GroundSettings, HexabotController, WalkSettings
+from hexabot_sim.control.resolved_rate import ResolvedRateGains
+from hexabot_sim.kinematics import hexabot as hx
+from hexabot_sim.kinematics.hexabot_terrain import Terrain
+from hexabot_sim.robots.hexabot.parameters import (
+    ACCELERATION_HEADROOM,
+    ACCELERATION_LIMIT,
+    LAYOUT,
+    SCENE_EXTENT,
+    SETTLE_TIME,
+    SLOPE_CAMERA_DISTANCE,
+    SLOPE_CAMERA_HEIGHT,
+    TERRAIN_NOSLIP_ITERATIONS,
+    HexabotParams,
+    _plan_cycle,
+    depth_range,
+    neutral,
+    terrain,
+)
+
+
+def _perturbations(p: HexabotParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Seeded servo trims (18,) [rad], body CoM offset (3,) [m] and per-foot friction factors (6,)."""
+    rng = np.random.default_rng(p.seed)
+    trims = rng.uniform(-1.0, 1.0, 18) * math.radians(p.trim_error_deg)
+    angle = rng.uniform(0.0, 2 * math.pi)
+    com = np.array([math.cos(angle), math.sin(angle), 0.0]) * p.com_offset
+    friction = 1.0 + rng.uniform(-1.0, 1.0, 6) * p.friction_spread
+    return trims, com, friction
+
+
+def build_xml(p: HexabotParams) -> str:
+    """The hexabot scene with the run's options, stance, friction, perturbations and ground written in."""
+    root = models.load_tree("hexabot_scene")
+    models.find(root, "option").attrib.update(timestep=models.fmt(p.timestep), integrator=p.integrator)
+    _, com, friction = _perturbations(p)
+    torso = models.find(root, "body", "torso")
+    torso.find("inertial").set("pos", models.fmt(com))
+    feet = neutral(p)
+    q0, _ = hx.ik_hip_batch(LAYOUT, hx.body_to_hip(LAYOUT, feet))
+    z0 = p.stand_height + LAYOUT.foot_radius
+    pose = [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0]
+    ground = terrain(p)
+    if not ground.flat:
+        pose, q0 = _add_terrain(root, p, ground, feet, q0)
+    torso.set("pos", models.fmt(pose[:3]))
+    for leg, factor in zip(hx.LEGS, friction, strict=True):
+        foot = models.find(root, "geom", f"{leg}_foot")
+        foot.set("friction", models.fmt([p.friction * factor, 0.005, 0.0001]))
+    key = models.find(root, "key", "home")
+    key.set("qpos", models.fmt([*pose, *q0.ravel()]))
+    key.set("ctrl", models.fmt([*q0.ravel(), *np.zeros(18)]))
+    return models.to_xml(root)
+
+
+def _add_terrain(root, p: HexabotParams, ground: Terrain, feet: np.ndarray, q0: np.ndarray):
+    """Writes the ground into the scene tree; the start pose (7,) and joint angles (6, 3) standing on it.
+
+    With the ground-finding controller the body starts level, its feet on the ground under their
+    neutral points (IK). With the planned controller it starts parallel to a slope, or level on its
+    neutral stance above the highest ground under a foot (it settles onto the feet that touch).
+    """
+    import xml.etree.ElementTree as ET
+
+    assets, geoms = ground.mjcf()
+    asset = root.findall("asset")[-1]  # the scene's (the robot's comes first)
+    for text in assets:
+        asset.append(ET.fromstring(text))
+    world = root.findall("worldbody")[-1]
+    for text in geoms:
+        world.append(ET.fromstring(text))
+    floor = models.find(root, "geom", "floor")
+    models.find(root, "option").set("noslip_iterations", str(TERRAIN_NOSLIP_ITERATIONS))
+    # MuJoCo sizes the scene from its geoms unless told: the 20 m kerb or floor ring made it 28-67 m, and the
+    # renderer's near plane (znear x extent) clipped the ground in front of the chase camera. The robot's scale:
+    root.insert(0, ET.Element("statistic", extent=models.fmt(SCENE_EXTENT), center="0 0 0.1"))
+    if ground.slope_deg:
+        floor.set("quat", models.fmt(ground.floor_quat()))
+        # From the chase camera a 10 deg tilt hardly shows: the video looks along the slope's contour lines
+        # instead, low, with the uphill to the right, so the ground's line rises across the frame.
+        uphill = np.array([*ground.uphill, 0.0])
+        eye = SLOPE_CAMERA_DISTANCE * np.array([uphill[1], -uphill[0], 0.0]) + np.array([0.0, 0.0, SLOPE_CAMERA_HEIGHT])
+        forward = -eye / np.linalg.norm(eye)  # toward the body
+        right = np.cross(forward, [0.0, 0.0, 1.0])
+        right /= np.linalg.norm(right)
+        xyaxes = np.r_[right, np.cross(right, forward)]
+        models.find(root, "body", "torso").append(
+            ET.Element("camera", name="slope", mode="trackcom", pos=models.fmt(eye), xyaxes=models.fmt(xyaxes))
+        )
+    if ground.roughness:  # the heightfield replaces the floor under the walk; the plane stays as scenery below
+        floor.attrib.update(conaffinity="0", pos=models.fmt([0.0, 0.0, -ground.roughness - 0.002]))
+    r = LAYOUT.foot_radius
+    normal = ground.normal()
+    if p.on_ground() and not (ground.slope_deg and p.level_body == "off"):
+        # Level body; every foot centre r (along the normal) above the ground under its neutral point.
+        g = ground.height(feet[:, 0], feet[:, 1]) + r / normal[2]  # (6,)
+        z0 = p.stand_height + float(g.mean())
+        target = feet.copy()
+        target[:, 2] = g - z0
+        q = hx.ik_body(LAYOUT, target)
+        return [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0], q
+    if ground.slope_deg:
+        pos = normal * (p.stand_height + r)
+        return [*pos, *ground.floor_quat()], q0
+    z0 = p.stand_height + r + float(ground.height(feet[:, 0], feet[:, 1]).max())
+    return [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0], q0
+
+
+def acceleration_limit(p: HexabotParams) -> float:
+    """Commanded joint-acceleration limit [rad/s^2]: ACCELERATION_LIMIT, or more where the steady cycle needs it."""
+    hip, dt = _plan_cycle(p, p.command())
+    q, _ = hx.ik_hip_batch(LAYOUT, hip)  # (n, 6, 3)
+    peak = float(np.abs(np.diff(q, 2, axis=0)).max()) / dt**2
+    return max(ACCELERATION_LIMIT, ACCELERATION_HEADROOM * peak)
+
+
+def make_controller(p: HexabotParams, model: mujoco.MjModel, data: mujoco.MjData) -> HexabotController:
+    """The walking controller of a run (the ground-finding one for sensed touchdown or a levelled body)."""
+    trims, _, _ = _perturbations(p)
+    planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), p.timestep, start_time=SETTLE_TIME)
+    settings = WalkSettings(
+        p.command(), settle_time=SETTLE_TIME, ramp_time=p.period, heading_hold=p.heading_hold == "on",
+        trims=tuple(trims.tolist()),
+    )  # fmt: skip
+    gains = ResolvedRateGains(p.task_gain, 0.01, 0.01, p.max_joint_speed, acceleration_limit(p))
+    q0 = model.key("home").qpos[7:].reshape(6, 3)
+    if not p.on_ground():
+        return HexabotController(model, data, LAYOUT, planner, gains, settings, q0)
+    ground = GroundSettings(
+        sensed=p.touchdown == "sensed", level=p.level_body == "on", stand_height=p.stand_height,
+        depth_range=depth_range(p),
+    )  # fmt: skip
+    return GroundController(model, data, LAYOUT, planner, gains, settings, q0, ground)
