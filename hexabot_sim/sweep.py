@@ -472,8 +472,7 @@ def dask_executor(address: str, timeout: float = 10.0) -> Iterator[tuple[concurr
     except ImportError:
         raise UsageError("--scheduler needs the 'distributed' package: pip install \"hexabot-sim[cluster]\"") from None
     address = scheduler_address(address)
-    for name in ("distributed", "tornado", "asyncio"):  # Dask's own log lines are not the user's business
-        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+    _silence_logs("distributed", "tornado", "asyncio", "bokeh")  # Dask's own log lines are not the user's business
     try:
         client = _connect(Client, address, timeout)
     except Exception as e:  # noqa: BLE001 - whatever the connection raised, it is one line about the address
@@ -494,6 +493,14 @@ def dask_executor(address: str, timeout: float = 10.0) -> Iterator[tuple[concurr
     finally:
         with contextlib.suppress(Exception):
             client.close(timeout=5)
+
+
+def _silence_logs(*prefixes: str) -> None:
+    """Silences these loggers and every child logger: Dask's configuration gives some children (distributed.client)
+    their own level and stderr handler, so silencing the parent alone let a lost scheduler print a traceback."""
+    names = [n for n in list(logging.root.manager.loggerDict) if n.split(".")[0] in prefixes]
+    for name in {*prefixes, *names}:
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
 
 
 def _connect(client_type: Any, address: str, timeout: float) -> Any:
@@ -580,6 +587,9 @@ def run_cells(
             try:
                 result = future.result()
             except concurrent.futures.CancelledError:
+                client = getattr(executor, "_client", None)  # Dask cancels every future when its scheduler is gone
+                if client is not None and getattr(client, "status", "running") != "running":
+                    raise WorkerFailed(f"lost the Dask scheduler at {client.scheduler.address}") from None
                 raise WorkerFailed("a cell was cancelled by the executor (cluster shut down?)") from None
             except Exception as e:
                 text = " ".join(str(e).split())[:300]
