@@ -302,9 +302,10 @@ def _check_video_cost(args: argparse.Namespace, p: Any) -> None:
     fixed, per_megapixel = VIDEO_FRAME_SECONDS[args.quality]
     seconds = frames * (fixed + per_megapixel * width * height / 1e6)
     if seconds > params_mod.MAX_SECONDS:
+        hours, limit = params_mod.over(seconds, params_mod.MAX_SECONDS, lambda s: f"{s / 3600:.2g} h", 3600, " h")
         raise UsageError(
-            f"the video would take ~{seconds / 3600:.2g} h to render ({frames} frames of {width}x{height} at the "
-            f"{args.quality} preset); the limit is {params_mod.MAX_SECONDS / 3600:g} h: lower --fps, --size or "
+            f"the video would take ~{hours} to render ({frames} frames of {width}x{height} at the "
+            f"{args.quality} preset); the limit is {limit}: lower --fps, --size or "
             "'duration'" + ("" if args.quality == "preview" else ", or use --quality preview")
         )
 

@@ -11,7 +11,7 @@ import mujoco
 import numpy as np
 
 from hexabot_sim import models, render
-from hexabot_sim.params import check_duration, check_run_cost, param
+from hexabot_sim.params import apart, check_duration, check_run_cost, param
 from hexabot_sim.scenarios.base import Live, Marker, Metric, Progress, ScenarioResult, at_home
 from hexabot_sim.simulate import simulate, step_count
 
@@ -48,9 +48,8 @@ class PendulumParams:
 
     def __post_init__(self) -> None:
         if self.radius >= self.length:
-            raise ValueError(
-                f"parameter 'radius' must be smaller than 'length' ({self.length:g} m); got {self.radius:g}"
-            )
+            radius, length = apart(self.radius, self.length, "down")
+            raise ValueError(f"parameter 'radius' must be smaller than 'length' ({length} m); got {radius}")
         check_duration(self.duration, self.timestep)
         n = step_count(self.duration, self.timestep)
         check_run_cost(n, n + 1, 8, *RUN_COST, "raise 'timestep' or lower 'duration'")
