@@ -25,8 +25,7 @@ def dask_executor(address: str, timeout: float = 10.0) -> Iterator[tuple[concurr
     except ImportError:
         raise UsageError("--scheduler needs the 'distributed' package: pip install \"hexabot-sim[cluster]\"") from None
     address = scheduler_address(address)
-    for name in ("distributed", "tornado", "asyncio"):  # Dask's own log lines are not the user's business
-        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+    _silence_logs("distributed", "tornado", "asyncio", "bokeh")  # Dask's own log lines are not the user's business
     try:
         client = _connect(Client, address, timeout)
     except Exception as e:
@@ -47,6 +46,14 @@ def dask_executor(address: str, timeout: float = 10.0) -> Iterator[tuple[concurr
     finally:
         with contextlib.suppress(Exception):
             client.close(timeout=5)
+
+
+def _silence_logs(*prefixes: str) -> None:
+    """Silences these loggers and every child logger: Dask's configuration gives some children (distributed.client)
+    their own level and stderr handler, so silencing the parent alone let a lost scheduler print a traceback."""
+    names = [n for n in list(logging.root.manager.loggerDict) if n.split(".")[0] in prefixes]
+    for name in {*prefixes, *names}:
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
 
 
 def _connect(client_type: Any, address: str, timeout: float) -> Any:

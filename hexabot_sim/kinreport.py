@@ -12,6 +12,7 @@ import numpy as np
 from hexabot_sim.errors import HexabotError, UsageError
 from hexabot_sim.kinematics import inverse, robots
 from hexabot_sim.kinematics.chain import SerialChain
+from hexabot_sim.params import apart
 
 # Input ranges of `kin` beyond the link lengths (robots.LENGTH_MIN..LENGTH_MAX): wide enough for anything a
 # course exercise types, narrow enough that every product and sum in FK, J, det and IK stays finite and exact.
@@ -65,8 +66,16 @@ def _show(values: Iterable[float], units: Iterable[str]) -> list[float]:
     return [math.degrees(v) if u == "deg" else float(v) for v, u in zip(values, units, strict=True)]
 
 
-def _angle_limit(unit: str) -> str:
-    return f"±{ANGLE_MAX:g} rad" if unit == "rad" else f"±{math.degrees(ANGLE_MAX):.6g} deg (±{ANGLE_MAX:g} rad)"
+def _beyond(value: float, unit: str, limit: float) -> str:
+    """Says "x = 100.0000001 m is outside the allowed ±100 m": |value| over `limit` [m or rad], both shown with the
+    digits it takes for them to differ (params.apart); an angle typed in degrees is compared in degrees."""
+    if unit == "deg":
+        shown, bound = apart(abs(value), math.degrees(limit), "down", least=6)
+        allowed = f"±{bound} deg (±{limit:g} rad)"
+    else:
+        shown, bound = apart(abs(value), limit, "down", least=6)
+        allowed = f"±{bound} {unit}"
+    return f"{'-' * (value < 0)}{shown} {unit} is outside the allowed {allowed}"
 
 
 def _joint_values(robot: str, values: Sequence[float], degrees: bool) -> np.ndarray:
@@ -80,14 +89,24 @@ def _joint_values(robot: str, values: Sequence[float], degrees: bool) -> np.ndar
     for joint, unit, value in zip(chain.joints, units, values, strict=True):
         if unit == "m":
             if abs(value) > PRISMATIC_MAX:
-                raise UsageError(f"--q: {joint.name} = {value:g} m is outside the allowed ±{PRISMATIC_MAX:g} m")
+                raise UsageError(f"--q: {joint.name} = {_beyond(value, 'm', PRISMATIC_MAX)}")
             q.append(value)
         else:
             rad = math.radians(value) if unit == "deg" else value
             if abs(rad) > ANGLE_MAX:
-                raise UsageError(f"--q: {joint.name} = {value:g} {unit} is outside the allowed {_angle_limit(unit)}")
+                raise UsageError(f"--q: {joint.name} = {_beyond(value, unit, ANGLE_MAX)}")
             q.append(rad)
     return np.array(q)  # (n,)
+
+
+def _outside(value: float, lo: float, hi: float) -> tuple[str, str, str]:
+    """A value outside [lo, hi] and the range, with the digits it takes for the value to differ from the bound it
+    passed (6 at least): "1.5708 is outside [-1.5708, 1.5708]" said nothing."""
+    if value > hi:
+        text, hi_text = apart(value, hi, "nearest", least=6)
+        return text, f"{lo:.6g}", hi_text
+    text, lo_text = apart(value, lo, "nearest", least=6)
+    return text, lo_text, f"{hi:.6g}"
 
 
 def _range_warnings(robot: str, chain: SerialChain, q: np.ndarray, degrees: bool) -> list[str]:
@@ -102,10 +121,8 @@ def _range_warnings(robot: str, chain: SerialChain, q: np.ndarray, degrees: bool
             else ""
         )
         if joint.lower is not None and joint.upper is not None and not joint.lower <= value <= joint.upper:
-            lo, hi = _show([joint.lower, joint.upper], [unit, unit])
-            out.append(
-                f"{joint.name} = {shown:.6g} {unit} is outside its joint range [{lo:.6g}, {hi:.6g}] {unit}{hint}"
-            )
+            text, lo, hi = _outside(shown, *_show([joint.lower, joint.upper], [unit, unit]))
+            out.append(f"{joint.name} = {text} {unit} is outside its joint range [{lo}, {hi}] {unit}{hint}")
         elif hint:
             out.append(f"{joint.name} = {shown:.6g} rad is more than a full turn{hint}")
     return out
@@ -189,12 +206,12 @@ def _target(robot: str, target: Sequence[float], degrees: bool) -> np.ndarray:
     for i, value in enumerate(target):
         if i < 3:
             if abs(value) > TARGET_MAX:
-                raise UsageError(f"--target: {'xyz'[i]} = {value:g} m is outside the allowed ±{TARGET_MAX:g} m")
+                raise UsageError(f"--target: {'xyz'[i]} = {_beyond(value, 'm', TARGET_MAX)}")
             values.append(value)
         else:
             rad = math.radians(value) if degrees else value
             if abs(rad) > ANGLE_MAX:
-                raise UsageError(f"--target: angle {value:g} {unit} is outside the allowed {_angle_limit(unit)}")
+                raise UsageError(f"--target: angle {_beyond(value, unit, ANGLE_MAX)}")
             values.append(rad)
     return _pose(values) if robot == "stanford" else np.array(values)
 
@@ -256,8 +273,8 @@ def _violation(robot: str, chain: SerialChain, q: np.ndarray, degrees: bool) -> 
         if joint.lower is not None and joint.upper is not None:
             lo_tol, hi_tol = joint.lower - inverse.IK_RANGE_TOL, joint.upper + inverse.IK_RANGE_TOL
             if not lo_tol <= value <= hi_tol:
-                shown, lo, hi = _show([value, joint.lower, joint.upper], [unit] * 3)
-                parts.append(f"{joint.name} = {shown:.6g} outside [{lo:.6g}, {hi:.6g}] {unit}")
+                text, lo, hi = _outside(*_show([value, joint.lower, joint.upper], [unit] * 3))
+                parts.append(f"{joint.name} = {text} outside [{lo}, {hi}] {unit}")
     return ", ".join(parts)
 
 

@@ -98,6 +98,31 @@ def _number(value: float) -> str:
     return text
 
 
+def apart(value: float, bound: float, toward: str, least: int = 3) -> tuple[str, str]:
+    """`value` and `allowed(bound, toward)` with as many digits as it takes for the two texts to differ
+    ("a 32.004 mm kerb is above the largest climbable, 32.003 mm", not "32 mm ... 32 mm"). Every refusal that
+    prints a value against its bound formats the pair with this."""
+    for digits in range(least, 18):
+        shown, limit = f"{value:.{digits}g}", allowed(bound, toward, digits)
+        if float(shown) != float(limit):
+            return shown, limit
+    return f"{value!r}", allowed(bound, toward, 17)
+
+
+def allowed(value: float, toward: str, digits: int = 3) -> str:
+    """`value` to 3 significant digits, rounded so the printed number is itself allowed: "up" for a lower
+    bound, "down" for an upper bound, "zero" for the largest magnitude in a direction (0.8333 printed as
+    0.833 was refused as below the wave's smallest duty, 5/6); "nearest" where the bound is shown as it is
+    (a joint range in a warning). Rounding noise past 15 digits is ignored (a bound
+    computed as 0.7500000000000001 is 0.75), and the rounding is decimal, not binary (1000 is not 999.99999)."""
+    if value == 0 or not math.isfinite(value) or toward == "nearest":
+        return f"{value:.{digits}g}"
+    exact = decimal.Decimal(f"{value:.{max(15, digits)}g}")
+    rounding = {"up": decimal.ROUND_CEILING, "down": decimal.ROUND_FLOOR, "zero": decimal.ROUND_DOWN}[toward]
+    step = decimal.Decimal(1).scaleb(exact.adjusted() - (digits - 1))
+    return f"{float(exact.quantize(step, rounding=rounding)):.{digits}g}"
+
+
 def describe_range(info: ParamInfo, name: str = "value") -> str:
     """The allowed values in words, e.g. "0 < mass <= 1000 kg" or "one of RK4, Euler, implicit"."""
     if info.choices is not None:
@@ -335,7 +360,8 @@ def resolve(cls: type[T], defaults: Mapping[str, Any], *layers: Mapping[str, Any
 def check_duration(duration: float, timestep: float) -> None:
     """Cross-field check shared by time-stepped scenarios (raises ValueError, reported as a usage error)."""
     if timestep > duration:
-        raise ValueError(f"parameter 'timestep' must not exceed 'duration' ({duration:g} s); got {timestep:g}")
+        shown, limit = apart(timestep, duration, "down")
+        raise ValueError(f"parameter 'timestep' must not exceed 'duration' ({limit} s); got {shown}")
 
 
 def _size(n: float) -> str:
@@ -348,6 +374,16 @@ def _time(seconds: float) -> str:
     if seconds >= 3600:
         return f"{seconds / 3600:.3g} h"
     return f"{seconds / 60:.2g} min" if seconds >= 60 else f"{seconds:.2g} s"
+
+
+def over(value: float, limit: float, show: Any, scale: float, unit: str) -> tuple[str, str]:
+    """show(value) and show(limit), or, where a value over its limit would read the same ("~1 h; the limit is
+    1 h"), both in `unit` (of size `scale`) with apart()'s digits."""
+    text, limit_text = show(value), show(limit)
+    if value <= limit or text != limit_text:
+        return text, limit_text
+    shown, bound = apart(value / scale, limit / scale, "down")
+    return f"{shown}{unit}", f"{bound}{unit}"
 
 
 # While estimates() is active: the estimated seconds of every run checked by check_budget (a sweep's cost).
@@ -383,10 +419,14 @@ def check_budget(steps: float, memory_bytes: float, output_bytes: float, seconds
     fits = steps <= MAX_STEPS and memory_bytes <= MAX_MEMORY_BYTES and output_bytes <= MAX_OUTPUT_BYTES
     if fits and seconds <= MAX_SECONDS:
         return
+    step_text, step_limit = over(steps, MAX_STEPS, lambda n: f"{n:.3g}", 1.0, "")
+    output_text, output_limit = over(output_bytes, MAX_OUTPUT_BYTES, _size, 1e9, " GB")
+    memory_text, memory_limit = over(memory_bytes, MAX_MEMORY_BYTES, _size, 1e9, " GB")
+    time_text, time_limit = over(seconds, MAX_SECONDS, _time, 3600.0, " h")
     raise ValueError(
-        f"this run would take {steps:.3g} steps (~{_size(output_bytes)} of output, ~{_size(memory_bytes)} in memory, "
-        f"~{_time(seconds)}); the limit is {MAX_STEPS:.0e} steps, {_size(MAX_OUTPUT_BYTES)} of output, "
-        f"{_size(MAX_MEMORY_BYTES)} in memory and {_time(MAX_SECONDS)}: {fix}"
+        f"this run would take {step_text} steps (~{output_text} of output, ~{memory_text} in memory, "
+        f"~{time_text}); the limit is {step_limit} steps, {output_limit} of output, "
+        f"{memory_limit} in memory and {time_limit}: {fix}"
     )
 
 

@@ -184,6 +184,9 @@ def run_cells(
             try:
                 result = future.result()
             except concurrent.futures.CancelledError:
+                client = getattr(executor, "_client", None)  # Dask cancels every future when its scheduler is gone
+                if client is not None and getattr(client, "status", "running") != "running":
+                    raise WorkerFailed(f"lost the Dask scheduler at {client.scheduler.address}") from None
                 raise WorkerFailed("a cell was cancelled by the executor (cluster shut down?)") from None
             except Exception as e:
                 text = " ".join(str(e).split())[:300]

@@ -306,9 +306,10 @@ def check_cost(p: Plan, workers: int, where: str) -> float | None:
         return None
     seconds = max(sum(p.costs) / max(workers, 1), max(p.costs, default=0.0))
     if seconds > MAX_SWEEP_SECONDS:
+        shown, limit = params_mod.over(seconds, MAX_SWEEP_SECONDS, _time, 3600.0, " h")
         raise UsageError(
-            f"this sweep would take ~{_time(seconds)} ({len(p.cells)} cells, ~{_time(sum(p.costs))} of runs, on "
-            f"{where}); the limit is {_time(MAX_SWEEP_SECONDS)}: fewer cells, shorter runs (e.g. 'duration') "
+            f"this sweep would take ~{shown} ({len(p.cells)} cells, ~{_time(sum(p.costs))} of runs, on "
+            f"{where}); the limit is {limit}: fewer cells, shorter runs (e.g. 'duration') "
             "or more workers (--workers, --scheduler)"
         )
     return seconds

@@ -7,7 +7,7 @@ import math
 from typing import Any
 
 from hexabot_sim.errors import UsageError
-from hexabot_sim.params import MAX_SECONDS
+from hexabot_sim.params import MAX_SECONDS, over
 
 # Video frames: H.264 in yuv420p needs even sides; beyond 4:1 a frame shows a sliver of the scene.
 MIN_SIDE, MAX_SIZE, MAX_ASPECT = 64, (3840, 2160), 4.0
@@ -96,8 +96,9 @@ def check_cost(video: VideoSettings, duration: Any) -> None:
     fixed, per_megapixel = FRAME_SECONDS[video.quality]
     seconds = frames * (fixed + per_megapixel * video.width * video.height / 1e6)
     if seconds > MAX_SECONDS:
+        hours, limit = over(seconds, MAX_SECONDS, lambda s: f"{s / 3600:.2g} h", 3600, " h")
         raise UsageError(
-            f"the video would take ~{seconds / 3600:.2g} h to render ({frames} frames of {video.width}x{video.height} "
-            f"at the {video.quality} preset); the limit is {MAX_SECONDS / 3600:g} h: lower --fps, --size or "
+            f"the video would take ~{hours} to render ({frames} frames of {video.width}x{video.height} "
+            f"at the {video.quality} preset); the limit is {limit}: lower --fps, --size or "
             "'duration'" + ("" if video.quality == "preview" else ", or use --quality preview")
         )

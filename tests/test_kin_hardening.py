@@ -175,7 +175,7 @@ def test_ik_branches_reports_what_ik_drops():
     [
         (["leg", "--q", "1e308,1e308,1e308"], "--q: coxa = 1e+308 rad is outside the allowed ±1000 rad"),
         (["rrp", "--q", "0,0,1e308", "--json"], "--q: d3 = 1e+308 m is outside the allowed ±100 m"),
-        (["stanford", "--q", "0,0,0,0,1e6,0", "--deg"], "theta5 = 1e+06 deg is outside the allowed ±57295.8 deg"),
+        (["stanford", "--q", "0,0,0,0,1e6,0", "--deg"], "theta5 = 1e+06 deg is outside the allowed ±57295.7 deg"),
         (["rrp", "--q", "1e309,0,0"], "--q must be finite numbers"),
         (["elbow", "--q", "nan,0,0", "--json"], "--q must be finite numbers"),
         (["elbow", "--target", "1e300,0,0"], "--target: x = 1e+300 m is outside the allowed ±1000 m"),

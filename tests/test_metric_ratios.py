@@ -69,3 +69,19 @@ def test_one_non_finite_length_is_named_in_the_singular():
         parse_numbers("inf", "length 'L1'")
     with pytest.raises(UsageError, match="must be finite numbers;"):
         parse_numbers("1,nan", "--q")
+
+
+@pytest.mark.parametrize(("name", "theta0_deg"), [("pendulum-damped", 0.0), ("pendulum-damped", 1e-9),
+                                                  ("pendulum", 23.323816292263167)])  # fmt: skip
+def test_a_pendulum_that_starts_at_rest_has_no_settling_verdict(name, theta0_deg):
+    """The settling band is 2 % of |theta0 - rest|: a start at the rest angle gave a zero band and 'settled = false'
+    (a pendulum at rest 'has not settled'), a start 1e-9 deg away a verdict that rounding decided."""
+    r = hs.run(name, theta0_deg=theta0_deg, duration=2)
+    for metric in ("settled", "settling_time"):
+        assert r.metrics[metric].value is None, (metric, r.metrics[metric].value)
+        assert "null here" in r.metrics[metric].doc
+
+
+def test_a_small_real_swing_keeps_its_settling_verdict():
+    r = hs.run("pendulum-damped", theta0_deg=0.01, duration=5)
+    assert r.metrics["settled"].value is True and 2 < r.metrics["settling_time"].value < 3

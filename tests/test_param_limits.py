@@ -349,3 +349,63 @@ def test_equilibria_bounded(stiffness):
         assert abs(stiffness * (root - 0.5) + mgc * math.sin(root)) <= 1e-6 * mgc
     rest = pendulum.rest_angle(stiffness, mgc, 0.5, near=12.0)
     assert rest is not None and (abs(rest - 12.0) < 2 * math.pi or rest == min(stable, key=lambda r: abs(r - 12)))
+
+
+# --- issue 17: a value just past its bound is never printed as the bound ------------------------------------
+
+_NUM = r"(-?[0-9.]+(?:e[+-]?[0-9]+)?)"
+
+
+@pytest.mark.parametrize(
+    "argv, pattern",
+    [
+        (["pendulum", "--set", "duration=0.01", "--set", "timestep=0.0100000001"],
+         rf"must not exceed 'duration' \({_NUM} s\); got {_NUM}"),
+        (["pendulum", "--set", "length=0.5", "--set", "radius=0.5000001"], rf"'length' \({_NUM} m\); got {_NUM}"),
+        (["leg-step", "--set", "task_gain=1000.0001", "--set", "timestep=0.001"],
+         rf"must be <= {_NUM} \(the foot error.* = {_NUM}$"),
+        (["leg-step", "--set", "omega=10.000001", "--set", "timestep=0.05", "--set", "task_gain=1"],
+         rf"must be <= {_NUM} rad .* = {_NUM} rad$"),
+        (["pendulum", "--set", "duration=20000.001", "--set", "timestep=0.001"],
+         rf"the limit is {_NUM} steps.*would take {_NUM} steps|would take {_NUM} steps.*the limit is {_NUM} steps"),
+        (["hexabot-walk", "--set", "kerb_height=0.0480001", "--set", "stand_height=0.06"],
+         rf"a {_NUM} mm kerb would hit the plate.*at most {_NUM} mm"),
+        (["hexabot-walk", "--set", "slope_deg=10", "--set", f"friction={math.tan(math.radians(10)) * (1 - 1e-12)!r}"],
+         rf"at least tan\(slope\) = {_NUM} to hold the feet; friction is {_NUM}"),
+    ],
+)  # fmt: skip
+def test_a_value_just_past_its_bound_is_printed_apart_from_it(capsys, tmp_path, argv, pattern):
+    """Not "must not exceed 'duration' (0.01 s); got 0.01", "= 1 ... must be <= 1", "2e+07 steps; the limit is 2e+07
+    steps", "a 48 mm kerb ... at most 48 mm": every refusal prints the pair with params.apart."""
+    import re
+
+    err = refused(capsys, tmp_path, *argv).strip()
+    match = re.search(pattern, err)
+    assert match is not None, err
+    numbers = [float(g) for g in match.groups() if g is not None]
+    assert len(numbers) == 2 and numbers[0] != numbers[1], err
+
+
+@pytest.mark.parametrize(
+    "value, bound, toward, expected",
+    [(0.5, 0.5, "down", ("0.5", "0.5")), (1000.0000001, 1000.0, "down", ("1000.0000001", "1000")),
+     (0.80000001, 0.7500000000000001, "up", ("0.8", "0.75"))],
+)  # fmt: skip
+def test_apart_rounds_in_decimal(value, bound, toward, expected):
+    """allowed() rounded in binary: 1000 to 6 digits came out as 999.99999, a radius equal to length as 0.499999999."""
+    assert params.apart(value, bound, toward, least=6 if value > 1 else 3) == expected
+
+
+def test_the_kin_limits_are_printed_apart_from_the_value(capsys):
+    for argv, shown, bound in [
+        (["kin", "leg", "--q", "-1000.0000001,0,0"], "-1000.0000001 rad", "±1000 rad"),
+        (["kin", "leg", "--deg", "--q", "-57295.78,0,0"], "-57295.8 deg", "±57295.7 deg"),
+        (["kin", "rrp", "--q", "0,0,100.0000001"], "100.0000001 m", "±100 m"),
+        (["kin", "leg", "--target", "1000.0000001,0,0"], "1000.0000001 m", "±1000 m"),
+    ]:
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert f"= {shown} is outside the allowed {bound}" in err and err.count("\n") == 1, err
+    assert main(["kin", "leg", "--q", "1.5708,0,0"]) == 0  # a warning, not "1.5708 outside [.., 1.5708]"
+    err = capsys.readouterr().err
+    assert "coxa = 1.5708 rad is outside its joint range [-1.5708, 1.570796] rad" in err, err

@@ -104,3 +104,62 @@ def test_a_cluster_that_loses_its_workers_or_scheduler_mid_sweep_fails_in_bounde
     never = concurrent.futures.Future()
     with pytest.raises(pool.WorkerFailed, match="no worker for|lost the Dask scheduler"):
         list(pool._completed([never], 1, None, executor))
+
+
+def _dask_cli(*args, log):
+    """A `dask` command-line process on loopback, its output in `log` (the scheduler or a worker)."""
+    import shutil
+    import subprocess
+    import sys
+
+    dask = shutil.which("dask") or str(__import__("pathlib").Path(sys.executable).with_name("dask"))
+    return subprocess.Popen([dask, *args], stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+
+
+@pytest.mark.parametrize("victim", ["worker", "scheduler"])
+def test_kill_9_of_a_real_worker_or_scheduler_mid_sweep_is_one_line_in_bounded_time(tmp_path, victim):
+    """A real `dask scheduler` and `dask worker --no-nanny` on 127.0.0.1; once the worker runs a cell, one of them
+    is killed with SIGKILL. The sweep (a separate process, its waits shortened) ends with exit 1 and one line on
+    stderr, no traceback (distributed.client printed one when the scheduler went), and writes nothing."""
+    import json
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    distributed = pytest.importorskip("distributed", reason="the 'cluster' extra (distributed) is not installed")
+    file, log = tmp_path / "scheduler.json", open(tmp_path / "dask.log", "wb")
+    common = ["--no-dashboard", "--host", "127.0.0.1"]
+    processes = [_dask_cli("scheduler", "--port", "0", "--scheduler-file", str(file), *common, log=log)]
+    try:
+        deadline = time.monotonic() + 15
+        while not file.exists() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        address = json.loads(file.read_text())["address"]
+        processes.append(_dask_cli("worker", address, "--no-nanny", "--nthreads", "1", *common, log=log))
+        code = (
+            "import sys; from hexabot_sim import pool; pool.HEARTBEAT = 0.2; pool.WORKER_WAIT = 1.0\n"
+            "from hexabot_sim.__main__ import main; sys.exit(main(sys.argv[1:]))"
+        )
+        argv = ["sweep", "pendulum", "--grid", "damping=0,0.01", "--set", "duration=3000", "--no-plots",
+                "--scheduler", address, "--out", str(tmp_path / "s")]  # fmt: skip
+        env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+        run = subprocess.Popen([sys.executable, "-c", code, *argv], stderr=subprocess.PIPE, text=True, env=env)
+        with distributed.Client(address, set_as_default=False, timeout=10) as client:
+            while not any(client.processing().values()) and time.monotonic() < deadline:
+                time.sleep(0.1)
+            assert any(client.processing().values()), "no cell started on the worker"
+        started = time.monotonic()
+        processes[1 if victim == "worker" else 0].send_signal(signal.SIGKILL)
+        _, err = run.communicate(timeout=20)
+        assert time.monotonic() - started < 10
+    finally:
+        for process in processes:
+            process.kill()
+            process.wait(timeout=10)
+        log.close()
+    assert run.returncode == 1, err
+    assert len(err.strip().splitlines()) == 2 and "Traceback" not in err, err  # the 0% progress line, the error
+    assert ("no worker for" if victim == "worker" else "lost the Dask scheduler") in err, err
+    assert not (tmp_path / "s").exists() and [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []

@@ -11,7 +11,7 @@ import numpy as np
 from hexabot_sim.control.gait import GAITS, Command, Gait, GaitPlanner
 from hexabot_sim.kinematics import hexabot as hx
 from hexabot_sim.kinematics.hexabot_terrain import HFIELD_CELL, HFIELD_MARGIN, HFIELD_MAX_POINTS, Terrain
-from hexabot_sim.params import check_run_cost, param
+from hexabot_sim.params import allowed, apart, check_run_cost, param
 from hexabot_sim.simulate import step_count
 
 INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")
@@ -208,28 +208,6 @@ def _cycle_problem_computed(p: HexabotParams, cmd: Command) -> str:
     return ""
 
 
-def apart(value: float, bound: float, toward: str) -> tuple[str, str]:
-    """`value` and `allowed(bound, toward)` with as many digits as it takes for the two texts to differ
-    ("a 32.004 mm kerb is above the largest climbable, 32.003 mm", not "32 mm ... 32 mm")."""
-    for digits in range(3, 18):
-        shown, limit = f"{value:.{digits}g}", allowed(bound, toward, digits)
-        if float(shown) != float(limit):
-            return shown, limit
-    return f"{value!r}", allowed(bound, toward, 17)
-
-
-def allowed(value: float, toward: str, digits: int = 3) -> str:
-    """`value` to 3 significant digits, rounded so the printed number is itself allowed: "up" for a lower
-    bound, "down" for an upper bound, "zero" for the largest magnitude in a direction (0.8333 printed as
-    0.833 was refused as below the wave's smallest duty, 5/6)."""
-    if value == 0 or not math.isfinite(value):
-        return f"{value:.{digits}g}"
-    scale = 10.0 ** (math.floor(math.log10(abs(value))) - (digits - 1))
-    q = value / scale
-    rounded = {"up": math.ceil(q - 1e-9), "down": math.floor(q + 1e-9), "zero": math.trunc(q)}[toward]
-    return f"{rounded * scale:.{digits}g}"
-
-
 def feasibility(p: HexabotParams) -> str:
     """'' if the legs can deliver the command, else a one-line reason with the largest feasible command."""
     if not math.isfinite(p.vx + p.vy + p.yaw_rate):
@@ -341,10 +319,11 @@ def terrain_problem(p: HexabotParams) -> str:
     if p.slope_deg:
         tan = math.tan(math.radians(p.slope_deg))
         if tan > p.friction:
+            friction, least = apart(p.friction, tan, "up")
+            slope, steepest = apart(p.slope_deg, math.degrees(math.atan(p.friction)), "down")
             return (
-                f"a {p.slope_deg:g} deg slope needs a friction coefficient of at least tan(slope) = "
-                f"{allowed(tan, 'up')} to hold the feet; friction is {p.friction:g} (the steepest slope it holds is "
-                f"{allowed(math.degrees(math.atan(p.friction)), 'down')} deg)"
+                f"a {slope} deg slope needs a friction coefficient of at least tan(slope) = "
+                f"{least} to hold the feet; friction is {friction} (the steepest slope it holds is {steepest} deg)"
             )
         if p.level_body == "on":
             # A level body on a slope: the stance feet reach down or up by x tan(slope) (x along the uphill).
@@ -352,20 +331,21 @@ def terrain_problem(p: HexabotParams) -> str:
             lo, hi = depth_range(p)
             if p.stand_height - reach < lo or p.stand_height + reach > hi:
                 steepest = math.degrees(math.atan(min(p.stand_height - lo, hi - p.stand_height) / (reach / tan)))
+                slope, steepest_text = apart(p.slope_deg, steepest, "down")
                 return (
-                    f"a level body on a {p.slope_deg:g} deg slope needs the feet {reach * 1000:.0f} mm above and "
-                    f"below the neutral stance, beyond the legs' workspace (stance depth {lo:.3f} to {hi:.3f} m with "
-                    f"this gait); the steepest levelled slope is {allowed(steepest, 'down')} deg "
+                    f"a level body on a {slope} deg slope needs the feet {reach * 1000:.0f} "
+                    f"mm above and below the neutral stance, beyond the legs' workspace (stance depth {lo:.3f} to "
+                    f"{hi:.3f} m with this gait); the steepest levelled slope is {steepest_text} deg "
                     "(or set level_body=off)"
                 )
     if p.kerb_height:
         underside = p.stand_height + LAYOUT.foot_radius - LAYOUT.plate[2]  # the plate's underside above the ground
         if p.kerb_height > underside - KERB_PLATE_CLEARANCE:
+            kerb_mm, highest_mm = apart(p.kerb_height * 1000, (underside - KERB_PLATE_CLEARANCE) * 1000, "down")
             return (
-                f"a {p.kerb_height * 1000:.0f} mm kerb would hit the plate: at stand_height {p.stand_height:g} m its "
+                f"a {kerb_mm} mm kerb would hit the plate: at stand_height {p.stand_height:g} m its "
                 f"underside is {underside * 1000:.0f} mm above the ground, and the kerb must stay "
-                f"{KERB_PLATE_CLEARANCE * 1000:g} mm below it (at most "
-                f"{allowed((underside - KERB_PLATE_CLEARANCE) * 1000, 'down')} mm); raise 'stand_height'"
+                f"{KERB_PLATE_CLEARANCE * 1000:g} mm below it (at most {highest_mm} mm); raise 'stand_height'"
             )
         largest = largest_climbable_kerb(p)
         if p.kerb_height > largest:
@@ -380,8 +360,9 @@ def terrain_problem(p: HexabotParams) -> str:
         x0, x1, y0, y1 = t.extent
         points = ((x1 - x0) / HFIELD_CELL + 1) * ((y1 - y0) / HFIELD_CELL + 1)
         if points > HFIELD_MAX_POINTS:
+            shown, most = apart(points, HFIELD_MAX_POINTS, "down")
             return (
                 f"the rough ground under this walk would be a {x1 - x0:.3g} x {y1 - y0:.3g} m heightfield of "
-                f"{points:.3g} points (at most {HFIELD_MAX_POINTS:.3g}); shorten 'duration' or lower the speed"
+                f"{shown} points (at most {most}); shorten 'duration' or lower the speed"
             )
     return ""

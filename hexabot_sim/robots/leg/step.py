@@ -15,7 +15,7 @@ from hexabot_sim.control.resolved_rate import ResolvedRateController, ResolvedRa
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.kinematics import robots
-from hexabot_sim.params import check_duration, check_run_cost, param
+from hexabot_sim.params import apart, check_duration, check_run_cost, param
 from hexabot_sim.result import Live, Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import Controller, simulate, site_trajectory, step_count
 
@@ -82,9 +82,10 @@ class LegParams:
 
     def __post_init__(self) -> None:
         if self.task_gain * self.timestep > 1:
+            product, limit = apart(self.task_gain * self.timestep, 1.0, "down")
             raise ValueError(
-                f"parameters 'task_gain' * 'timestep' must be <= 1 (the foot error would overshoot every control "
-                f"period); got {self.task_gain:g} 1/s * {self.timestep:g} s = {self.task_gain * self.timestep:g}"
+                f"parameters 'task_gain' * 'timestep' must be <= {limit} (the foot error would overshoot every control "
+                f"period); got {self.task_gain!r} 1/s * {self.timestep!r} s = {product}"
             )
         start = (self.start_x, self.start_y, self.start_z)
         if not reachable(np.array(start)):
@@ -126,10 +127,11 @@ class LegStepParams(LegParams):
 def check_command(omega: float, timestep: float) -> None:
     """The control period must sample the command finely enough (raises ValueError)."""
     if omega * timestep > MAX_PHASE_STEP:
+        product, limit = apart(omega * timestep, MAX_PHASE_STEP, "down")
         raise ValueError(
-            f"parameters 'omega' * 'timestep' must be <= {MAX_PHASE_STEP:g} rad (at least "
+            f"parameters 'omega' * 'timestep' must be <= {limit} rad (at least "
             f"{2 * math.pi / MAX_PHASE_STEP:.0f} control periods per cycle of the command); "
-            f"got {omega:g} rad/s * {timestep:g} s = {omega * timestep:g} rad"
+            f"got {omega!r} rad/s * {timestep!r} s = {product} rad"
         )
 
 

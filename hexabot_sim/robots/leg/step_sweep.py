@@ -12,7 +12,7 @@ import numpy as np
 
 from hexabot_sim import pool
 from hexabot_sim.errors import SimulationError
-from hexabot_sim.params import CSV_BYTES_PER_VALUE, check_budget, param
+from hexabot_sim.params import CSV_BYTES_PER_VALUE, apart, check_budget, param
 from hexabot_sim.result import Metric, Progress, ScenarioResult
 from hexabot_sim.robots.leg import step as leg
 from hexabot_sim.simulate import step_count
@@ -69,9 +69,10 @@ class LegSweepParams(leg.LegParams):
         fastest = max(self.omegas)
         leg.check_command(fastest, self.timestep)
         if self.periods * 2 * math.pi / fastest < self.timestep:
+            last, least = apart(self.periods * 2 * math.pi / fastest, self.timestep, "up")
             raise ValueError(
-                f"parameter 'periods' must give every cell at least one 'timestep' ({self.timestep:g} s); "
-                f"{self.periods:g} periods at omega = {fastest:g} rad/s last {self.periods * 2 * math.pi / fastest:g} s"
+                f"parameter 'periods' must give every cell at least one 'timestep' ({least} s); "
+                f"{self.periods!r} periods at omega = {fastest!r} rad/s last {last} s"
             )
         # The whole grid's cost: cells run `parallel` at a time, each holding its own recorded rows.
         n = [step_count(self.periods * 2 * math.pi / w, self.timestep) for w in self.omegas]

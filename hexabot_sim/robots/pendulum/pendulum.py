@@ -11,7 +11,7 @@ import mujoco
 import numpy as np
 
 from hexabot_sim import models, render
-from hexabot_sim.params import check_duration, check_run_cost, param
+from hexabot_sim.params import apart, check_duration, check_run_cost, param
 from hexabot_sim.result import Live, Marker, Metric, Progress, ScenarioResult, at_home
 from hexabot_sim.simulate import simulate, step_count
 
@@ -48,9 +48,8 @@ class PendulumParams:
 
     def __post_init__(self) -> None:
         if self.radius >= self.length:
-            raise ValueError(
-                f"parameter 'radius' must be smaller than 'length' ({self.length:g} m); got {self.radius:g}"
-            )
+            radius, length = apart(self.radius, self.length, "down")
+            raise ValueError(f"parameter 'radius' must be smaller than 'length' ({length} m); got {radius}")
         check_duration(self.duration, self.timestep)
         n = step_count(self.duration, self.timestep)
         check_run_cost(n, n + 1, 8, *RUN_COST, "raise 'timestep' or lower 'duration'")
@@ -61,6 +60,9 @@ class PendulumParams:
 
 
 ENERGY_FLOOR: float = 1e-8  # energy_drift_rel needs E(0) above this fraction of (m g c + k) [J]
+# `settled` compares energies rounded to ~1e-16 of (m g c + k) with the 2 % band's energy barrier: the barrier must be
+# 1e4 times that (a start >= ~0.004 deg from rest for the default pendulum), or rounding would give the verdict.
+BARRIER_FLOOR: float = 1e-12
 
 def pivot_inertia(mass: float, length: float, radius: float) -> float:
     """Moment of inertia [kg m^2] of a solid cylinder about a transverse axis through one end."""
@@ -305,18 +307,26 @@ def run(name: str, p: PendulumParams, progress: Progress | None = None) -> Scena
             return mgc * (1 - math.cos(angle)) + 0.5 * k * (angle - target) ** 2
 
         energy_left = float(e_kin[-1] + e_grav[-1] + e_spring[-1]) - potential(rest)
-        settled = settled_for_good(energy_left, potential, rest, band)
+        # A start at (or within rounding of) the rest angle leaves a band, and an energy barrier at its edges, that
+        # rounding alone would cross or not: the verdict would be noise ("settled = false" for a pendulum at rest).
+        barrier = min(potential(rest - band), potential(rest + band)) - potential(rest)
+        meaningful = barrier > BARRIER_FLOOR * (mgc + k)
+        settled = settled_for_good(energy_left, potential, rest, band) if meaningful else None
+        why = "" if meaningful else (
+            f"; null here: theta0 is {abs(theta0 - rest):.3g} rad from the rest angle, and the band's energy barrier "
+            f"{barrier:.3g} J is not above {BARRIER_FLOOR * (mgc + k):.3g} J, where rounding would decide"
+        )  # fmt: skip
         metrics["settled"] = Metric(
             settled,
             "",
             "true if at the end of the run the energy left is below the potential at the edges of the 2 % band "
-            "around the rest angle, so theta can never leave the band again",
+            "around the rest angle, so theta can never leave the band again" + why,
         )
         metrics["settling_time"] = Metric(
             settling_time(t, theta, rest, band) if settled else None,
             "s",
             "time after which |theta - rest| stays within 2 % of |theta0 - rest| for good; null if the motion "
-            "has not settled by the end of the run (settled = false)",
+            "has not settled by the end of the run (settled = false)" + why,
         )
     if k > 0:
         metrics["target_deg"] = Metric(math.degrees(target), "deg", "spring equilibrium position")
