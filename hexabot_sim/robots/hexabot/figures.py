@@ -9,10 +9,10 @@ import mujoco
 import numpy as np
 
 from hexabot_sim.kinematics import hexabot as hx
-from hexabot_sim.kinematics.hexabot_terrain import Terrain
 from hexabot_sim.result import ScenarioResult
 from hexabot_sim.robots.hexabot.metrics import Contacts
 from hexabot_sim.robots.hexabot.parameters import LAYOUT, SETTLE_TIME, walking_direction
+from hexabot_sim.terrain import Ground
 
 LEG_COLOURS = {
     "lf": "tab:blue",
@@ -153,7 +153,7 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
         fontsize=plots.TITLE_FONTSIZE,
     )
     out["slip"] = fig
-    ground: Terrain = result.extras["terrain"]
+    ground: Ground = result.extras["terrain"]
     if not ground.flat:
         out["terrain"] = _terrain_figure(result, ground)
     return out
@@ -173,7 +173,7 @@ def _foot_centres(result: ScenarioResult, every: int) -> tuple[np.ndarray, np.nd
     return rows, feet
 
 
-def _terrain_figure(result: ScenarioResult, ground: Terrain) -> Any:
+def _terrain_figure(result: ScenarioResult, ground: Ground) -> Any:
     """Side view: the ground under the body and the body's height; per leg, the ground along that foot's own track,
     the sole's path over it and the touchdowns (contact points), so every point is drawn over the ground under it."""
     from hexabot_sim import plots
@@ -224,14 +224,8 @@ def _terrain_figure(result: ScenarioResult, ground: Terrain) -> Any:
     axes[0].grid(True, alpha=0.3)
     plots.legend_above(axes[1], ncol=3)
     axes[-1].set_xlabel("distance along the commanded direction [m]" if straight else "t [s]")
-    if p.slope_deg:
-        kind = f"{p.slope_deg:g} deg slope ({p.slope_heading})"
-    elif p.roughness:
-        kind = f"roughness {p.roughness * 1000:g} mm, seed {p.seed}"
-    else:
-        kind = f"{p.kerb_height * 1000:g} mm kerb at {p.kerb_distance:g} m"
     fig.suptitle(
-        _title(result, f"terrain: {kind}, touchdown {p.touchdown}, level_body {p.level_body}"),
+        _title(result, f"terrain: {ground.label()}, touchdown {p.touchdown}, level_body {p.level_body}"),
         fontsize=plots.TITLE_FONTSIZE,
     )
     return fig

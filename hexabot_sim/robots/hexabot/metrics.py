@@ -10,7 +10,6 @@ import numpy as np
 
 from hexabot_sim.control.hexabot import HexabotController
 from hexabot_sim.kinematics import hexabot as hx
-from hexabot_sim.kinematics.hexabot_terrain import Terrain
 from hexabot_sim.result import Metric
 from hexabot_sim.robots.hexabot.parameters import (
     FALL_TILT_DEG,
@@ -22,6 +21,7 @@ from hexabot_sim.robots.hexabot.parameters import (
     largest_climbable_kerb,
     walking_direction,
 )
+from hexabot_sim.terrain import Ground
 
 
 def rpy_from_quat(quat: np.ndarray) -> np.ndarray:
@@ -235,7 +235,7 @@ TOUCHDOWN_TOLERANCE: float = 0.02  # [s] a touchdown further than this from the 
 
 def terrain_metrics(
     p: HexabotParams,
-    ground: Terrain,
+    ground: Ground,
     t: np.ndarray,
     qpos: np.ndarray,
     controller: HexabotController,

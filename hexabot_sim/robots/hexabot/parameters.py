@@ -10,9 +10,12 @@ import numpy as np
 
 from hexabot_sim.control.gait import GAITS, Command, Gait, GaitPlanner
 from hexabot_sim.kinematics import hexabot as hx
-from hexabot_sim.kinematics.hexabot_terrain import HFIELD_CELL, HFIELD_MARGIN, HFIELD_MAX_POINTS, Terrain
 from hexabot_sim.params import allowed, apart, check_run_cost, param
 from hexabot_sim.simulate import step_count
+from hexabot_sim.terrain import Ground, Kerb, Limits, RoughPatch, Slope
+from hexabot_sim.terrain.heightfield import CELL as HFIELD_CELL
+from hexabot_sim.terrain.heightfield import MARGIN as HFIELD_MARGIN
+from hexabot_sim.terrain.heightfield import MAX_POINTS as HFIELD_MAX_POINTS
 
 INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")
 
@@ -254,7 +257,7 @@ def walking_direction(p: HexabotParams) -> np.ndarray:
     return np.array([p.vx, p.vy]) / speed if speed > 0 else np.array([1.0, 0.0])
 
 
-def terrain(p: HexabotParams) -> Terrain:
+def terrain(p: HexabotParams) -> Ground:
     """The run's ground: slope direction from the walking direction, heightfield over the walk's area."""
     along = walking_direction(p)
     uphill = {"uphill": along, "downhill": -along, "across": np.array([-along[1], along[0]])}[p.slope_heading]
@@ -268,12 +271,15 @@ def terrain(p: HexabotParams) -> Terrain:
             min(0.0, end[0]) - HFIELD_MARGIN, max(0.0, end[0]) + HFIELD_MARGIN,
             min(0.0, end[1]) - HFIELD_MARGIN, max(0.0, end[1]) + HFIELD_MARGIN,
         )  # fmt: skip
+    if p.slope_deg:  # the patch lies in the ground frame: a world distance d is d / cos(slope) along the slope
+        extent = tuple(v / math.cos(math.radians(p.slope_deg)) for v in extent)
     extent = tuple(round(v / HFIELD_CELL) * HFIELD_CELL for v in extent)
-    return Terrain(
-        slope_deg=p.slope_deg, uphill=(float(uphill[0]), float(uphill[1])), roughness=p.roughness, seed=p.seed,
-        extent=extent, kerb_height=p.kerb_height, kerb_distance=p.kerb_distance,
-        along=(float(along[0]), float(along[1])),
-    )  # fmt: skip
+    along_xy = (float(along[0]), float(along[1]))
+    return Ground(
+        slope=Slope(p.slope_deg, (float(uphill[0]), float(uphill[1])), p.slope_heading),
+        rough=RoughPatch(p.roughness, p.seed, extent) if p.roughness else None,
+        obstacles=(Kerb(p.kerb_height, p.kerb_distance, along_xy),) if p.kerb_height else (),
+    )
 
 
 def depth_range(p: HexabotParams) -> tuple[float, float]:
@@ -312,57 +318,38 @@ def largest_climbable_kerb(p: HexabotParams) -> float:
 
 
 def terrain_problem(p: HexabotParams) -> str:
-    """'' if the ground can be walked as asked, else a one-line reason."""
-    features = [name for name in ("slope_deg", "roughness", "kerb_height") if getattr(p, name)]
-    if len(features) > 1:
-        return f"one terrain feature at a time: {', '.join(features)} are set; keep one, set the others to 0"
-    if p.slope_deg:
-        tan = math.tan(math.radians(p.slope_deg))
-        if tan > p.friction:
-            friction, least = apart(p.friction, tan, "up")
-            slope, steepest = apart(p.slope_deg, math.degrees(math.atan(p.friction)), "down")
-            return (
-                f"a {slope} deg slope needs a friction coefficient of at least tan(slope) = "
-                f"{least} to hold the feet; friction is {friction} (the steepest slope it holds is {steepest} deg)"
-            )
-        if p.level_body == "on":
-            # A level body on a slope: the stance feet reach down or up by x tan(slope) (x along the uphill).
-            reach = float(np.abs(neutral(p)[:, :2] @ terrain(p).uphill).max()) * tan
-            lo, hi = depth_range(p)
-            if p.stand_height - reach < lo or p.stand_height + reach > hi:
-                steepest = math.degrees(math.atan(min(p.stand_height - lo, hi - p.stand_height) / (reach / tan)))
-                slope, steepest_text = apart(p.slope_deg, steepest, "down")
-                return (
-                    f"a level body on a {slope} deg slope needs the feet {reach * 1000:.0f} "
-                    f"mm above and below the neutral stance, beyond the legs' workspace (stance depth {lo:.3f} to "
-                    f"{hi:.3f} m with this gait); the steepest levelled slope is {steepest_text} deg "
-                    "(or set level_body=off)"
-                )
-    if p.kerb_height:
-        underside = p.stand_height + LAYOUT.foot_radius - LAYOUT.plate[2]  # the plate's underside above the ground
-        if p.kerb_height > underside - KERB_PLATE_CLEARANCE:
-            kerb_mm, highest_mm = apart(p.kerb_height * 1000, (underside - KERB_PLATE_CLEARANCE) * 1000, "down")
-            return (
-                f"a {kerb_mm} mm kerb would hit the plate: at stand_height {p.stand_height:g} m its "
-                f"underside is {underside * 1000:.0f} mm above the ground, and the kerb must stay "
-                f"{KERB_PLATE_CLEARANCE * 1000:g} mm below it (at most {highest_mm} mm); raise 'stand_height'"
-            )
-        largest = largest_climbable_kerb(p)
-        if p.kerb_height > largest:
-            kerb_mm, largest_mm = apart(p.kerb_height * 1000, largest * 1000, "down")
-            return (
-                f"a {kerb_mm} mm kerb is above the largest climbable, {largest_mm} mm "
-                f"(the foot lifts step_height = {p.step_height:g} m, less a foot radius of clearance; the legs reach "
-                f"{(p.stand_height - depth_range(p)[0]) * 1000:.0f} mm above the stance); raise 'step_height'"
-            )
-    if p.roughness:
-        t = terrain(p)
-        x0, x1, y0, y1 = t.extent
-        points = ((x1 - x0) / HFIELD_CELL + 1) * ((y1 - y0) / HFIELD_CELL + 1)
-        if points > HFIELD_MAX_POINTS:
-            shown, most = apart(points, HFIELD_MAX_POINTS, "down")
-            return (
-                f"the rough ground under this walk would be a {x1 - x0:.3g} x {y1 - y0:.3g} m heightfield of "
-                f"{shown} points (at most {most}); shorten 'duration' or lower the speed"
-            )
+    """'' if the ground can be walked as asked, else a one-line reason (the terrain types' own refusals, with
+    what this robot can take, and a level body's reach on a slope)."""
+    ground = terrain(p)
+    underside = p.stand_height + LAYOUT.foot_radius - LAYOUT.plate[2]  # the plate's underside above the ground
+    limits = Limits(
+        friction=p.friction,
+        climbable=largest_climbable_kerb(p) if ground.obstacles else math.inf,
+        climbable_why=(
+            f"the foot lifts step_height = {p.step_height:g} m, less a foot radius of clearance; the legs reach "
+            f"{(p.stand_height - depth_range(p)[0]) * 1000:.0f} mm above the stance"
+        ) if ground.obstacles else "",
+        climbable_hint="raise 'step_height'",
+        underside=underside,
+        underside_why=f"at stand_height {p.stand_height:g} m",
+        underside_hint="raise 'stand_height'",
+        clearance=KERB_PLATE_CLEARANCE,
+        max_points=HFIELD_MAX_POINTS,
+    )  # fmt: skip
+    problem = ground.problem(limits)
+    if problem or not (p.slope_deg and p.level_body == "on"):
+        return problem
+    # A level body on a slope: the stance feet reach down or up by x tan(slope) (x along the uphill).
+    tan = math.tan(math.radians(p.slope_deg))
+    reach = float(np.abs(neutral(p)[:, :2] @ ground.slope.uphill).max()) * tan
+    lo, hi = depth_range(p)
+    if p.stand_height - reach < lo or p.stand_height + reach > hi:
+        steepest = math.degrees(math.atan(min(p.stand_height - lo, hi - p.stand_height) / (reach / tan)))
+        slope, steepest_text = apart(p.slope_deg, steepest, "down")
+        return (
+            f"a level body on a {slope} deg slope needs the feet {reach * 1000:.0f} "
+            f"mm above and below the neutral stance, beyond the legs' workspace (stance depth {lo:.3f} to "
+            f"{hi:.3f} m with this gait); the steepest levelled slope is {steepest_text} deg "
+            "(or set level_body=off)"
+        )
     return ""

@@ -12,7 +12,7 @@ from hexabot_sim.control.gait import GaitPlanner
 from hexabot_sim.control.hexabot import GroundController, GroundSettings, HexabotController, WalkSettings
 from hexabot_sim.control.resolved_rate import ResolvedRateGains
 from hexabot_sim.kinematics import hexabot as hx
-from hexabot_sim.kinematics.hexabot_terrain import Terrain
+from hexabot_sim.terrain import Ground
 from hexabot_sim.robots.hexabot.parameters import (
     ACCELERATION_HEADROOM,
     ACCELERATION_LIMIT,
@@ -64,7 +64,7 @@ def build_xml(p: HexabotParams) -> str:
     return models.to_xml(root)
 
 
-def _add_terrain(root, p: HexabotParams, ground: Terrain, feet: np.ndarray, q0: np.ndarray):
+def _add_terrain(root, p: HexabotParams, ground: Ground, feet: np.ndarray, q0: np.ndarray):
     """Writes the ground into the scene tree; the start pose (7,) and joint angles (6, 3) standing on it.
 
     With the ground-finding controller the body starts level, its feet on the ground under their
@@ -85,11 +85,12 @@ def _add_terrain(root, p: HexabotParams, ground: Terrain, feet: np.ndarray, q0: 
     # MuJoCo sizes the scene from its geoms unless told: the 20 m kerb or floor ring made it 28-67 m, and the
     # renderer's near plane (znear x extent) clipped the ground in front of the chase camera. The robot's scale:
     root.insert(0, ET.Element("statistic", extent=models.fmt(SCENE_EXTENT), center="0 0 0.1"))
-    if ground.slope_deg:
-        floor.set("quat", models.fmt(ground.floor_quat()))
+    for name, value in ground.floor().items():  # turned with a slope; under a rough patch, lowered scenery
+        floor.set(name, value if isinstance(value, str) else models.fmt(value))
+    if ground.slope.tilted:
         # From the chase camera a 10 deg tilt hardly shows: the video looks along the slope's contour lines
         # instead, low, with the uphill to the right, so the ground's line rises across the frame.
-        uphill = np.array([*ground.uphill, 0.0])
+        uphill = np.array([*ground.slope.uphill, 0.0])
         eye = SLOPE_CAMERA_DISTANCE * np.array([uphill[1], -uphill[0], 0.0]) + np.array([0.0, 0.0, SLOPE_CAMERA_HEIGHT])
         forward = -eye / np.linalg.norm(eye)  # toward the body
         right = np.cross(forward, [0.0, 0.0, 1.0])
@@ -98,11 +99,9 @@ def _add_terrain(root, p: HexabotParams, ground: Terrain, feet: np.ndarray, q0: 
         models.find(root, "body", "torso").append(
             ET.Element("camera", name="slope", mode="trackcom", pos=models.fmt(eye), xyaxes=models.fmt(xyaxes))
         )
-    if ground.roughness:  # the heightfield replaces the floor under the walk; the plane stays as scenery below
-        floor.attrib.update(conaffinity="0", pos=models.fmt([0.0, 0.0, -ground.roughness - 0.002]))
     r = LAYOUT.foot_radius
     normal = ground.normal()
-    if p.on_ground() and not (ground.slope_deg and p.level_body == "off"):
+    if p.on_ground() and not (ground.slope.tilted and p.level_body == "off"):
         # Level body; every foot centre r (along the normal) above the ground under its neutral point.
         g = ground.height(feet[:, 0], feet[:, 1]) + r / normal[2]  # (6,)
         z0 = p.stand_height + float(g.mean())
@@ -110,9 +109,10 @@ def _add_terrain(root, p: HexabotParams, ground: Terrain, feet: np.ndarray, q0: 
         target[:, 2] = g - z0
         q = hx.ik_body(LAYOUT, target)
         return [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0], q
-    if ground.slope_deg:
-        pos = normal * (p.stand_height + r)
-        return [*pos, *ground.floor_quat()], q0
+    if ground.slope.tilted:  # parallel to the slope, above whatever stands on it under the feet
+        lift = max(0.0, float(ground.surface(feet[:, 0], feet[:, 1]).max()))
+        pos = normal * (p.stand_height + r + lift)
+        return [*pos, *ground.slope.floor_quat()], q0
     z0 = p.stand_height + r + float(ground.height(feet[:, 0], feet[:, 1]).max())
     return [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0], q0
 

@@ -1,0 +1,60 @@
+"""A kerb: a step up across the path, onto a pavement that continues beyond the walk."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from hexabot_sim.terrain.limits import Limits, apart
+
+KERB_LENGTH: float = 20.0  # [m] the pavement after the kerb (beyond any walk)
+KERB_WIDTH: float = 20.0  # [m] across the path
+
+
+@dataclasses.dataclass(frozen=True)
+class Kerb:
+    """A box across the path whose top, `height` above the ground (along its normal), starts `distance` ahead of
+    the start along `along` (a horizontal unit vector (2,), the walking direction) and runs on beyond the walk."""
+
+    height: float
+    distance: float = 0.5
+    along: tuple[float, float] = (1.0, 0.0)
+
+    def surface(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Height [m] of the kerb's top over ground-frame points, -inf where it does not lie."""
+        return np.where(u * self.along[0] + v * self.along[1] >= self.distance, self.height, -np.inf)
+
+    def mjcf(self) -> tuple[list[str], list[str]]:
+        """(asset elements, ground elements) as MJCF text, in the ground frame."""
+        ax, ay = self.along
+        centre = self.distance + KERB_LENGTH / 2
+        yaw = math.atan2(ay, ax)
+        geom = (
+            f'<geom name="kerb" type="box" size="{KERB_LENGTH / 2!r} {KERB_WIDTH / 2!r} {self.height / 2!r}" '
+            f'pos="{centre * ax!r} {centre * ay!r} {self.height / 2!r}" '
+            f'quat="{math.cos(yaw / 2)!r} 0 0 {math.sin(yaw / 2)!r}" material="terrain" '
+            'contype="0" conaffinity="2" group="0"/>'
+        )
+        return [], [geom]
+
+    def problem(self, limits: Limits) -> str:
+        """'' if the robot can climb the kerb, else why not (one line)."""
+        if self.height > limits.underside - limits.clearance:
+            kerb_mm, highest_mm = apart(self.height * 1000, (limits.underside - limits.clearance) * 1000, "down")
+            return (
+                f"a {kerb_mm} mm kerb would hit the plate: {limits.underside_why} its "
+                f"underside is {limits.underside * 1000:.0f} mm above the ground, and the kerb must stay "
+                f"{limits.clearance * 1000:g} mm below it (at most {highest_mm} mm); {limits.underside_hint}"
+            )
+        if self.height > limits.climbable:
+            kerb_mm, largest_mm = apart(self.height * 1000, limits.climbable * 1000, "down")
+            return (
+                f"a {kerb_mm} mm kerb is above the largest climbable, {largest_mm} mm ({limits.climbable_why}); "
+                f"{limits.climbable_hint}"
+            )
+        return ""
+
+    def label(self) -> str:
+        return f"{self.height * 1000:g} mm kerb at {self.distance:g} m"

@@ -1,0 +1,36 @@
+"""What a robot on the ground can take: each terrain type refuses, in one line, what exceeds it."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from hexabot_sim.params import apart
+
+__all__ = ["Limits", "apart"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Limits:
+    """The robot's side of a terrain check, filled in by the robot (its legs, body and gait).
+
+    Attributes:
+        friction: Friction coefficient of the feet on the ground.
+        climbable: Highest step up [m] the walk can climb (swing clearance and leg reach).
+        climbable_why: How `climbable` follows from the robot, e.g. "the foot lifts ..., the legs reach ...".
+        climbable_hint: What to change to climb higher, e.g. "raise 'step_height'".
+        underside: Height [m] of the body's underside above the ground it stands on.
+        underside_why: Where `underside` comes from, e.g. "at stand_height 0.05 m".
+        underside_hint: What to change to raise it, e.g. "raise 'stand_height'".
+        clearance: [m] an obstacle stays this far below the underside.
+        max_points: Largest heightfield (grid points) a run may build.
+    """
+
+    friction: float
+    climbable: float
+    climbable_why: str
+    climbable_hint: str
+    underside: float
+    underside_why: str
+    underside_hint: str
+    clearance: float
+    max_points: int
