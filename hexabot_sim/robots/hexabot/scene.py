@@ -12,7 +12,6 @@ from hexabot_sim.control.gait import GaitPlanner
 from hexabot_sim.control.hexabot import GroundController, GroundSettings, HexabotController, WalkSettings
 from hexabot_sim.control.resolved_rate import ResolvedRateGains
 from hexabot_sim.kinematics import hexabot as hx
-from hexabot_sim.terrain import Ground
 from hexabot_sim.robots.hexabot.parameters import (
     ACCELERATION_HEADROOM,
     ACCELERATION_LIMIT,
@@ -28,6 +27,7 @@ from hexabot_sim.robots.hexabot.parameters import (
     neutral,
     terrain,
 )
+from hexabot_sim.terrain import Ground
 
 
 def _perturbations(p: HexabotParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
