@@ -18,7 +18,7 @@ from hexabot_sim.kinematics.chain import Joint, SerialChain
 N = 500  # random configurations per robot
 N_CONSTRUCTED = 200  # random configurations per chain built in this file (keeps the file under 10 s)
 GENERATED = ("rrp", "elbow", "stanford", "scara")
-SCRIPT = Path(__file__).resolve().parent.parent / "scripts" / "generate_models.py"
+SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "generate_models.py"
 
 
 def load_generator():
