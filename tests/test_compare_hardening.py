@@ -8,15 +8,10 @@ import subprocess
 import sys
 
 import pytest
+from helpers import cli
 
 from hexabot_sim import compare
 from hexabot_sim.__main__ import main
-
-
-def cli(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.fixture(scope="module")

@@ -4,14 +4,9 @@ import io
 
 import numpy as np
 import pytest
+from helpers import cli
 
 from hexabot_sim.__main__ import main
-
-
-def cli(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.fixture(scope="module")

@@ -6,17 +6,11 @@ import subprocess
 import sys
 
 import pytest
+from helpers import cli
 
 from hexabot_sim import output
-from hexabot_sim.__main__ import main
 
 FAST = ["--set", "duration=0.05", "--no-plots"]
-
-
-def cli(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def _dead_pid() -> int:

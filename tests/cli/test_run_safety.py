@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 import pytest
+from helpers import cli
 
 from hexabot_sim import output, params, registry
 from hexabot_sim.__main__ import main
@@ -18,12 +19,6 @@ from hexabot_sim.errors import OutputError, UsageError
 from hexabot_sim.robots.pendulum.pendulum import PendulumParams
 
 FAST = ["--set", "duration=0.05", "--no-plots"]
-
-
-def cli(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def one_line_error(err: str) -> str:

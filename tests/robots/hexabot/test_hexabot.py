@@ -6,6 +6,7 @@ import math
 import mujoco
 import numpy as np
 import pytest
+from helpers import walk
 
 from hexabot_sim import models, params
 from hexabot_sim.__main__ import main
@@ -16,14 +17,8 @@ from hexabot_sim.kinematics import hexabot_mjcf
 from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.robots.hexabot import parameters as hexabot_parameters
 from hexabot_sim.robots.hexabot import scene as hexabot_scene
-from hexabot_sim.robots.hexabot import walk as scenario
 
 LEGS = hx.LEGS
-
-
-def walk(**overrides):
-    p = params.resolve(hexabot_parameters.HexabotParams, {}, overrides)
-    return scenario.run("hexabot-walk", p)
 
 
 def quat_to_matrix(q):

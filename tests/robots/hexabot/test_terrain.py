@@ -7,8 +7,8 @@ import multiprocessing
 import mujoco
 import numpy as np
 import pytest
+from helpers import walk, walk_params
 
-from hexabot_sim import params
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import hexabot as hx
 from hexabot_sim.robots.hexabot import metrics as hexabot_metrics
@@ -21,12 +21,7 @@ from hexabot_sim.terrain.ground import SQUARE as TERRAIN_SQUARE
 SLOPE = {"slope_deg": 10.0, "touchdown": "sensed", "level_body": "on", "duration": 10.0}
 
 
-def resolve(**overrides):
-    return params.resolve(hexabot_parameters.HexabotParams, {}, overrides)
-
-
-def walk(**overrides):
-    return scenario.run("hexabot-walk", resolve(**overrides))
+resolve = walk_params
 
 
 def value(result, name):
