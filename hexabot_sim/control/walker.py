@@ -1,6 +1,9 @@
-"""Walking controller of the hexabot: gait targets per leg, the leg's resolved-rate step, heading hold.
+"""Walking controller of a legged robot: gait targets per leg, the leg's resolved-rate step, heading hold.
 
-Per control period: read the 18 joint angles (the servos' encoders), take each foot's target at t
+Shared by every robot built of the 3-DOF leg (kinematics/legged.py): the number of legs comes from the
+layout, and the model must name its joints, actuators and touch sensors after the layout's legs.
+
+Per control period: read the 3 joint angles of every leg (the servos' encoders), take each foot's target at t
 and t + dt from the gait planner (planned a chunk ahead, in the leg's hip frame), and advance each
 leg's joint command with `resolved_rate.rate_steps` — the same step leg-step uses, compiled (the
 per-step work runs in control/kernels.py; planning, once a chunk, stays here). The servos get
@@ -26,7 +29,7 @@ import numpy as np
 
 from hexabot_sim.control.gait import Command, GaitPlanner
 from hexabot_sim.control.resolved_rate import ResolvedRateGains, step_constants
-from hexabot_sim.kinematics import hexabot as hx
+from hexabot_sim.kinematics import legged
 
 
 def kernels():
@@ -53,7 +56,8 @@ class WalkSettings:
         ramp_time: The command grows linearly from 0 to `command` over this time [s].
         heading_hold: Correct the yaw rate from the IMU's yaw.
         heading_gain: Yaw-rate correction per radian of heading error [1/s].
-        trims: Servo zero errors (6, 3) [rad]: each servo holds q_cmd + trim while its encoder reads q - trim.
+        trims: Servo zero errors (3 n_legs,) [rad], leg by leg: each servo holds q_cmd + trim while its encoder
+            reads q - trim; empty: none.
     """
 
     command: Command
@@ -61,7 +65,7 @@ class WalkSettings:
     ramp_time: float = 1.0
     heading_hold: bool = False
     heading_gain: float = 2.0
-    trims: tuple[float, ...] = (0.0,) * 18
+    trims: tuple[float, ...] = ()
 
 
 def yaw_of(quat: np.ndarray) -> float:
@@ -70,18 +74,19 @@ def yaw_of(quat: np.ndarray) -> float:
     return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
-class HexabotController:
-    """Drives the 18 servos of models/hexabot.xml so the body follows a walking command.
+class WalkingController:
+    """Drives the 3 n_legs servos of a legged robot's model (models/hexabot.xml for the hexabot) so the body
+    follows a walking command.
 
     Call it before every mj_step (it is a simulate() controller). State lives here: the joint command
-    q_cmd (18,), the previous joint rate, the planned targets of the current chunk.
+    q_cmd (3 n_legs,), the previous joint rate, the planned targets of the current chunk.
     """
 
     def __init__(
         self,
         model: mujoco.MjModel,
         data: mujoco.MjData,
-        layout: hx.Layout,
+        layout: legged.Layout,
         planner: GaitPlanner,
         gains: ResolvedRateGains,
         settings: WalkSettings,
@@ -92,27 +97,37 @@ class HexabotController:
         self.settings = settings
         self.dt = planner.dt
         self.foot_radius = layout.foot_radius
-        self.qadr = [int(model.joint(f"{leg}_{j}").qposadr[0]) for leg in hx.LEGS for j in hx.JOINTS]
-        if self.qadr != list(range(7, 25)):
-            raise ValueError("hexabot.xml must put the 18 leg joints right after the free joint, in LEGS order")
-        pos_act = [model.actuator(f"{leg}_{j}").id for leg in hx.LEGS for j in hx.JOINTS]
-        vel_act = [model.actuator(f"{leg}_{j}_velocity").id for leg in hx.LEGS for j in hx.JOINTS]
-        if pos_act + vel_act != list(range(36)):
-            raise ValueError("hexabot.xml must list the 18 position then the 18 velocity actuators in LEGS order")
+        n = layout.n_legs
+        if planner.n_legs != n:
+            raise ValueError(f"the gait planner has {planner.n_legs} legs; the layout has {n}")
+        nq = 3 * n
+        self.qadr = [int(model.joint(f"{leg}_{j}").qposadr[0]) for leg in layout.legs for j in legged.JOINTS]
+        if self.qadr != list(range(7, 7 + nq)):
+            raise ValueError(f"the model must put the {nq} leg joints after the free joint, in the layout's order")
+        pos_act = [model.actuator(f"{leg}_{j}").id for leg in layout.legs for j in legged.JOINTS]
+        vel_act = [model.actuator(f"{leg}_{j}_velocity").id for leg in layout.legs for j in legged.JOINTS]
+        if pos_act + vel_act != list(range(2 * nq)):
+            raise ValueError(
+                f"the model must list the {nq} position then the {nq} velocity actuators in the layout's order"
+            )
         self.quat_adr = int(model.sensor_adr[model.sensor("imu_quat").id])
-        lower, upper = hx.JOINT_LOWER, hx.JOINT_UPPER
+        lower, upper = legged.JOINT_LOWER, legged.JOINT_UPPER
         self.kernels = kernels()
         self.consts = np.array(step_constants(layout.geometry, gains, lower, upper))
-        self.trims = np.array(settings.trims, dtype=float)
+        self.trims = np.array(settings.trims, dtype=float) if settings.trims else np.zeros(nq)
+        if self.trims.shape != (nq,):
+            raise ValueError(f"{n} legs need {nq} servo trims; got {len(settings.trims)}")
         self.q_cmd = np.array(q_start, dtype=float).ravel()  # the position servos' command [rad]
-        self.dq = np.zeros(18)  # the rate it moved at over the last step [rad/s]
-        self.rot = layout.hip_rotations()  # (6, 3, 3) hip -> body
-        self.hips = layout.hip_positions()  # (6, 3)
-        # Targets of the current chunk in each hip frame, one flat row of 18 floats per step, and stance flags.
-        self._feed = np.zeros((0, 18))  # per step: the rate_steps feed (v_des + K x_des)
+        if self.q_cmd.shape != (nq,):
+            raise ValueError(f"{n} legs need {nq} start joint angles; got {self.q_cmd.size}")
+        self.dq = np.zeros(nq)  # the rate it moved at over the last step [rad/s]
+        self.rot = layout.hip_rotations()  # (n, 3, 3) hip -> body
+        self.hips = layout.hip_positions()  # (n, 3)
+        # Targets of the current chunk in each hip frame, one flat row of 3 n floats per step, and stance flags.
+        self._feed = np.zeros((0, nq))  # per step: the rate_steps feed (v_des + K x_des)
         self._k = 0
-        # Rolling state carried between chunks: last row's offset (6, 2), offset at lift-off (6, 2), in stance.
-        self._rolling = (np.zeros((6, 2)), np.zeros((6, 2)), np.ones(6, dtype=bool))
+        # Rolling state carried between chunks: last row's offset (n, 2), offset at lift-off (n, 2), in stance.
+        self._rolling = (np.zeros((n, 2)), np.zeros((n, 2)), np.ones(n, dtype=bool))
         self._chunk = 0  # steps in the current chunk (0: plan one first)
         # Heading: desired yaw (integral of the commanded yaw rate) and the unwrapped measured yaw.
         self._yaw_des = 0.0
@@ -152,26 +167,26 @@ class HexabotController:
             # The commanded heading advances by the yaw rate times the integral of the ramp over the chunk.
             self._yaw_des += s.command.yaw_rate * float(np.sum(0.5 * (ramp[1:] + ramp[:-1]))) * self.dt
         self.commands.append((t, cmd.vx, cmd.vy, cmd.yaw_rate))
-        targets = self.planner.plan(cmd, n, None if ramp[0] >= 1.0 else self.scale)  # (n + 1, 6, 3) body frame
+        targets = self.planner.plan(cmd, n, None if ramp[0] >= 1.0 else self.scale)  # (n + 1, legs, 3) body frame
         times = self.planner.time - self.dt * np.arange(n, -1, -1)  # (n + 1,)
-        stance = self.planner.in_stance(times)  # (n + 1, 6)
+        stance = self.planner.in_stance(times)  # (n + 1, legs)
         duty = self.planner.gait.duty
         swing_s = np.where(stance, 0.0, (self.planner.phase(times) - duty) / (1.0 - duty))
         # Body -> hip frame of each leg: R^T (p - hip).
-        hip = np.einsum("lji,klj->kli", self.rot, targets - self.hips)  # (n + 1, 6, 3)
+        hip = np.einsum("lji,klj->kli", self.rot, targets - self.hips)  # (n + 1, legs, 3)
         hip += self._rolling_offsets(hip, stance, swing_s)
-        self._publish(hip.reshape(n + 1, 18), stance)
+        self._publish(hip.reshape(n + 1, -1), stance)
         self._chunk = n
         self._k = 0
 
     def _publish(self, rows: np.ndarray, stance: np.ndarray) -> None:
-        """Keeps what the steps of the chunk need from its targets rows (n + 1, 18) (hip frames) and stance flags."""
+        """Keeps what the steps of the chunk need from its target rows (n + 1, 3 legs) (hip frames) and stance flags."""
         rates = np.empty(rows[1:].size)
         self.kernels.feed(self.consts[3], rows[:-1].ravel(), rows[1:].ravel(), self.dt, rates)
-        self._feed = rates.reshape(-1, 18)
+        self._feed = rates.reshape(rows.shape[0] - 1, rows.shape[1])
 
     def _rolling_offsets(self, hip: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
-        """Offsets (n + 1, 6, 3) of the foot-centre targets for feet that roll without slipping.
+        """Offsets (n + 1, legs, 3) of the foot-centre targets for feet that roll without slipping.
 
         A sphere foot rolling without slip moves its centre over the ground by r dtheta along the leg's
         radial direction e_r, theta = q2 + q3 its pitch. So in stance the centre target is shifted by
@@ -180,34 +195,35 @@ class HexabotController:
         swing, the shift reached at lift-off fades out over the first half. The state at the end of a
         chunk carries over to the next one, whose row 0 repeats the previous chunk's last row.
         """
-        n = hip.shape[0] - 1
+        n, n_legs = hip.shape[0] - 1, hip.shape[1]
         offset0, lift0, was0 = self._rolling
         # Which rows roll, and the latest touchdown / lift-off row at every row (0: none in this chunk).
-        st = stance[1:]  # (n, 6); row 0 is the previous chunk's last row
+        st = stance[1:]  # (n, legs); row 0 is the previous chunk's last row
         before = np.vstack([was0[None], st[:-1]])
         rows = np.arange(1, n + 1)[:, None]  # (n, 1)
-        last_td = np.maximum.accumulate(np.where(st & ~before, rows, 0), axis=0)  # (n, 6)
+        last_td = np.maximum.accumulate(np.where(st & ~before, rows, 0), axis=0)  # (n, legs)
         last_lo = np.maximum.accumulate(np.where(~st & before, rows, 0), axis=0)
-        legs = np.arange(6)
-        td_row, lo_row = np.maximum(last_td - 1, 0) * 6 + legs, np.maximum(last_lo - 1, 0) * 6 + legs  # flat (row, leg)
+        legs = np.arange(n_legs)
+        td_row = np.maximum(last_td - 1, 0) * n_legs + legs  # flat (row, leg)
+        lo_row = np.maximum(last_lo - 1, 0) * n_legs + legs
         after_td, after_lo = (last_td > 0)[..., None], (last_lo > 0)[..., None]
         # r e_r at the middle of every rolling step (0 elsewhere), and the swing's fade (smoothstep 1 -> 0).
-        radial = hip[..., :2] / np.hypot(hip[..., 0], hip[..., 1])[..., None]  # (n + 1, 6, 2)
+        radial = hip[..., :2] / np.hypot(hip[..., 0], hip[..., 1])[..., None]  # (n + 1, legs, 2)
         e_mid = radial[1:] + radial[:-1]
         e_mid *= (self.foot_radius / np.hypot(e_mid[..., 0], e_mid[..., 1]))[..., None]
-        r_e = np.where((st & before)[..., None], e_mid, 0.0)  # (n, 6, 2)
+        r_e = np.where((st & before)[..., None], e_mid, 0.0)  # (n, legs, 2)
         fade = 1.0 - np.clip(2.0 * swing_s[1:], 0.0, 1.0)
-        fade = (fade * fade * (3.0 - 2.0 * fade))[..., None]  # (n, 6, 1)
-        offset = np.repeat(lift0[None], n + 1, axis=0)  # (n + 1, 6, 2) [m] first guess
+        fade = (fade * fade * (3.0 - 2.0 * fade))[..., None]  # (n, legs, 1)
+        offset = np.repeat(lift0[None], n + 1, axis=0)  # (n + 1, legs, 2) [m] first guess
         stance3 = st[..., None]
         shifted = hip.copy()
         for _ in range(2):
             shifted[..., :2] = hip[..., :2] + offset
-            theta = hx.foot_pitch(self.layout, shifted)  # (n + 1, 6)
-            total = np.cumsum(r_e * np.diff(theta, axis=0)[..., None], axis=0)  # (n, 6, 2)
+            theta = legged.foot_pitch(self.layout, shifted)  # (n + 1, legs)
+            total = np.cumsum(r_e * np.diff(theta, axis=0)[..., None], axis=0)  # (n, legs, 2)
             at_td = total.reshape(-1, 2)[td_row]  # total at each leg's latest touchdown
             stance_offset = np.where(after_td, total - at_td, offset0 + total)
-            full = np.concatenate([offset0[None], np.where(stance3, stance_offset, 0.0)])  # (n + 1, 6, 2)
+            full = np.concatenate([offset0[None], np.where(stance3, stance_offset, 0.0)])  # (n + 1, legs, 2)
             lift = np.where(after_lo, full.reshape(-1, 2)[lo_row], lift0)
             offset = np.concatenate([offset0[None], np.where(stance3, stance_offset, lift * fade)])
         self._rolling = (offset[-1], lift[-1], st[-1])
@@ -270,8 +286,8 @@ class Touchdown:
     touched: float  # [s] touch-sensor time (sensed) or the planned time (planned); NaN: no ground
 
 
-class GroundController(HexabotController):
-    """HexabotController with feet that find the ground and (optionally) a body kept level.
+class GroundController(WalkingController):
+    """WalkingController with feet that find the ground and (optionally) a body kept level.
 
     The gait planner's targets keep their horizontal motion; the height of each foot target (the z of
     the body/hip frame, which the hip frames share) is set here:
@@ -292,20 +308,21 @@ class GroundController(HexabotController):
         super().__init__(model, data, layout, planner, gains, settings, q_start)
         K = self.kernels
         self.ground = ground
-        touch_adr = [int(model.sensor_adr[model.sensor(f"{leg}_touch").id]) for leg in hx.LEGS]
-        feet = hx.feet_body(layout, np.asarray(q_start).reshape(6, 3))  # (6, 3)
+        n = layout.n_legs
+        touch_adr = [int(model.sensor_adr[model.sensor(f"{leg}_touch").id]) for leg in layout.legs]
+        feet = legged.feet_body(layout, np.asarray(q_start).reshape(n, 3))  # (n, 3)
         neutral = np.asarray(planner.neutral, dtype=float)
         # The legs' state (kernels module docstring): every foot in stance where it stands now.
-        self.legs = np.zeros((6, K.NLEG))
+        self.legs = np.zeros((n, K.NLEG))
         self.legs[:, K.Z] = self.legs[:, K.Z_LIFT] = feet[:, 2]
         self.legs[:, K.LANDING : K.LANDING + 2] = self.legs[:, K.NEXT_LANDING : K.NEXT_LANDING + 2] = neutral[:, :2]
-        self.flags = np.zeros((6, 3), dtype=np.int64)
+        self.flags = np.zeros((n, 3), dtype=np.int64)
         self.flags[:, K.MODE] = K.STANCE
         self.flags[:, K.WAS_STANCE] = self.flags[:, K.GROUNDED] = 1
         self.plane = np.array([-ground.stand_height, 0.0, 0.0])  # stance plane z = a + b x + c y (body frame)
         self.counts = np.zeros(3, dtype=np.int64)
         self.cmd = np.zeros(3)  # the chunk's command (vx, vy, yaw rate), heading correction included
-        self.geo = np.zeros((6, 6))
+        self.geo = np.zeros((n, K.NGEO))
         self.geo[:, K.COS], self.geo[:, K.SIN] = np.cos(layout.yaws), np.sin(layout.yaws)
         self.geo[:, K.HIP_X : K.HIP_Y + 1] = self.hips[:, :2]
         self.geo[:, K.NEUTRAL_Z] = neutral[:, 2]
@@ -321,8 +338,8 @@ class GroundController(HexabotController):
         self.par[[K.DT, K.SETTLE_TIME, K.RAMP_TIME]] = self.dt, settings.settle_time, settings.ramp_time
         self.par[K.QUAT_ADR] = self.quat_adr
         self.events: list[Touchdown] = []
-        self._events = np.zeros((6, 3))  # swings that ended in one step (kernels.targets)
-        self._row_prev = np.zeros(18)  # the targets at the current time (hip frames)
+        self._events = np.zeros((n, 3))  # swings that ended in one step (kernels.targets): one a leg at most
+        self._row_prev = np.zeros(3 * n)  # the targets at the current time (hip frames)
         self._started = False
 
     @property
