@@ -1,4 +1,10 @@
-"""Writes models/hexabot.xml from the leg's modified DH table and the body layout (one source of truth)."""
+"""Writes a legged robot's MJCF from the leg's modified DH table and the body layout (one source of truth).
+
+Any number of the 3-DOF legs (kinematics/legged.py): a plate body with a free joint, per leg the
+coxa/femur/tibia chain with its sphere foot, a position and a velocity servo per joint, an IMU and a
+touch sensor per foot. The hexabot's models/hexabot.xml is robot_xml with its layout and comment
+(kinematics/hexabot_mjcf.py).
+"""
 
 from __future__ import annotations
 
@@ -6,8 +12,8 @@ import math
 
 import numpy as np
 
-from hexabot_sim.kinematics import hexabot as hx
 from hexabot_sim.kinematics import leg as leg_kin
+from hexabot_sim.kinematics import legged
 
 SERVO_BANDWIDTH_HZ: float = 20.0  # f_n of every joint servo (as leg.xml)
 SERVO_DAMPING_RATIO: float = 1.0
@@ -17,7 +23,7 @@ SERVO_TORQUE_LIMIT: float = 1.5  # [N m] hobby servo stall torque (e.g. 15 kg cm
 # 2e-5 the tibia servo (kp ~100 N m/rad on 1.7e-4 kg m^2) rings at w dt ~ 1.5 and the walk wanders.
 ARMATURE: float = 3e-3
 LINK_RADIUS: float = 0.01  # [m] tube radius of the axial inertia m r^2 / 2 (as leg.xml)
-STANCE_LEGS: int = 3  # legs that carry the body in a tripod stance (the worst case for the servos)
+STANCE_LEGS: int = 3  # legs that carry the body in a hexapod's tripod stance (the worst case for its servos)
 # Foot contact: time constant 6 ms (3x the 2 ms timestep), critically damped, impedance 0.9 -> 0.97
 # over 1 mm: a standing foot sinks 0.15 mm (MuJoCo's default 20 ms: 0.5 mm). Stiffer settings
 # (5 ms with d = 0.99, or 4 ms) make the stance chatter at a 2 ms step (measured: feet hop at ~40 Hz).
@@ -38,12 +44,13 @@ def _look_at(eye: np.ndarray, target: tuple[float, float, float] = (0.0, 0.0, 0.
     return np.round(np.r_[right, up], 4)
 
 
-def _num(value: float) -> str:
+def num(value: float) -> str:
+    """A float as MJCF text: its shortest repr, no negative zero."""
     return repr(float(value) + 0.0)
 
 
-def _nums(values) -> str:
-    return " ".join(_num(v) for v in values)
+def nums(values) -> str:
+    return " ".join(num(v) for v in values)
 
 
 def _quat_z(angle: float) -> np.ndarray:
@@ -59,9 +66,10 @@ def link_inertia(mass: float, length: float) -> tuple[float, float, float]:
     return (mass * LINK_RADIUS**2 / 2, mass * length**2 / 12, mass * length**2 / 12)
 
 
-def loaded_joint_inertia(layout: hx.Layout, q: np.ndarray) -> np.ndarray:
+def loaded_joint_inertia(layout: legged.Layout, q: np.ndarray, stance_legs: int = STANCE_LEGS) -> np.ndarray:
     """Inertia each servo of a stance leg drives [kg m^2], (3,): the leg's own links about the joint axis,
-    the armature, and the body mass share m_total / STANCE_LEGS reflected through the leg Jacobian column.
+    the armature, and the body mass share m_total / stance_legs reflected through the leg Jacobian column
+    (stance_legs: the fewest feet that carry the body in the robot's gaits).
 
     The leg's own part is the joint-space mass-matrix diagonal of a fixed-base leg; tests compare it
     with MuJoCo's mj_fullM.
@@ -96,18 +104,18 @@ def loaded_joint_inertia(layout: hx.Layout, q: np.ndarray) -> np.ndarray:
             inertia[j] += i_centre + mass * float(d_perp @ d_perp)
     _, jac = leg_kin.foot_and_jacobian(q1, q2, q3, g.l1, g.l2, g.l3)
     column_sq = np.sum(np.array(jac, dtype=float) ** 2, axis=0)  # |dp/dq_j|^2 [m^2]
-    return inertia + ARMATURE + layout.total_mass / STANCE_LEGS * column_sq
+    return inertia + ARMATURE + layout.total_mass / stance_legs * column_sq
 
 
-def servo_gains(layout: hx.Layout) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def servo_gains(layout: legged.Layout, stance_legs: int = STANCE_LEGS) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(M, kp, kv) per joint: kp = M w_n^2, kv = 2 zeta M w_n on the loaded inertia at the neutral stance."""
-    q0 = hx.ik_body(layout, layout.neutral_feet_body())[0]
-    inertia = loaded_joint_inertia(layout, q0)
+    q0 = legged.ik_body(layout, layout.neutral_feet_body())[0]
+    inertia = loaded_joint_inertia(layout, q0, stance_legs)
     w_n = 2 * math.pi * SERVO_BANDWIDTH_HZ
     return inertia, inertia * w_n**2, 2 * SERVO_DAMPING_RATIO * inertia * w_n
 
 
-def _leg_lines(layout: hx.Layout, i: int, name: str, indent: str) -> list[str]:
+def _leg_lines(layout: legged.Layout, i: int, name: str, indent: str) -> list[str]:
     g = layout.geometry
     rows = leg_kin.modified_dh_table(g)  # (alpha, d, theta offset, r) of frames 1..4
     masses = layout.link_masses
@@ -115,36 +123,36 @@ def _leg_lines(layout: hx.Layout, i: int, name: str, indent: str) -> list[str]:
     materials = ("coxa", "femur", "tibia")
     radii = (0.008, 0.007, 0.005)
     servo = (0.012, 0.011, 0.010)
-    lo, hi = hx.JOINT_LOWER, hx.JOINT_UPPER
+    lo, hi = legged.JOINT_LOWER, legged.JOINT_UPPER
     hip = layout.hip_positions()[i]
-    lines = [f'{indent}<site name="{name}_hip" pos="{_nums(hip)}" quat="{_nums(_quat_z(layout.yaws[i]))}"/>']
+    lines = [f'{indent}<site name="{name}_hip" pos="{nums(hip)}" quat="{nums(_quat_z(layout.yaws[i]))}"/>']
     pos, quat = hip, _quat_z(layout.yaws[i])
     depth = indent
-    for j, joint in enumerate(hx.JOINTS):
+    for j, joint in enumerate(legged.JOINTS):
         alpha, d, theta, r = rows[j]
         if j > 0:  # frame j+1 = Rx(alpha) Tx(d) Rz(theta) Tz(r) in frame j
             if theta != 0 or r != 0:
                 raise ValueError("the leg's DH rows must have zero theta offset and r")
             pos, quat = np.array([d, 0.0, 0.0]), _quat_x(alpha)
-        quat_attr = "" if np.allclose(quat, [1, 0, 0, 0]) else f' quat="{_nums(quat)}"'
-        lines.append(f'{depth}<body name="{name}_{joint}" pos="{_nums(pos)}"{quat_attr}>')
+        quat_attr = "" if np.allclose(quat, [1, 0, 0, 0]) else f' quat="{nums(quat)}"'
+        lines.append(f'{depth}<body name="{name}_{joint}" pos="{nums(pos)}"{quat_attr}>')
         inner = depth + "  "
-        lines.append(f'{inner}<joint name="{name}_{joint}" range="{_num(lo[j])} {_num(hi[j])}"/>')
+        lines.append(f'{inner}<joint name="{name}_{joint}" range="{num(lo[j])} {num(hi[j])}"/>')
         length = lengths[j]
         lines.append(
-            f'{inner}<inertial pos="{_num(length / 2)} 0 0" mass="{_num(masses[j])}" '
-            f'diaginertia="{_nums(link_inertia(masses[j], length))}"/>'
+            f'{inner}<inertial pos="{num(length / 2)} 0 0" mass="{num(masses[j])}" '
+            f'diaginertia="{nums(link_inertia(masses[j], length))}"/>'
         )
         lines.append(
             f'{inner}<geom name="{name}_{joint}_servo" type="cylinder" '
-            f'fromto="0 0 {_num(-servo[j])} 0 0 {_num(servo[j])}" size="{_num(servo[j])}" material="{materials[j]}"/>'
+            f'fromto="0 0 {num(-servo[j])} 0 0 {num(servo[j])}" size="{num(servo[j])}" material="{materials[j]}"/>'
         )
         lines.append(
-            f'{inner}<geom name="{name}_{joint}" fromto="0 0 0 {_num(length)} 0 0" size="{_num(radii[j])}" '
+            f'{inner}<geom name="{name}_{joint}" fromto="0 0 0 {num(length)} 0 0" size="{num(radii[j])}" '
             f'material="{materials[j]}"/>'
         )
         depth = inner
-    foot = _num(rows[3][1])
+    foot = num(rows[3][1])
     lines.append(f'{depth}<geom name="{name}_foot" class="foot" pos="{foot} 0 0"/>')
     lines.append(f'{depth}<site name="{name}_foot" pos="{foot} 0 0"/>')
     lines.append(f'{depth}<site name="{name}_touch" class="touch" pos="{foot} 0 0"/>')
@@ -153,69 +161,36 @@ def _leg_lines(layout: hx.Layout, i: int, name: str, indent: str) -> list[str]:
     return lines
 
 
-def robot_xml(layout: hx.Layout = hx.DEFAULT_LAYOUT) -> str:
-    """The robot file models/hexabot.xml (no floor: the scene adds it)."""
-    g = layout.geometry
-    inertia, kp, kv = servo_gains(layout)
-    q0 = hx.ik_body(layout, layout.neutral_feet_body())
+def robot_xml(layout: legged.Layout, model: str, comment: str, stance_legs: int = STANCE_LEGS) -> str:
+    """The robot file models/<model>.xml (no floor: the scene adds it), opening with `comment` (an XML
+    comment, "<!-- ... -->"); its default class is named after the model."""
+    _, kp, kv = servo_gains(layout, stance_legs)
+    q0 = legged.ik_body(layout, layout.neutral_feet_body())
     px, py, pz = layout.plate
     m = layout.body_mass
     plate_inertia = (m * (py**2 + pz**2) / 3, m * (px**2 + pz**2) / 3, m * (px**2 + py**2) / 3)  # box, half sizes
     z0 = layout.body_height()
-    lo, hi = hx.JOINT_LOWER, hx.JOINT_UPPER
-    hips = "\n".join(
-        f"    {leg}: hip ({x:+.3f}, {y:+.3f}, 0) m, yaw {yaw:+.0f} deg"
-        for leg, (x, y), yaw in zip(hx.LEGS, layout.hips, layout.yaws_deg, strict=True)
-    )
-    header = f"""<!--
-  Hexabot (report 000: "a robot that walks using six legs ... capable of multi-direction walking
-  and self-balancing"). Generated by scripts/generate_models.py from hexabot_sim.kinematics.hexabot
-  (layout) and the leg's modified DH table: do not edit by hand.
-
-  Body frame: x forward, y left, z up, origin at the centre of the plate; free joint "root".
-  Six legs lf, lm, lr, rf, rm, rr (left/right x front/middle/rear), each exactly the leg of
-  models/leg.xml: L1 = {g.l1} m, L2 = {g.l2} m, L3 = {g.l3} m, joints <leg>_coxa, <leg>_femur,
-  <leg>_tibia with qpos == the leg's DH q, site <leg>_hip = the leg's DH frame 0, site <leg>_foot.
-{hips}
-
-  Masses: plate {m} kg (box {2 * px} x {2 * py} x {2 * pz} m), each leg {sum(layout.link_masses):.3f} kg
-  (coxa, femur, tibia {layout.link_masses} kg, rods as in leg.xml): {layout.total_mass:.3f} kg in all.
-  No gravity compensation: on a free-floating robot it would be an external lifting force.
-
-  Servos: per joint a position actuator (kp) and a velocity actuator (kv, fed the resolved-rate
-  joint velocity), tau = kp (q_cmd - q) + kv (dq_cmd - dq); the joint's actuatorfrcrange clamps
-  their SUM to +-{SERVO_TORQUE_LIMIT} N m (one hobby-servo torque limit for both terms).
-  Gains: f_n = {SERVO_BANDWIDTH_HZ:g} Hz, zeta = {SERVO_DAMPING_RATIO:g} on the inertia the servo drives in a
-  tripod stance at the neutral pose: the leg's own joint-space inertia plus armature {ARMATURE} kg m^2
-  plus a third of the robot's mass reflected through the leg Jacobian column
-  (hexabot_mjcf.loaded_joint_inertia): M = {_nums(np.round(inertia, 8))} kg m^2.
-
-  Contact: only the sphere feet (r = {layout.foot_radius} m) and the plate touch the ground
-  (contype 2 / the floor's conaffinity 2). Elliptic friction cones; foot friction {FOOT_FRICTION} with
-  priority over the floor; solref {FOOT_SOLREF} (time constant >= 2 x the 2 ms step), solimp
-  {FOOT_SOLIMP}: a standing foot sinks ~0.15 mm (MuJoCo's default ~0.5 mm).
-  Sensors: an IMU site on the plate (framequat, gyro, accelerometer) and a touch sensor per foot.
--->"""
+    lo, hi = legged.JOINT_LOWER, legged.JOINT_UPPER
     lines = [
-        header,
-        '<mujoco model="hexabot">',
+        comment,
+        f'<mujoco model="{model}">',
         '  <compiler angle="radian" autolimits="true"/>',
         "",
         '  <option timestep="0.002" integrator="implicitfast" cone="elliptic"/>',
         "",
         "  <default>",
-        '    <default class="hexabot">',
-        f'      <joint type="hinge" axis="0 0 1" armature="{_num(ARMATURE)}" damping="0" '
-        f'actuatorfrcrange="{_num(-SERVO_TORQUE_LIMIT)} {_num(SERVO_TORQUE_LIMIT)}"/>',
+        f'    <default class="{model}">',
+        f'      <joint type="hinge" axis="0 0 1" armature="{num(ARMATURE)}" damping="0" '
+        f'actuatorfrcrange="{num(-SERVO_TORQUE_LIMIT)} {num(SERVO_TORQUE_LIMIT)}"/>',
         '      <geom type="capsule" contype="0" conaffinity="0" group="2" mass="0"/>',
         '      <site group="4" size="0.004"/>',
         '      <default class="foot">',
-        f'        <geom type="sphere" size="{_num(layout.foot_radius)}" contype="2" conaffinity="0" group="3" '
-        f'condim="3" priority="1" friction="{_num(FOOT_FRICTION)} 0.005 0.0001" solref="{_nums(FOOT_SOLREF)}" '
-        f'solimp="{_nums(FOOT_SOLIMP)}" material="foot"/>',
+        f'        <geom type="sphere" size="{num(layout.foot_radius)}" contype="2" conaffinity="0" group="3" '
+        f'condim="3" priority="1" friction="{num(FOOT_FRICTION)} 0.005 0.0001" solref="{nums(FOOT_SOLREF)}" '
+        f'solimp="{nums(FOOT_SOLIMP)}" material="foot"/>',
         "      </default>",
         '      <default class="touch">',
-        f'        <site type="sphere" size="{_num(layout.foot_radius * 1.25)}" group="5"/>',
+        f'        <site type="sphere" size="{num(layout.foot_radius * 1.25)}" group="5"/>',
         "      </default>",
         "    </default>",
         "  </default>",
@@ -229,28 +204,28 @@ def robot_xml(layout: hx.Layout = hx.DEFAULT_LAYOUT) -> str:
         "  </asset>",
         "",
         "  <worldbody>",
-        f'    <body name="torso" pos="0 0 {_num(z0)}" childclass="hexabot">',
+        f'    <body name="torso" pos="0 0 {num(z0)}" childclass="{model}">',
         '      <freejoint name="root"/>',
-        f'      <inertial pos="0 0 0" mass="{_num(m)}" diaginertia="{_nums(plate_inertia)}"/>',
-        f'      <geom name="torso" type="box" size="{_nums(layout.plate)}" contype="2" conaffinity="0" '
+        f'      <inertial pos="0 0 0" mass="{num(m)}" diaginertia="{nums(plate_inertia)}"/>',
+        f'      <geom name="torso" type="box" size="{nums(layout.plate)}" contype="2" conaffinity="0" '
         'group="2" material="body"/>',
         '      <site name="imu" pos="0 0 0"/>',
-        f'      <camera name="track" mode="trackcom" pos="{_nums(TRACK_EYE)}" xyaxes="{_nums(_look_at(TRACK_EYE))}"/>',
+        f'      <camera name="track" mode="trackcom" pos="{nums(TRACK_EYE)}" xyaxes="{nums(_look_at(TRACK_EYE))}"/>',
         '      <camera name="top" mode="trackcom" pos="0 0 1.2" xyaxes="1 0 0 0 1 0"/>',
     ]
-    for i, name in enumerate(hx.LEGS):
+    for i, name in enumerate(layout.legs):
         lines += _leg_lines(layout, i, name, "      ")
     lines += ["    </body>", "  </worldbody>", "", "  <actuator>"]
-    for name in hx.LEGS:
-        for j, joint in enumerate(hx.JOINTS):
+    for name in layout.legs:
+        for j, joint in enumerate(legged.JOINTS):
             lines.append(
-                f'    <position name="{name}_{joint}" joint="{name}_{joint}" kp="{_num(round(kp[j], 4))}" '
-                f'ctrlrange="{_num(lo[j])} {_num(hi[j])}"/>'
+                f'    <position name="{name}_{joint}" joint="{name}_{joint}" kp="{num(round(kp[j], 4))}" '
+                f'ctrlrange="{num(lo[j])} {num(hi[j])}"/>'
             )
-    for name in hx.LEGS:
-        for j, joint in enumerate(hx.JOINTS):
+    for name in layout.legs:
+        for j, joint in enumerate(legged.JOINTS):
             lines.append(
-                f'    <velocity name="{name}_{joint}_velocity" joint="{name}_{joint}" kv="{_num(round(kv[j], 6))}"/>'
+                f'    <velocity name="{name}_{joint}_velocity" joint="{name}_{joint}" kv="{num(round(kv[j], 6))}"/>'
             )
     lines += ["  </actuator>", "", "  <sensor>"]
     lines += [
@@ -258,15 +233,15 @@ def robot_xml(layout: hx.Layout = hx.DEFAULT_LAYOUT) -> str:
         '    <gyro name="imu_gyro" site="imu"/>',
         '    <accelerometer name="imu_acc" site="imu"/>',
     ]
-    lines += [f'    <touch name="{name}_touch" site="{name}_touch"/>' for name in hx.LEGS]
+    lines += [f'    <touch name="{name}_touch" site="{name}_touch"/>' for name in layout.legs]
     lines += ["  </sensor>", ""]
     qpos = [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0, *q0.ravel()]
-    ctrl = [*q0.ravel(), *np.zeros(18)]
+    ctrl = [*q0.ravel(), *np.zeros(q0.size)]
     lines += [
         "  <keyframe>",
         "    <!-- Neutral stance: every foot (neutral_reach, 0, -stand_height) in its hip frame, on the ground. -->",
-        f'    <key name="home" qpos="{_nums(qpos)}"',
-        f'         ctrl="{_nums(ctrl)}"/>',
+        f'    <key name="home" qpos="{nums(qpos)}"',
+        f'         ctrl="{nums(ctrl)}"/>',
         "  </keyframe>",
         "</mujoco>",
         "",
@@ -274,15 +249,12 @@ def robot_xml(layout: hx.Layout = hx.DEFAULT_LAYOUT) -> str:
     return "\n".join(lines)
 
 
-def scene_xml() -> str:
-    """models/hexabot_scene.xml: the robot on a replaceable flat floor (geom "floor"), light and sky."""
-    return """<!--
-  The hexabot on flat ground. The floor is one geom named "floor" (conaffinity 2: only the feet and
-  the plate touch it) so a scenario can swap it for a slope or a heightfield. Generated by
-  scripts/generate_models.py.
--->
-<mujoco model="hexabot scene">
-  <include file="hexabot.xml"/>
+def scene_xml(model: str, comment: str) -> str:
+    """models/<model>_scene.xml: the robot (models/<model>.xml) on a replaceable flat floor (geom "floor"),
+    light and sky, opening with `comment` (an XML comment)."""
+    return f"""{comment}
+<mujoco model="{model} scene">
+  <include file="{model}.xml"/>
 
   <visual>
     <headlight ambient="0.35 0.35 0.35" diffuse="0.5 0.5 0.5"/>
