@@ -16,15 +16,23 @@ from hexabot_sim.kinematics.legged_mjcf import (  # noqa: F401 (re-exported: the
     SERVO_BANDWIDTH_HZ,
     SERVO_DAMPING_RATIO,
     SERVO_TORQUE_LIMIT,
-    STANCE_LEGS,
     TRACK_EYE,
     link_inertia,
-    loaded_joint_inertia,
     nums,
-    servo_gains,
 )
 
 MODEL = "hexabot"
+STANCE_LEGS: int = 3  # legs that carry the body in a tripod stance (the worst case for the servos)
+
+
+def loaded_joint_inertia(layout: hx.Layout, q: np.ndarray) -> np.ndarray:
+    """legged_mjcf.loaded_joint_inertia of a hexabot leg, a third of the mass on it (tripod)."""
+    return legged_mjcf.loaded_joint_inertia(layout, q, STANCE_LEGS)
+
+
+def servo_gains(layout: hx.Layout) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """legged_mjcf.servo_gains of the hexabot's servos (sized for the tripod stance)."""
+    return legged_mjcf.servo_gains(layout, STANCE_LEGS)
 
 
 def _comment(layout: hx.Layout) -> str:
@@ -69,7 +77,7 @@ def _comment(layout: hx.Layout) -> str:
 
 def robot_xml(layout: hx.Layout = hx.DEFAULT_LAYOUT) -> str:
     """The robot file models/hexabot.xml (no floor: the scene adds it)."""
-    return legged_mjcf.robot_xml(layout, MODEL, _comment(layout))
+    return legged_mjcf.robot_xml(layout, MODEL, _comment(layout), STANCE_LEGS)
 
 
 def scene_xml() -> str:

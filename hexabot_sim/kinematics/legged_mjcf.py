@@ -23,7 +23,6 @@ SERVO_TORQUE_LIMIT: float = 1.5  # [N m] hobby servo stall torque (e.g. 15 kg cm
 # 2e-5 the tibia servo (kp ~100 N m/rad on 1.7e-4 kg m^2) rings at w dt ~ 1.5 and the walk wanders.
 ARMATURE: float = 3e-3
 LINK_RADIUS: float = 0.01  # [m] tube radius of the axial inertia m r^2 / 2 (as leg.xml)
-STANCE_LEGS: int = 3  # legs that carry the body in a hexapod's tripod stance (the worst case for its servos)
 # Foot contact: time constant 6 ms (3x the 2 ms timestep), critically damped, impedance 0.9 -> 0.97
 # over 1 mm: a standing foot sinks 0.15 mm (MuJoCo's default 20 ms: 0.5 mm). Stiffer settings
 # (5 ms with d = 0.99, or 4 ms) make the stance chatter at a 2 ms step (measured: feet hop at ~40 Hz).
@@ -66,10 +65,10 @@ def link_inertia(mass: float, length: float) -> tuple[float, float, float]:
     return (mass * LINK_RADIUS**2 / 2, mass * length**2 / 12, mass * length**2 / 12)
 
 
-def loaded_joint_inertia(layout: legged.Layout, q: np.ndarray, stance_legs: int = STANCE_LEGS) -> np.ndarray:
+def loaded_joint_inertia(layout: legged.Layout, q: np.ndarray, stance_legs: int) -> np.ndarray:
     """Inertia each servo of a stance leg drives [kg m^2], (3,): the leg's own links about the joint axis,
     the armature, and the body mass share m_total / stance_legs reflected through the leg Jacobian column
-    (stance_legs: the fewest feet that carry the body in the robot's gaits).
+    (stance_legs: the fewest feet that carry the body in the robot's gaits, the worst case for its servos).
 
     The leg's own part is the joint-space mass-matrix diagonal of a fixed-base leg; tests compare it
     with MuJoCo's mj_fullM.
@@ -107,7 +106,7 @@ def loaded_joint_inertia(layout: legged.Layout, q: np.ndarray, stance_legs: int 
     return inertia + ARMATURE + layout.total_mass / stance_legs * column_sq
 
 
-def servo_gains(layout: legged.Layout, stance_legs: int = STANCE_LEGS) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def servo_gains(layout: legged.Layout, stance_legs: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(M, kp, kv) per joint: kp = M w_n^2, kv = 2 zeta M w_n on the loaded inertia at the neutral stance."""
     q0 = legged.ik_body(layout, layout.neutral_feet_body())[0]
     inertia = loaded_joint_inertia(layout, q0, stance_legs)
@@ -161,9 +160,9 @@ def _leg_lines(layout: legged.Layout, i: int, name: str, indent: str) -> list[st
     return lines
 
 
-def robot_xml(layout: legged.Layout, model: str, comment: str, stance_legs: int = STANCE_LEGS) -> str:
+def robot_xml(layout: legged.Layout, model: str, comment: str, stance_legs: int) -> str:
     """The robot file models/<model>.xml (no floor: the scene adds it), opening with `comment` (an XML
-    comment, "<!-- ... -->"); its default class is named after the model."""
+    comment, "<!-- ... -->"); its default class is named after the model. Servo gains: servo_gains."""
     _, kp, kv = servo_gains(layout, stance_legs)
     q0 = legged.ik_body(layout, layout.neutral_feet_body())
     px, py, pz = layout.plate
