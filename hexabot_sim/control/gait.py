@@ -6,7 +6,7 @@ instantaneous centre of rotation when turning. A foot in swing follows the repor
 arc: a cubic Hermite in the ground plane whose end velocities equal the stance velocity at lift-off
 and touchdown (no stubbing, no scuffing), lifted by h sin^2(pi s) (zero vertical speed at both ends).
 
-Targets are planned in chunks (numpy over all six legs and every step of the chunk); between chunks
+Targets are planned in chunks (numpy over all the legs and every step of the chunk); between chunks
 the command may change (heading hold), and every leg continues from where its target is, so the
 targets stay continuous in position and velocity.
 """
@@ -19,14 +19,16 @@ from collections.abc import Callable
 
 import numpy as np
 
-from hexabot_sim.kinematics.hexabot import LEGS
-
 CHUNK_TIME: float = 1.0  # [s] targets planned at once
 
 
 @dataclasses.dataclass(frozen=True)
 class Gait:
-    """Phase offsets of the legs (LEGS order, in cycles) and the stance fraction of a cycle."""
+    """Phase offsets of the legs (the layout's leg order, in cycles) and the stance fraction of a cycle.
+
+    A leg's phase is (cycles + offset) mod 1, in stance while it is below `duty`: within a cycle the
+    leg with the largest offset lifts first.
+    """
 
     name: str
     offsets: tuple[float, ...]
@@ -34,25 +36,52 @@ class Gait:
     doc: str
 
 
-GAITS: dict[str, Gait] = {
-    g.name: g
-    for g in (
-        # lf, lm, lr, rf, rm, rr
-        Gait("tripod", (0.0, 0.5, 0.0, 0.5, 0.0, 0.5), 0.5, "two alternating tripods (lf, rm, lr) and (rf, lm, rr)"),
-        Gait(
-            "ripple",
-            (2 / 3, 1 / 3, 0.0, 1 / 6, 5 / 6, 0.5),
-            2 / 3,
-            "a wave back to front on each side, the sides half a cycle apart: four feet down",
-        ),
-        Gait(
-            "wave",
-            (2 / 6, 1 / 6, 0.0, 5 / 6, 4 / 6, 3 / 6),
-            5 / 6,
-            "one leg at a time, rear to front, left then right: five feet down",
-        ),
-    )
+# The gaits of each leg count. Offsets follow the legs' order in the layout: the left row front to rear,
+# then the right row (kinematics/legged.Layout).
+HEXAPOD_GAITS: tuple[Gait, ...] = (  # lf, lm, lr, rf, rm, rr
+    Gait("tripod", (0.0, 0.5, 0.0, 0.5, 0.0, 0.5), 0.5, "two alternating tripods (lf, rm, lr) and (rf, lm, rr)"),
+    Gait(
+        "ripple",
+        (2 / 3, 1 / 3, 0.0, 1 / 6, 5 / 6, 0.5),
+        2 / 3,
+        "a wave back to front on each side, the sides half a cycle apart: four feet down",
+    ),
+    Gait(
+        "wave",
+        (2 / 6, 1 / 6, 0.0, 5 / 6, 4 / 6, 3 / 6),
+        5 / 6,
+        "one leg at a time, rear to front, left then right: five feet down",
+    ),
+)
+QUADRUPED_GAITS: tuple[Gait, ...] = (  # lf, lr, rf, rr
+    # Swings lr, lf, rr, rf (left hind, left fore, right hind, right fore: the lateral-sequence crawl), a
+    # quarter cycle each. Of the six orders it keeps the body's centre best inside the triangle of the three
+    # feet down: on its edge at worst at duty 3/4 while walking straight, inside with a larger duty
+    # (tests/test_legged.py); the other orders put it outside.
+    Gait(
+        "crawl",
+        (0.5, 0.75, 0.0, 0.25),
+        0.75,
+        "one leg at a time, hind then fore, left then right (lr, lf, rr, rf): three feet down",
+    ),
+    Gait("trot", (0.0, 0.5, 0.5, 0.0), 0.5, "two alternating diagonal pairs (lf, rr) and (rf, lr)"),
+)
+GAITS_BY_LEGS: dict[int, dict[str, Gait]] = {
+    len(gaits[0].offsets): {g.name: g for g in gaits} for gaits in (HEXAPOD_GAITS, QUADRUPED_GAITS)
 }
+GAITS: dict[str, Gait] = GAITS_BY_LEGS[6]  # the hexabot's (robots/hexabot/walk.py); new code: gaits_for(n_legs)
+
+
+def gaits_for(n_legs: int) -> dict[str, Gait]:
+    """The gaits of a robot with n_legs legs, by name.
+
+    Raises:
+        ValueError: if no gait is defined for that many legs.
+    """
+    if n_legs not in GAITS_BY_LEGS:
+        counts = ", ".join(str(n) for n in sorted(GAITS_BY_LEGS))
+        raise ValueError(f"no gaits for {n_legs} legs (gaits exist for {counts} legs)")
+    return GAITS_BY_LEGS[n_legs]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -162,7 +191,8 @@ class GaitPlanner:
         gait: Which legs swing when.
         period: Gait cycle [s].
         step_height: Swing lift [m].
-        neutral: Neutral foot centres (6, 3) in the body frame [m]; z is the stance height.
+        neutral: Neutral foot centres (n_legs, 3) in the body frame [m]; z is the stance height. The leg count
+            comes from here; the gait must have as many offsets.
         dt: Control period [s]; targets are produced for every multiple of dt.
         start_time: Gait clock starts here [s] (before it, every foot holds its neutral point).
     """
@@ -176,14 +206,19 @@ class GaitPlanner:
 
     def __post_init__(self) -> None:
         self.neutral = np.asarray(self.neutral, dtype=float).copy()
+        if self.neutral.ndim != 2 or self.neutral.shape[1] != 3:
+            raise ValueError(f"neutral feet must be (n_legs, 3); got {self.neutral.shape}")
+        self.n_legs = n = self.neutral.shape[0]
+        if len(self.gait.offsets) != n:
+            raise ValueError(f"the {self.gait.name} gait is for {len(self.gait.offsets)} legs; the robot has {n}")
         self.offsets = np.array(self.gait.offsets)
         self.stance_time = self.gait.duty * self.period
         self.swing_time = (1 - self.gait.duty) * self.period
-        # State of every foot target at the planner's time: position (6, 3), planar velocity (6, 2).
+        # State of every foot target at the planner's time: position (n, 3), planar velocity (n, 2).
         self.time = 0.0
         self.pos = self.neutral.copy()
-        self.vel = np.zeros((6, 2))
-        self.swing_targets: list[np.ndarray | None] = [None] * 6  # touchdown point of each swing under way
+        self.vel = np.zeros((n, 2))
+        self.swing_targets: list[np.ndarray | None] = [None] * n  # touchdown point of each swing under way
         # Steps planned at once: planning costs ~0.4 ms a chunk plus ~4 us a step (numpy over the legs and
         # the rows), and the command (heading hold) changes between chunks. With 1 s chunks the loop is ~1 us
         # a step cheaper than with 0.5 s, and heading hold keeps an imperfect robot as straight (measured).
@@ -191,12 +226,12 @@ class GaitPlanner:
         self._warp = _Warp(np.zeros(1), None)
 
     def phase(self, t: np.ndarray | float) -> np.ndarray:
-        """Gait phase in [0, 1) of each leg (..., 6); stance while phase < duty. Before start_time: stance."""
+        """Gait phase in [0, 1) of each leg (..., n_legs); stance while phase < duty. Before start_time: stance."""
         cycles = (np.asarray(t, dtype=float) - self.start_time) / self.period
         return np.mod(np.asarray(cycles)[..., None] + self.offsets, 1.0)
 
     def in_stance(self, t: np.ndarray | float) -> np.ndarray:
-        """True where the plan has the foot on the ground (..., 6).
+        """True where the plan has the foot on the ground (..., n_legs).
 
         Every foot is down before start_time, and a swing whose lift-off would have come before it is
         skipped (that foot stays down until its next lift-off): no foot is snatched up mid-swing.
@@ -208,7 +243,7 @@ class GaitPlanner:
         return ~swing
 
     def plan(self, cmd: Command, n_steps: int, scale: Scale | None = None) -> np.ndarray:
-        """Targets (n_steps + 1, 6, 3) at time, time + dt, ..., time + n_steps dt; advances the planner by n_steps dt.
+        """Targets (n_steps + 1, n_legs, 3) at time, time + dt, ..., time + n_steps dt; advances the planner n_steps dt.
 
         Row 0 equals the last row of the previous chunk (continuity); n_steps <= max_chunk.
 
@@ -226,14 +261,14 @@ class GaitPlanner:
             standing = self.plan(Command(), before)
             return np.concatenate([standing, self.plan(cmd, n_steps - before, scale)[1:]])
         times = self.time + self.dt * np.arange(n_steps + 1)  # (n+1,)
-        out = np.repeat(self.pos[None], n_steps + 1, axis=0)  # (n+1, 6, 3)
+        out = np.repeat(self.pos[None], n_steps + 1, axis=0)  # (n+1, n_legs, 3)
         if times[-1] <= self.start_time:  # standing still before the gait starts
             self.time = float(times[-1])
             return out
         self._warp = _Warp(times, scale)
-        new_vel = np.zeros((6, 2))
-        stance_all = self.in_stance(times)  # (n+1, 6)
-        for leg in range(6):
+        new_vel = np.zeros((self.n_legs, 2))
+        stance_all = self.in_stance(times)  # (n+1, n_legs)
+        for leg in range(self.n_legs):
             stance = stance_all[:, leg]
             p0, v0 = self.pos[leg, :2], self.vel[leg]
             xy = np.empty((n_steps + 1, 2))
@@ -336,4 +371,4 @@ class GaitPlanner:
         return p, v
 
 
-__all__ = ["GAITS", "LEGS", "Command", "Gait", "GaitPlanner"]
+__all__ = ["GAITS", "GAITS_BY_LEGS", "Command", "Gait", "GaitPlanner", "gaits_for"]

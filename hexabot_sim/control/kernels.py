@@ -1,10 +1,14 @@
 """Compiled per-step work of the walking controllers (numba): the servo step and the ground-finding legs.
 
-A walking controller runs before every 2 ms physics step. In pure Python its per-step work (six
-resolved-rate leg steps, the touchdown state machine, the stance plane) cost as much as MuJoCo's
+A walking controller runs before every 2 ms physics step. In pure Python its per-step work (a
+resolved-rate step per leg, the touchdown state machine, the stance plane) cost as much as MuJoCo's
 step itself; compiled it costs a few microseconds (scripts/bench.py). Everything that happens once
-per chunk (the gait plan, rolling offsets, heading hold) stays in Python, in control/hexabot.py,
+per chunk (the gait plan, rolling offsets, heading hold) stays in Python, in control/walker.py,
 which owns the state arrays these kernels update in place.
+
+No kernel knows how many legs there are: it comes from the shapes of the arrays (n legs: 3 n joint
+angles and targets, n rows of `legs`, `flags` and `geo`). numba compiles a kernel per argument types,
+not shapes, so one compiled (and cached) version serves the hexabot's six legs and any other count.
 
 The resolved-rate step is `resolved_rate.rate_steps` itself, compiled here: the single leg of
 leg-step runs the same source as plain Python (cheaper there than converting its lists to arrays).
@@ -13,11 +17,11 @@ package directory is read-only), so only the first run on a machine compiles the
 NUMBA_DISABLE_JIT=1 runs them as plain Python, for debugging.
 
 State of the ground-finding legs (GroundController), one row per leg:
-- `legs` float (6, NLEG): stance height z [m] (body/hip frame z of the foot target), its value at
+- `legs` float (n, NLEG): stance height z [m] (body/hip frame z of the foot target), its value at
   lift-off, the lift-off time [s], the horizontal target offset (x, y) [m] in the hip frame, the
   offset at lift-off, the landing point (x, y) of the swing under way in the body frame, and the
   planner's landing point of the next swing (set with each chunk's plan);
-- `flags` int (6, 3): swing mode (STANCE, SWING, EARLY, SEEKING), planned stance at the last step, grounded.
+- `flags` int (n, 3): swing mode (STANCE, SWING, EARLY, SEEKING), planned stance at the last step, grounded.
 """
 
 from __future__ import annotations
@@ -51,9 +55,10 @@ Z, Z_LIFT, T_LIFT, OFFSET, OFFSET_LIFT, LANDING, NEXT_LANDING = 0, 1, 2, 3, 5, 7
 NLEG = 11
 # Columns of `flags`.
 MODE, WAS_STANCE, GROUNDED = 0, 1, 2
-# Per-leg constants `geo` (6, 6): cos and sin of the hip yaw, hip position (x, y) in the body frame, the
+# Per-leg constants `geo` (n, NGEO): cos and sin of the hip yaw, hip position (x, y) in the body frame, the
 # neutral foot height [m], the touch sensor's address in sensordata.
 COS, SIN, HIP_X, HIP_Y, NEUTRAL_Z, TOUCH_ADR = 0, 1, 2, 3, 4, 5
+NGEO = 6
 # Scalars `par`: GroundSettings, the gait's timing and the command's ramp.
 (SENSED, LEVEL, STAND_HEIGHT, DEPTH_MIN, DEPTH_MAX, ATTITUDE_GAIN, HEIGHT_GAIN, TOUCH_THRESHOLD, UPDATE_EVERY,
  SWING_TIME, SEEK_SPEED, DT, SETTLE_TIME, RAMP_TIME, QUAT_ADR) = range(15)  # fmt: skip
@@ -64,15 +69,17 @@ STEPS, UPDATES, CLIPPED = 0, 1, 2
 
 @jit
 def servo(k, qpos, trims, q_cmd, dq, feed, dt, ctrl):
-    """One resolved-rate step of the 18 joints toward `feed` (rate_steps), written to the 36 servos.
+    """One resolved-rate step of the n joints (3 a leg) toward `feed` (rate_steps), written to the 2 n servos.
 
-    The encoders read qpos[7:25] - trims; the position servos get q_cmd + trims, the velocity servos dq.
+    The encoders read qpos[7:7 + n] - trims (the joints right after the free joint); the position servos
+    ctrl[:n] get q_cmd + trims, the velocity servos ctrl[n:2 n] dq.
     """
-    q = qpos[7:25] - trims
+    n = q_cmd.shape[0]
+    q = qpos[7 : 7 + n] - trims
     rate_steps(k, q, q_cmd, dq, feed, dt)
-    for i in range(18):
+    for i in range(n):
         ctrl[i] = q_cmd[i] + trims[i]
-        ctrl[18 + i] = dq[i]
+        ctrl[n + i] = dq[i]
 
 
 @jit
@@ -115,10 +122,11 @@ def update_plane(par, geo, legs, flags, plane, counts, row, sensordata):
     -stand_height, (b, c) to zero: from the IMU's roll and pitch (level) or the plane's own slope.
     Heights are clipped to the legs' workspace depths.
     """
-    xs, ys, zs = np.empty(6), np.empty(6), np.empty(6)
-    idx = np.empty(6, dtype=np.int64)
+    n_legs = legs.shape[0]
+    xs, ys, zs = np.empty(n_legs), np.empty(n_legs), np.empty(n_legs)
+    idx = np.empty(n_legs, dtype=np.int64)
     n = 0
-    for i in range(6):
+    for i in range(n_legs):
         mode = flags[i, MODE]
         if (mode == STANCE or mode == EARLY) and flags[i, GROUNDED]:
             c, s = geo[i, COS], geo[i, SIN]
@@ -162,7 +170,7 @@ def _event(events, n, leg, planned, touched):
 
 @jit
 def targets(par, geo, legs, flags, plane, cmd, row, stance, t, row_prev, sensordata, out, events):
-    """The planner's hip-frame row (18,) at time t with the heights and offsets of uneven ground, into out.
+    """The planner's hip-frame row (3 n,) at time t with the heights and offsets of uneven ground, into out.
 
     Per leg: a planned stance goes on at its height z; a planned lift-off starts a swing from the
     lift-off height toward the stance plane under the landing point (smoothstep) plus the planner's
@@ -175,7 +183,7 @@ def targets(par, geo, legs, flags, plane, cmd, row, stance, t, row_prev, sensord
     sensed = par[SENSED] != 0.0
     swing_time, dt, threshold = par[SWING_TIME], par[DT], par[TOUCH_THRESHOLD]
     n_events = 0
-    for i in range(6):
+    for i in range(stance.shape[0]):
         j = 3 * i
         planned = stance[i]
         mode = flags[i, MODE]
@@ -281,10 +289,10 @@ def ground_step(par, geo, k, legs, flags, plane, counts, cmd, rows, stance, r, t
     if counts[STEPS] % int(par[UPDATE_EVERY]) == 0:
         update_plane(par, geo, legs, flags, plane, counts, row_prev, sensordata)
     counts[STEPS] += 1
-    row1 = np.empty(18)
+    row1 = np.empty(row_prev.shape[0])
     n_events = targets(par, geo, legs, flags, plane, cmd, rows[r + 1], stance[r + 1], t + dt, rows[r], sensordata,
                        row1, events)  # fmt: skip
-    rate = np.empty(18)
+    rate = np.empty(row_prev.shape[0])
     feed(k[3], row_prev, row1, dt, rate)
     row_prev[:] = row1
     servo(k, qpos, trims, q_cmd, dq, rate, dt, ctrl)
@@ -325,18 +333,20 @@ def warm_up() -> None:
 
 
 def _compile_all() -> None:
-    """Calls each kernel the controllers call from Python once, on arrays of the types they pass."""
+    """Calls each kernel the controllers call from Python once, on arrays of the types they pass (for six
+    legs; the types, hence the compiled code, are the same for any leg count)."""
     par = np.zeros(NPAR)
     par[UPDATE_EVERY], par[DT], par[SWING_TIME] = 1.0, 0.002, 1.0
     gains = resolved_rate.ResolvedRateGains(max_joint_acceleration=200.0)
     k = np.array(resolved_rate.step_constants(LegGeometry(), gains, (-1.0, -1.0, 0.0), (1.0, 1.0, 2.0)))
-    qpos, sensordata, ctrl = np.zeros(25), np.zeros(8), np.zeros(36)
-    qpos[7:] = np.tile([0.0, 0.5, 1.0], 6)  # a leg away from its singularities
-    geo, legs, flags = np.zeros((6, 6)), np.zeros((6, NLEG)), np.zeros((6, 3), dtype=np.int64)
+    n, nq = 6, 18  # legs, joints: any count compiles the same code
+    qpos, sensordata, ctrl = np.zeros(7 + nq), np.zeros(8), np.zeros(2 * nq)
+    qpos[7:] = np.tile([0.0, 0.5, 1.0], n)  # a leg away from its singularities
+    geo, legs, flags = np.zeros((n, NGEO)), np.zeros((n, NLEG)), np.zeros((n, 3), dtype=np.int64)
     plane, counts, cmd = np.zeros(3), np.zeros(3, dtype=np.int64), np.zeros(3)
-    rows, stance = np.zeros((2, 18)), np.ones((2, 6), dtype=bool)
-    q_cmd, dq, trims, row, events = np.zeros(18), np.zeros(18), np.zeros(18), np.zeros(18), np.zeros((6, 3))
-    feed(1.0, rows[:-1].ravel(), rows[1:].ravel(), 0.002, np.empty(18))  # as HexabotController._publish
+    rows, stance = np.zeros((2, nq)), np.ones((2, n), dtype=bool)
+    q_cmd, dq, trims, row, events = np.zeros(nq), np.zeros(nq), np.zeros(nq), np.zeros(nq), np.zeros((n, 3))
+    feed(1.0, rows[:-1].ravel(), rows[1:].ravel(), 0.002, np.empty(nq))  # as WalkingController._publish
     servo(k, qpos, trims, q_cmd, dq, rows[0], 0.002, ctrl)
     targets(par, geo, legs, flags, plane, cmd, rows[0], stance[0], 0.0, rows[0], sensordata, row, events)
     ground_step(par, geo, k, legs, flags, plane, counts, cmd, rows, stance, 0, 0.0, row, q_cmd, dq, trims, qpos,

@@ -2,7 +2,7 @@
 
 Pure Python floats in the loop (no numpy): at 1 kHz a 3x3 problem is dominated by call overhead,
 and this keeps the controller cheaper than the MuJoCo step it drives (scripts/bench.py). The walking
-hexabot runs `rate_steps` compiled by numba (control/kernels.py): its source must stay in the
+robots run `rate_steps` compiled by numba (control/kernels.py): its source must stay in the
 subset numba compiles (floats, indexing, math; no helper that is not compiled too).
 """
 
@@ -162,7 +162,7 @@ def step_constants(geometry: LegGeometry, gains: ResolvedRateGains, q_lower: Vec
 
 def feed(gain: float, target0, target1, dt: float, out) -> None:
     """The target part of the task-space rate, (x_des(t + dt) - x_des(t)) / dt + K x_des(t), for rate_steps,
-    into `out` (as many values as it holds; compiled as kernels.feed for the hexabot's rows)."""
+    into `out` (as many values as it holds; compiled as kernels.feed for a walking robot's rows)."""
     inv = 1.0 / dt
     for i in range(len(out)):
         out[i] = (target1[i] - target0[i]) * inv + gain * target0[i]
@@ -185,7 +185,7 @@ def rate_steps(
     decouples the same way. Then: the joint speed limit on dq as a whole (the foot keeps its
     direction), braking before a range limit, the acceleration limit on the change of dq, and the
     integration inside the ranges. Pure Python floats for one leg (leg-step), cheaper than numpy's
-    per-call overhead; compiled for the hexabot's six (kernels.rate_steps, on arrays).
+    per-call overhead; compiled for a walking robot's legs (kernels.rate_steps, on arrays).
 
     Args:
         k: step_constants of the legs (the same for all).

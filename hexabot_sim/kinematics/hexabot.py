@@ -1,167 +1,43 @@
-"""The six-legged hexabot of report 000: where each DH leg sits on the body, body-frame FK/IK of all feet."""
+"""The six-legged hexabot of report 000: where each DH leg sits on its body.
+
+The body-frame kinematics of all feet (FK, IK, Jacobians) is any legged robot's, kinematics/legged.py;
+it is re-exported here, so `hexabot.ik_body(hexabot.DEFAULT_LAYOUT, feet)` reads as before.
+"""
 
 from __future__ import annotations
 
 import dataclasses
-import math
 
-import numpy as np
-from numpy.typing import ArrayLike
-
-from hexabot_sim.kinematics import leg as leg_kin
+from hexabot_sim.kinematics import legged
+from hexabot_sim.kinematics.legged import (  # noqa: F401 (re-exported: the hexabot's kinematics is the generic one)
+    JOINT_LOWER,
+    JOINT_UPPER,
+    JOINTS,
+    body_to_hip,
+    feet_body,
+    foot_pitch,
+    hip_to_body,
+    ik_body,
+    ik_hip_batch,
+    jacobians_body,
+)
 
 LEGS: tuple[str, ...] = ("lf", "lm", "lr", "rf", "rm", "rr")  # left/right x front/middle/rear
-JOINTS: tuple[str, ...] = ("coxa", "femur", "tibia")
-# Joint ranges of one leg [rad] (coxa, femur, tibia): the leg's DH table (hexabot_sim.kinematics.robots "leg").
-JOINT_LOWER = (-math.pi / 2, -math.pi / 2, 0.0)
-JOINT_UPPER = (math.pi / 2, math.pi / 2, math.radians(160.0))
 
 
 @dataclasses.dataclass(frozen=True)
-class Layout:
-    """Geometry and masses of the hexabot (body frame: x forward, y left, z up, origin at the plate centre).
+class Layout(legged.Layout):
+    """The hexabot's layout (legged.Layout with the hexabot's legs as defaults).
 
-    Each leg is the 3-DOF leg of models/leg.xml (modified DH, L1 = 50 mm, L2 = L3 = 100 mm), its
-    frame 0 (site `<leg>_hip`) at `hips[i]` in the plate's mid-plane, turned by `yaws[i]` about z:
-    front and rear legs splayed by 45 deg, middle legs sideways, as on most hobby hexapods.
+    Six legs, front and rear legs splayed by 45 deg, middle legs sideways, as on most hobby hexapods
+    (the left row mirrored: legged.mirrored(("f", "m", "r"), left hips, (45, 90, 135)) gives the same).
     """
 
-    geometry: leg_kin.LegGeometry = leg_kin.DEFAULT_GEOMETRY
+    legs: tuple[str, ...] = LEGS
     hips: tuple[tuple[float, float], ...] = (
         (0.12, 0.06), (0.0, 0.08), (-0.12, 0.06), (0.12, -0.06), (0.0, -0.08), (-0.12, -0.06),
     )  # fmt: skip
     yaws_deg: tuple[float, ...] = (45.0, 90.0, 135.0, -45.0, -90.0, -135.0)
-    plate: tuple[float, float, float] = (0.15, 0.08, 0.015)  # half sizes [m] of the body plate
-    body_mass: float = 1.0  # [kg] plate, electronics and battery
-    link_masses: tuple[float, float, float] = (0.03, 0.06, 0.04)  # [kg] coxa, femur, tibia (as leg.xml)
-    foot_radius: float = 0.008  # [m] sphere foot (as leg.xml)
-    neutral_reach: float = 0.13  # [m] horizontal hip-to-foot distance of the neutral stance
-    stand_height: float = 0.09  # [m] depth of the foot centre below the hip in the neutral stance
-
-    @property
-    def yaws(self) -> np.ndarray:
-        return np.radians(self.yaws_deg)
-
-    @property
-    def total_mass(self) -> float:
-        return self.body_mass + 6 * sum(self.link_masses)
-
-    def hip_positions(self) -> np.ndarray:
-        """Hip origins in the body frame, (6, 3) [m]."""
-        return np.array([[x, y, 0.0] for x, y in self.hips])
-
-    def hip_rotations(self) -> np.ndarray:
-        """Rotation from each hip frame to the body frame, (6, 3, 3)."""
-        c, s = np.cos(self.yaws), np.sin(self.yaws)
-        rot = np.zeros((6, 3, 3))
-        rot[:, 0, 0], rot[:, 0, 1], rot[:, 1, 0], rot[:, 1, 1], rot[:, 2, 2] = c, -s, s, c, 1.0
-        return rot
-
-    def neutral_feet_hip(self) -> np.ndarray:
-        """Neutral foot centres in each hip frame, (6, 3) [m]."""
-        return np.tile([self.neutral_reach, 0.0, -self.stand_height], (6, 1))
-
-    def neutral_feet_body(self) -> np.ndarray:
-        """Neutral foot centres in the body frame, (6, 3) [m]."""
-        return hip_to_body(self, self.neutral_feet_hip())
-
-    def body_height(self) -> float:
-        """Height of the body origin above flat ground in the neutral stance [m]."""
-        return self.stand_height + self.foot_radius
 
 
 DEFAULT_LAYOUT = Layout()
-
-
-def hip_to_body(layout: Layout, points: ArrayLike) -> np.ndarray:
-    """Points (6, 3) given in each leg's hip frame, expressed in the body frame."""
-    points = np.asarray(points, dtype=float)
-    return np.einsum("lij,lj->li", layout.hip_rotations(), points) + layout.hip_positions()
-
-
-def body_to_hip(layout: Layout, points: ArrayLike) -> np.ndarray:
-    """Points (6, 3) given in the body frame, expressed in each leg's hip frame."""
-    points = np.asarray(points, dtype=float)
-    return np.einsum("lji,lj->li", layout.hip_rotations(), points - layout.hip_positions())
-
-
-def feet_body(layout: Layout, q: ArrayLike) -> np.ndarray:
-    """Foot centres in the body frame for joint angles q (6, 3) [rad] -> (6, 3) [m]."""
-    q = np.asarray(q, dtype=float).reshape(6, 3)
-    g = layout.geometry
-    p, _ = leg_kin.foot_and_jacobian(q[:, 0], q[:, 1], q[:, 2], g.l1, g.l2, g.l3, sin=np.sin, cos=np.cos)
-    return hip_to_body(layout, np.stack(p, axis=-1))
-
-
-def jacobians_body(layout: Layout, q: ArrayLike) -> np.ndarray:
-    """d(foot in body frame)/dq of each leg, (6, 3, 3), from the leg's analytic Jacobian rotated by the hip yaw."""
-    q = np.asarray(q, dtype=float).reshape(6, 3)
-    g = layout.geometry
-    _, jac = leg_kin.foot_and_jacobian(q[:, 0], q[:, 1], q[:, 2], g.l1, g.l2, g.l3, sin=np.sin, cos=np.cos)
-    jac_hip = np.stack([np.stack([np.broadcast_to(np.asarray(v, float), (6,)) for v in row], -1) for row in jac], 1)
-    return np.einsum("lij,ljk->lik", layout.hip_rotations(), jac_hip)
-
-
-def ik_body(layout: Layout, feet: ArrayLike) -> np.ndarray:
-    """Joint angles (6, 3) putting each foot at `feet` (6, 3) in the body frame: coxa toward the foot, knee up.
-
-    Raises:
-        leg.IKError: if a foot is out of reach or the branch leaves the joint ranges.
-    """
-    hip = body_to_hip(layout, feet)
-    q = np.empty((6, 3))
-    for i, point in enumerate(hip):
-        branches = leg_kin.ik(point, layout.geometry, q1=0.0)
-        inside = [
-            b
-            for b in branches
-            if np.all(b >= np.array(JOINT_LOWER) - 1e-12) and np.all(b <= np.array(JOINT_UPPER) + 1e-12)
-        ]
-        if not inside:
-            where = ", ".join(f"{round(float(v), 6) + 0.0:.4g}" for v in point)
-            raise leg_kin.IKError(f"foot {LEGS[i]} at ({where}) m (hip frame) is outside the joint ranges")
-        q[i] = inside[0]
-    return q
-
-
-def ik_hip_batch(layout: Layout, points: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    """Vectorised IK in the hip frame, the walking branch (coxa toward the foot, knee up: q3 >= 0).
-
-    Args:
-        points: Foot centres (..., 3) in a hip frame [m].
-
-    Returns:
-        (q (..., 3) [rad], ok (...,)): ok is False where the point is out of reach or a joint leaves its range.
-    """
-    p = np.asarray(points, dtype=float)
-    g = layout.geometry
-    x, y, z = p[..., 0], p[..., 1], p[..., 2]
-    q1 = np.arctan2(y, x)
-    r = np.hypot(x, y) - g.l1
-    h = -z
-    d2 = r * r + h * h
-    outer = (g.l2 + g.l3) ** 2 - d2  # 2 l2 l3 (1 - c3)
-    inner = d2 - (g.l2 - g.l3) ** 2  # 2 l2 l3 (1 + c3)
-    reach = (outer >= 0) & (inner >= 0)
-    q3 = 2.0 * np.arctan2(np.sqrt(np.maximum(outer, 0.0)), np.sqrt(np.maximum(inner, 0.0)))
-    q2 = np.arctan2(h, r) - np.arctan2(g.l3 * np.sin(q3), g.l2 + g.l3 * np.cos(q3))
-    q = np.stack([q1, q2, q3], axis=-1)
-    lower, upper = np.array(JOINT_LOWER), np.array(JOINT_UPPER)
-    ok = reach & np.all((q >= lower - 1e-12) & (q <= upper + 1e-12), axis=-1)
-    return q, ok
-
-
-def foot_pitch(layout: Layout, points: ArrayLike) -> np.ndarray:
-    """Pitch q2 + q3 [rad] of the tibia at foot centres (..., 3) in a hip frame, on ik_hip_batch's branch (q3 >= 0).
-
-    Cheaper than the whole IK (no coxa angle, two arctangents): q2 = atan2(h, r) - atan2(l3 s3, l2 + l3 c3)
-    and q3 - atan2(l3 s3, l2 + l3 c3) = atan2(l2 s3, l3 + l2 c3) (the argument of e^{i q3} conj(l2 + l3 e^{i q3})).
-    Points out of reach get the pitch of the nearest reachable stretch (c3 clipped to [-1, 1]).
-    """
-    p = np.asarray(points, dtype=float)
-    g = layout.geometry
-    r = np.hypot(p[..., 0], p[..., 1]) - g.l1
-    h = -p[..., 2]
-    c3 = np.clip((r * r + h * h - g.l2 * g.l2 - g.l3 * g.l3) / (2 * g.l2 * g.l3), -1.0, 1.0)
-    s3 = np.sqrt(1.0 - c3 * c3)
-    return np.arctan2(h, r) + np.arctan2(g.l2 * s3, g.l3 + g.l2 * c3)

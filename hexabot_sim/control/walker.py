@@ -1,0 +1,396 @@
+"""Walking controller of a legged robot: gait targets per leg, the leg's resolved-rate step, heading hold.
+
+Shared by every robot built of the 3-DOF leg (kinematics/legged.py): the number of legs comes from the
+layout, and the model must name its joints, actuators and touch sensors after the layout's legs.
+
+Per control period: read the 3 joint angles of every leg (the servos' encoders), take each foot's target at t
+and t + dt from the gait planner (planned a chunk ahead, in the leg's hip frame), and advance each
+leg's joint command with `resolved_rate.rate_steps` — the same step leg-step uses, compiled (the
+per-step work runs in control/kernels.py; planning, once a chunk, stays here). The servos get
+q_cmd (position) and dq (velocity feedforward).
+
+Two corrections make the body go where it is told:
+- Rolling feet: a sphere foot that rolls without slipping moves its centre by r dtheta over the
+  ground, theta = q2 + q3 its pitch in the leg plane. During stance the foot-centre target is
+  shifted by r (theta - theta_touchdown) along the leg's radial direction, so the contact point,
+  not the centre, stays where the plan puts it (otherwise the body is a few percent slow or fast).
+- Heading hold (optional): the body's yaw from the IMU quaternion (sensor "imu_quat", not the free
+  joint) is compared with the integral of the commanded yaw rate, and the yaw rate of the next
+  chunk is corrected by heading_gain times the error.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import mujoco
+import numpy as np
+
+from hexabot_sim.control.gait import Command, GaitPlanner
+from hexabot_sim.control.resolved_rate import ResolvedRateGains, step_constants
+from hexabot_sim.kinematics import legged
+
+
+def kernels():
+    """control/kernels.py, imported on first use and compiled (importing numba takes ~0.15 s, which
+    `hexabot-sim list` should not pay: it imports this module for the parameter tables)."""
+    from hexabot_sim.control import kernels
+    from hexabot_sim.signals import signals_held
+
+    with signals_held():  # a Ctrl-C inside numba's compiler would break the kernels (see kernels.warm_up)
+        kernels.warm_up()
+    return kernels
+
+
+MAX_HEADING_CORRECTION: float = 0.3  # [rad/s] largest yaw-rate correction heading hold adds
+
+
+@dataclasses.dataclass(frozen=True)
+class WalkSettings:
+    """What the walking controller is asked to do and how.
+
+    Attributes:
+        command: Body twist to walk at after the ramp.
+        settle_time: Standing still on the neutral stance first [s] (the robot settles on its feet).
+        ramp_time: The command grows linearly from 0 to `command` over this time [s].
+        heading_hold: Correct the yaw rate from the IMU's yaw.
+        heading_gain: Yaw-rate correction per radian of heading error [1/s].
+        trims: Servo zero errors (3 n_legs,) [rad], leg by leg: each servo holds q_cmd + trim while its encoder
+            reads q - trim; empty: none.
+    """
+
+    command: Command
+    settle_time: float = 0.5
+    ramp_time: float = 1.0
+    heading_hold: bool = False
+    heading_gain: float = 2.0
+    trims: tuple[float, ...] = ()
+
+
+def yaw_of(quat: np.ndarray) -> float:
+    """Yaw [rad] of a unit quaternion (w, x, y, z) (z-y-x Euler angles)."""
+    w, x, y, z = (float(v) for v in quat)
+    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+class WalkingController:
+    """Drives the 3 n_legs servos of a legged robot's model (models/hexabot.xml for the hexabot) so the body
+    follows a walking command.
+
+    Call it before every mj_step (it is a simulate() controller). State lives here: the joint command
+    q_cmd (3 n_legs,), the previous joint rate, the planned targets of the current chunk.
+    """
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
+        layout: legged.Layout,
+        planner: GaitPlanner,
+        gains: ResolvedRateGains,
+        settings: WalkSettings,
+        q_start: np.ndarray,
+    ) -> None:
+        self.layout = layout
+        self.planner = planner
+        self.settings = settings
+        self.dt = planner.dt
+        self.foot_radius = layout.foot_radius
+        n = layout.n_legs
+        if planner.n_legs != n:
+            raise ValueError(f"the gait planner has {planner.n_legs} legs; the layout has {n}")
+        nq = 3 * n
+        self.qadr = [int(model.joint(f"{leg}_{j}").qposadr[0]) for leg in layout.legs for j in legged.JOINTS]
+        if self.qadr != list(range(7, 7 + nq)):
+            raise ValueError(f"the model must put the {nq} leg joints after the free joint, in the layout's order")
+        pos_act = [model.actuator(f"{leg}_{j}").id for leg in layout.legs for j in legged.JOINTS]
+        vel_act = [model.actuator(f"{leg}_{j}_velocity").id for leg in layout.legs for j in legged.JOINTS]
+        if pos_act + vel_act != list(range(2 * nq)):
+            raise ValueError(
+                f"the model must list the {nq} position then the {nq} velocity actuators in the layout's order"
+            )
+        self.quat_adr = int(model.sensor_adr[model.sensor("imu_quat").id])
+        lower, upper = legged.JOINT_LOWER, legged.JOINT_UPPER
+        self.kernels = kernels()
+        self.consts = np.array(step_constants(layout.geometry, gains, lower, upper))
+        self.trims = np.array(settings.trims, dtype=float) if settings.trims else np.zeros(nq)
+        if self.trims.shape != (nq,):
+            raise ValueError(f"{n} legs need {nq} servo trims; got {len(settings.trims)}")
+        self.q_cmd = np.array(q_start, dtype=float).ravel()  # the position servos' command [rad]
+        if self.q_cmd.shape != (nq,):
+            raise ValueError(f"{n} legs need {nq} start joint angles; got {self.q_cmd.size}")
+        self.dq = np.zeros(nq)  # the rate it moved at over the last step [rad/s]
+        self.rot = layout.hip_rotations()  # (n, 3, 3) hip -> body
+        self.hips = layout.hip_positions()  # (n, 3)
+        # Targets of the current chunk in each hip frame, one flat row of 3 n floats per step, and stance flags.
+        self._feed = np.zeros((0, nq))  # per step: the rate_steps feed (v_des + K x_des)
+        self._k = 0
+        # Rolling state carried between chunks: last row's offset (n, 2), offset at lift-off (n, 2), in stance.
+        self._rolling = (np.zeros((n, 2)), np.zeros((n, 2)), np.ones(n, dtype=bool))
+        self._chunk = 0  # steps in the current chunk (0: plan one first)
+        # Heading: desired yaw (integral of the commanded yaw rate) and the unwrapped measured yaw.
+        self._yaw_des = 0.0
+        self._yaw_meas = yaw_of(data.sensordata[self.quat_adr : self.quat_adr + 4])
+        self._yaw_des = self._yaw_meas
+        self.commands: list[tuple[float, float, float, float]] = []  # (t, vx, vy, yaw rate) per chunk
+        self._qpos = data.qpos
+        self._ctrl = data.ctrl
+        self._sensordata = data.sensordata
+
+    def scale(self, t: np.ndarray | float) -> np.ndarray | float:
+        """Fraction of the command in force at t (vectorised): 0 while settling, then a linear ramp to 1."""
+        s = self.settings
+        if s.ramp_time <= 0:
+            return np.where(np.asarray(t) <= s.settle_time, 0.0, 1.0)
+        return np.clip((np.asarray(t) - s.settle_time) / s.ramp_time, 0.0, 1.0)
+
+    def _replan(self, t: float) -> None:
+        """Plans the next chunk of targets with the command in force now (and the heading correction).
+
+        The ramp is planned inside the chunk (the planner's scale), so the command grows smoothly
+        without short chunks; `commands` records the command before the ramp's factor.
+        """
+        s = self.settings
+        n = self.planner.max_chunk
+        cmd = s.command
+        times = t + self.dt * np.arange(n + 1)
+        ramp = self.scale(times)
+        if s.heading_hold:
+            # Unwrap the IMU yaw next to the last one, compare with the commanded heading.
+            quat = self._sensordata[self.quat_adr : self.quat_adr + 4]
+            yaw = yaw_of(quat)
+            self._yaw_meas += math.remainder(yaw - self._yaw_meas, 2 * math.pi)
+            error = self._yaw_des - self._yaw_meas
+            correction = max(-MAX_HEADING_CORRECTION, min(MAX_HEADING_CORRECTION, s.heading_gain * error))
+            cmd = Command(cmd.vx, cmd.vy, cmd.yaw_rate + correction)
+            # The commanded heading advances by the yaw rate times the integral of the ramp over the chunk.
+            self._yaw_des += s.command.yaw_rate * float(np.sum(0.5 * (ramp[1:] + ramp[:-1]))) * self.dt
+        self.commands.append((t, cmd.vx, cmd.vy, cmd.yaw_rate))
+        targets = self.planner.plan(cmd, n, None if ramp[0] >= 1.0 else self.scale)  # (n + 1, legs, 3) body frame
+        times = self.planner.time - self.dt * np.arange(n, -1, -1)  # (n + 1,)
+        stance = self.planner.in_stance(times)  # (n + 1, legs)
+        duty = self.planner.gait.duty
+        swing_s = np.where(stance, 0.0, (self.planner.phase(times) - duty) / (1.0 - duty))
+        # Body -> hip frame of each leg: R^T (p - hip).
+        hip = np.einsum("lji,klj->kli", self.rot, targets - self.hips)  # (n + 1, legs, 3)
+        hip += self._rolling_offsets(hip, stance, swing_s)
+        self._publish(hip.reshape(n + 1, -1), stance)
+        self._chunk = n
+        self._k = 0
+
+    def _publish(self, rows: np.ndarray, stance: np.ndarray) -> None:
+        """Keeps what the steps of the chunk need from its target rows (n + 1, 3 legs) (hip frames) and stance flags."""
+        rates = np.empty(rows[1:].size)
+        self.kernels.feed(self.consts[3], rows[:-1].ravel(), rows[1:].ravel(), self.dt, rates)
+        self._feed = rates.reshape(rows.shape[0] - 1, rows.shape[1])
+
+    def _rolling_offsets(self, hip: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
+        """Offsets (n + 1, legs, 3) of the foot-centre targets for feet that roll without slipping.
+
+        A sphere foot rolling without slip moves its centre over the ground by r dtheta along the leg's
+        radial direction e_r, theta = q2 + q3 its pitch. So in stance the centre target is shifted by
+        the sum of r dtheta e_r since touchdown (theta of the shifted target, iterated once since the
+        shift changes theta a little; summed step by step because e_r turns with the coxa); in the
+        swing, the shift reached at lift-off fades out over the first half. The state at the end of a
+        chunk carries over to the next one, whose row 0 repeats the previous chunk's last row.
+        """
+        n, n_legs = hip.shape[0] - 1, hip.shape[1]
+        offset0, lift0, was0 = self._rolling
+        # Which rows roll, and the latest touchdown / lift-off row at every row (0: none in this chunk).
+        st = stance[1:]  # (n, legs); row 0 is the previous chunk's last row
+        before = np.vstack([was0[None], st[:-1]])
+        rows = np.arange(1, n + 1)[:, None]  # (n, 1)
+        last_td = np.maximum.accumulate(np.where(st & ~before, rows, 0), axis=0)  # (n, legs)
+        last_lo = np.maximum.accumulate(np.where(~st & before, rows, 0), axis=0)
+        legs = np.arange(n_legs)
+        td_row = np.maximum(last_td - 1, 0) * n_legs + legs  # flat (row, leg)
+        lo_row = np.maximum(last_lo - 1, 0) * n_legs + legs
+        after_td, after_lo = (last_td > 0)[..., None], (last_lo > 0)[..., None]
+        # r e_r at the middle of every rolling step (0 elsewhere), and the swing's fade (smoothstep 1 -> 0).
+        radial = hip[..., :2] / np.hypot(hip[..., 0], hip[..., 1])[..., None]  # (n + 1, legs, 2)
+        e_mid = radial[1:] + radial[:-1]
+        e_mid *= (self.foot_radius / np.hypot(e_mid[..., 0], e_mid[..., 1]))[..., None]
+        r_e = np.where((st & before)[..., None], e_mid, 0.0)  # (n, legs, 2)
+        fade = 1.0 - np.clip(2.0 * swing_s[1:], 0.0, 1.0)
+        fade = (fade * fade * (3.0 - 2.0 * fade))[..., None]  # (n, legs, 1)
+        offset = np.repeat(lift0[None], n + 1, axis=0)  # (n + 1, legs, 2) [m] first guess
+        stance3 = st[..., None]
+        shifted = hip.copy()
+        for _ in range(2):
+            shifted[..., :2] = hip[..., :2] + offset
+            theta = legged.foot_pitch(self.layout, shifted)  # (n + 1, legs)
+            total = np.cumsum(r_e * np.diff(theta, axis=0)[..., None], axis=0)  # (n, legs, 2)
+            at_td = total.reshape(-1, 2)[td_row]  # total at each leg's latest touchdown
+            stance_offset = np.where(after_td, total - at_td, offset0 + total)
+            full = np.concatenate([offset0[None], np.where(stance3, stance_offset, 0.0)])  # (n + 1, legs, 2)
+            lift = np.where(after_lo, full.reshape(-1, 2)[lo_row], lift0)
+            offset = np.concatenate([offset0[None], np.where(stance3, stance_offset, lift * fade)])
+        self._rolling = (offset[-1], lift[-1], st[-1])
+        out = np.zeros_like(hip)
+        out[..., :2] = offset
+        return out
+
+    def __call__(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """Sets data.ctrl for the step from data.time to data.time + dt."""
+        k = self._k
+        if k >= self._chunk:
+            self._replan(data.time)
+            k = 0
+        self.kernels.servo(self.consts, self._qpos, self.trims, self.q_cmd, self.dq, self._feed[k], self.dt, self._ctrl)
+        self._k = k + 1
+
+
+def fit_plane(xy: list[tuple[float, float]], z: list[float]) -> list[float] | None:
+    """Least-squares plane z = a + b x + c y through the points, [a, b, c]; None if they do not span one."""
+    x, y = np.array(xy, dtype=float).reshape(-1, 2).T
+    out = np.zeros(3)
+    ok = kernels().plane_fit(np.ascontiguousarray(x), np.ascontiguousarray(y), np.asarray(z, dtype=float), len(z), out)
+    return out.tolist() if ok else None
+
+
+@dataclasses.dataclass(frozen=True)
+class GroundSettings:
+    """How the walking controller meets uneven ground (GroundController).
+
+    Attributes:
+        sensed: A swing foot whose touch sensor fires in the second half of its swing goes to stance at
+            once (early touchdown); one that has not touched at the planned touchdown keeps descending
+            (late touchdown) until it touches or its target leaves `depth_range` (no ground found).
+        level: Keep the body level relative to gravity from the IMU's roll and pitch; else the body
+            follows the plane of the stance feet.
+        stand_height: Depth of the stance feet below the body's origin over the local ground [m].
+        depth_range: (smallest, largest) depth of a foot target below its hip [m] (the legs' workspace).
+        attitude_gain: Rate at which tilt errors are removed [1/s].
+        height_gain: Rate at which body-height errors are removed [1/s].
+        touch_threshold: Touch-sensor force that counts as contact [N].
+        update_every: Control steps between updates of the ground plane and the levelling.
+    """
+
+    sensed: bool = True
+    level: bool = False
+    stand_height: float = 0.09
+    depth_range: tuple[float, float] = (0.03, 0.17)
+    attitude_gain: float = 10.0
+    height_gain: float = 5.0
+    touch_threshold: float = 0.3
+    update_every: int = 5
+
+
+@dataclasses.dataclass(frozen=True)
+class Touchdown:
+    """A swing that ended: when the plan said and when the foot touched (NaN: no ground found)."""
+
+    leg: int
+    planned: float  # [s] planned touchdown time
+    touched: float  # [s] touch-sensor time (sensed) or the planned time (planned); NaN: no ground
+
+
+class GroundController(WalkingController):
+    """WalkingController with feet that find the ground and (optionally) a body kept level.
+
+    The gait planner's targets keep their horizontal motion; the height of each foot target (the z of
+    the body/hip frame, which the hip frames share) is set here:
+    - stance: z_i, the height where the foot touched down, moved with the whole stance by a plane
+      a + b x + c y every `update_every` steps: a drives the stance plane's height at the body origin
+      to -stand_height, (b, c) drive the body's roll and pitch from the IMU quaternion to zero (level)
+      or the stance plane's slope to zero (follow the ground); clipped to the workspace depths;
+    - swing: from the lift-off height to the stance plane under the landing point (smoothstep), plus
+      the planner's lift h sin^2(pi s);
+    - sensed touchdown: early, the leg is in stance from the touch on (its horizontal target becomes
+      ground-fixed, the offset to the plan fading out over its next swing); late, the target keeps
+      descending at half the swing's peak vertical speed until it touches or leaves the workspace.
+    The per-step part (this state machine, the plane, the servo step) is kernels.ground_step; the
+    legs' state lives in the arrays `legs` and `flags` (layout in the kernels module).
+    """
+
+    def __init__(self, model, data, layout, planner, gains, settings, q_start, ground: GroundSettings) -> None:
+        super().__init__(model, data, layout, planner, gains, settings, q_start)
+        K = self.kernels
+        self.ground = ground
+        n = layout.n_legs
+        touch_adr = [int(model.sensor_adr[model.sensor(f"{leg}_touch").id]) for leg in layout.legs]
+        feet = legged.feet_body(layout, np.asarray(q_start).reshape(n, 3))  # (n, 3)
+        neutral = np.asarray(planner.neutral, dtype=float)
+        # The legs' state (kernels module docstring): every foot in stance where it stands now.
+        self.legs = np.zeros((n, K.NLEG))
+        self.legs[:, K.Z] = self.legs[:, K.Z_LIFT] = feet[:, 2]
+        self.legs[:, K.LANDING : K.LANDING + 2] = self.legs[:, K.NEXT_LANDING : K.NEXT_LANDING + 2] = neutral[:, :2]
+        self.flags = np.zeros((n, 3), dtype=np.int64)
+        self.flags[:, K.MODE] = K.STANCE
+        self.flags[:, K.WAS_STANCE] = self.flags[:, K.GROUNDED] = 1
+        self.plane = np.array([-ground.stand_height, 0.0, 0.0])  # stance plane z = a + b x + c y (body frame)
+        self.counts = np.zeros(3, dtype=np.int64)
+        self.cmd = np.zeros(3)  # the chunk's command (vx, vy, yaw rate), heading correction included
+        self.geo = np.zeros((n, K.NGEO))
+        self.geo[:, K.COS], self.geo[:, K.SIN] = np.cos(layout.yaws), np.sin(layout.yaws)
+        self.geo[:, K.HIP_X : K.HIP_Y + 1] = self.hips[:, :2]
+        self.geo[:, K.NEUTRAL_Z] = neutral[:, 2]
+        self.geo[:, K.TOUCH_ADR] = touch_adr
+        self.par = np.zeros(K.NPAR)
+        self.par[[K.SENSED, K.LEVEL]] = ground.sensed, ground.level
+        self.par[K.STAND_HEIGHT] = ground.stand_height
+        self.par[[K.DEPTH_MIN, K.DEPTH_MAX]] = ground.depth_range
+        self.par[[K.ATTITUDE_GAIN, K.HEIGHT_GAIN]] = ground.attitude_gain, ground.height_gain
+        self.par[[K.TOUCH_THRESHOLD, K.UPDATE_EVERY]] = ground.touch_threshold, ground.update_every
+        self.par[K.SWING_TIME] = planner.swing_time
+        self.par[K.SEEK_SPEED] = math.pi * planner.step_height / (2 * planner.swing_time)  # [m/s] half the swing's peak
+        self.par[[K.DT, K.SETTLE_TIME, K.RAMP_TIME]] = self.dt, settings.settle_time, settings.ramp_time
+        self.par[K.QUAT_ADR] = self.quat_adr
+        self.events: list[Touchdown] = []
+        self._events = np.zeros((n, 3))  # swings that ended in one step (kernels.targets): one a leg at most
+        self._row_prev = np.zeros(3 * n)  # the targets at the current time (hip frames)
+        self._started = False
+
+    @property
+    def updates(self) -> int:
+        """Stance-plane updates so far."""
+        K = self.kernels
+        return int(self.counts[K.UPDATES])
+
+    @property
+    def clipped_updates(self) -> int:
+        """Stance-plane updates whose heights were clipped to the legs' workspace."""
+        K = self.kernels
+        return int(self.counts[K.CLIPPED])
+
+    def _publish(self, rows: np.ndarray, stance: np.ndarray) -> None:
+        """Keeps the rows and stance flags themselves (the heights are set step by step) and the next landings."""
+        K = self.kernels
+        self._rows = np.ascontiguousarray(rows)
+        self._stance = np.ascontiguousarray(stance)
+        for i, landing in enumerate(self.planner.swing_targets):
+            if landing is not None:
+                self.legs[i, K.NEXT_LANDING : K.NEXT_LANDING + 2] = landing[:2]
+
+    def _rolling_offsets(self, hip: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
+        """The rolling offsets of the feet at the heights they stand at now (not the planned flat-ground height)."""
+        K = self.kernels
+        shifted = hip.copy()
+        shifted[..., 2] += self.legs[:, K.Z] - self.geo[:, K.NEUTRAL_Z]
+        return super()._rolling_offsets(shifted, stance, swing_s)
+
+    def _record(self, n: int) -> None:
+        """Keeps the n swings that ended in the last kernel call."""
+        self.events += [Touchdown(int(leg), float(planned), float(t)) for leg, planned, t in self._events[:n]]
+
+    def __call__(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """Sets data.ctrl for the step from data.time to data.time + dt."""
+        K = self.kernels
+        k = self._k
+        if k >= self._chunk:
+            self._replan(data.time)
+            k = 0
+            self.cmd[:] = self.commands[-1][1:]
+        rows, stance, t = self._rows, self._stance, data.time
+        if not self._started:  # the targets at the start
+            n = K.targets(self.par, self.geo, self.legs, self.flags, self.plane, self.cmd, rows[k], stance[k], t,
+                          rows[k], self._sensordata, self._row_prev, self._events)  # fmt: skip
+            self._record(n)
+            self._started = True
+        n = K.ground_step(self.par, self.geo, self.consts, self.legs, self.flags, self.plane, self.counts, self.cmd,
+                          rows, stance, k, t, self._row_prev, self.q_cmd, self.dq, self.trims, self._qpos,
+                          self._sensordata, self._ctrl, self._events)  # fmt: skip
+        if n:
+            self._record(n)
+        self._k = k + 1
