@@ -36,10 +36,10 @@ import mujoco
 
 from hexabot_sim import gl, params, registry, render
 from hexabot_sim.result import at_home
-from hexabot_sim.robots.hexabot import scene as hexabot_scene
 from hexabot_sim.robots.leg import step as leg
 from hexabot_sim.robots.pendulum import pendulum
 from hexabot_sim.simulate import simulate, step_count
+from hexabot_sim.walking import scene as hexabot_scene
 
 
 def paired_loops(prepare, loop, repeat: int) -> dict[str, float]:

@@ -17,7 +17,7 @@ def cli(capsys: Any, *argv: str) -> tuple[int, str, str]:
 
 def walk_params(**overrides: Any) -> Any:
     """hexabot-walk's parameters with these overrides, checked as a run checks them."""
-    from hexabot_sim.robots.hexabot.parameters import HexabotParams
+    from hexabot_sim.robots.hexabot.walk import HexabotParams
 
     return params.resolve(HexabotParams, {}, overrides)
 

@@ -6,6 +6,7 @@ import pytest
 
 import hexabot_sim as hs
 from hexabot_sim.__main__ import main
+from hexabot_sim.robots.hexabot.walk import HexabotParams
 
 
 @pytest.mark.parametrize("sets", [{"vx": 1e-9}, {"vx": 5e-4}, {"vx": 0.0, "vy": 1e-9}])
@@ -43,7 +44,7 @@ def test_the_energy_balance_of_a_real_swing_is_reported():
 
 def test_a_kerb_refusal_shows_the_value_and_the_bound_apart():
     from hexabot_sim.errors import UsageError
-    from hexabot_sim.robots.hexabot import parameters as hexabot_parameters
+    from hexabot_sim.walking import parameters as hexabot_parameters
 
     largest = hexabot_parameters.largest_climbable_kerb(_defaults())
     with pytest.raises((UsageError, ValueError)) as info:
@@ -56,9 +57,8 @@ def test_a_kerb_refusal_shows_the_value_and_the_bound_apart():
 
 def _defaults():
     from hexabot_sim import params
-    from hexabot_sim.robots.hexabot import parameters as hexabot_parameters
 
-    return params.resolve(hexabot_parameters.HexabotParams, {})
+    return params.resolve(HexabotParams, {})
 
 
 def test_one_non_finite_length_is_named_in_the_singular():

@@ -9,7 +9,7 @@ import pytest
 from hexabot_sim import dask_cluster, sweep
 from hexabot_sim.__main__ import main
 from hexabot_sim.errors import UsageError
-from hexabot_sim.robots.hexabot import parameters as hexabot_parameters
+from hexabot_sim.walking import parameters as hexabot_parameters
 
 FIXED = ["--set", "duration=0.05", "--set", "timestep=0.01", "--no-plots"]
 

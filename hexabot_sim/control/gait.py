@@ -69,7 +69,7 @@ QUADRUPED_GAITS: tuple[Gait, ...] = (  # lf, lr, rf, rr
 GAITS_BY_LEGS: dict[int, dict[str, Gait]] = {
     len(gaits[0].offsets): {g.name: g for g in gaits} for gaits in (HEXAPOD_GAITS, QUADRUPED_GAITS)
 }
-GAITS: dict[str, Gait] = GAITS_BY_LEGS[6]  # the hexabot's (robots/hexabot/walk.py); new code: gaits_for(n_legs)
+GAITS: dict[str, Gait] = GAITS_BY_LEGS[6]  # the six-legged gaits (the hexabot's); per robot: gaits_for(n_legs)
 
 
 def gaits_for(n_legs: int) -> dict[str, Gait]:

@@ -76,7 +76,7 @@ def test_kernels_work_where_no_cache_directory_is_writable():
 def test_kernels_compile_under_the_signal_hold(monkeypatch):
     """The controllers' loader compiles the kernels with stop signals held (see kernels.warm_up)."""
     from hexabot_sim import signals
-    from hexabot_sim.control import hexabot as control
+    from hexabot_sim.control import walker as control
 
     held = []
     monkeypatch.setattr(kernels, "warm_up", lambda: held.append(signals.HOLD[0]))
@@ -89,8 +89,8 @@ def test_warm_up_compiles_what_a_walk_uses():
     warm_up compiled (a walk passing other argument types would compile again, outside the signal hold)."""
     from hexabot_sim import params, registry
     from hexabot_sim.result import at_home
-    from hexabot_sim.robots.hexabot import scene as hexabot_scene
     from hexabot_sim.simulate import simulate
+    from hexabot_sim.walking import scene as hexabot_scene
 
     for name in ("hexabot-rough", "hexabot-walk"):
         scenario = registry.get(name)

@@ -15,8 +15,9 @@ from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import hexabot as hx
 from hexabot_sim.kinematics import hexabot_mjcf
 from hexabot_sim.kinematics import leg as leg_kin
-from hexabot_sim.robots.hexabot import parameters as hexabot_parameters
-from hexabot_sim.robots.hexabot import scene as hexabot_scene
+from hexabot_sim.robots.hexabot.walk import HexabotParams
+from hexabot_sim.walking import parameters as hexabot_parameters
+from hexabot_sim.walking import scene as hexabot_scene
 
 LEGS = hx.LEGS
 
@@ -168,7 +169,7 @@ def test_planned_stance_moves_with_the_ramped_command_and_targets_stay_smooth(cm
     ground-fixed velocity -s(t) (v + w x p) (the body twist scaled by the ramp, by finite differences),
     and chunk boundaries leave no mark (the same walk planned in other chunks is the same)."""
     dt, settle, ramp_time = 0.002, 0.5, 1.0
-    planner = GaitPlanner(GAITS["tripod"], 1.0, 0.03, hexabot_parameters.neutral(params.resolve(hexabot_parameters.HexabotParams, {}, {})),
+    planner = GaitPlanner(GAITS["tripod"], 1.0, 0.03, hexabot_parameters.neutral(params.resolve(HexabotParams, {}, {})),
                           dt, start_time=settle)  # fmt: skip
 
     def scale(t):
@@ -198,7 +199,7 @@ def test_planned_stance_moves_with_the_ramped_command_and_targets_stay_smooth(cm
 
 
 def test_stance_plane_fit_is_least_squares_and_refuses_collinear_feet():
-    from hexabot_sim.control.hexabot import fit_plane
+    from hexabot_sim.control.walker import fit_plane
 
     rng = np.random.default_rng(3)
     for n in (3, 4, 5, 6):
@@ -351,13 +352,13 @@ def test_a_yaw_rate_that_underflows_walks_straight():
 
 def test_perturbations_are_seeded():
     a = hexabot_scene._perturbations(
-        params.resolve(hexabot_parameters.HexabotParams, {}, {"trim_error_deg": 1, "seed": 3})
+        params.resolve(HexabotParams, {}, {"trim_error_deg": 1, "seed": 3})
     )
     b = hexabot_scene._perturbations(
-        params.resolve(hexabot_parameters.HexabotParams, {}, {"trim_error_deg": 1, "seed": 3})
+        params.resolve(HexabotParams, {}, {"trim_error_deg": 1, "seed": 3})
     )
     c = hexabot_scene._perturbations(
-        params.resolve(hexabot_parameters.HexabotParams, {}, {"trim_error_deg": 1, "seed": 4})
+        params.resolve(HexabotParams, {}, {"trim_error_deg": 1, "seed": 4})
     )
     assert all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
     assert not np.array_equal(a[0], c[0])
@@ -386,7 +387,7 @@ def test_perturbations_are_seeded():
 )
 def test_infeasible_commands_are_refused_up_front(overrides, fragment):
     with pytest.raises(UsageError, match=None) as info:
-        params.resolve(hexabot_parameters.HexabotParams, {}, overrides)
+        params.resolve(HexabotParams, {}, overrides)
     assert fragment in str(info.value)
 
 
@@ -413,7 +414,7 @@ def test_the_values_a_refusal_suggests_are_accepted(overrides, pattern, fix):
     import re
 
     with pytest.raises(UsageError) as refused:
-        params.resolve(hexabot_parameters.HexabotParams, {}, overrides)
+        params.resolve(HexabotParams, {}, overrides)
     found = re.search(pattern, str(refused.value))
     assert found, str(refused.value)
     if fix == "command":  # "vx = 0.0561 m/s, vy = 0.336 m/s": the components not named are 0
@@ -421,14 +422,14 @@ def test_the_values_a_refusal_suggests_are_accepted(overrides, pattern, fix):
         suggested |= {name: float(v) for name, v in re.findall(r"(\w+) = (\S+) ", found.group(1))}
     else:
         suggested = {fix: float(found.group(1)) / (1000 if fix == "kerb_height" else 1)}
-    params.resolve(hexabot_parameters.HexabotParams, {}, {**overrides, **suggested})  # no UsageError
+    params.resolve(HexabotParams, {}, {**overrides, **suggested})  # no UsageError
 
 
 def test_refused_largest_feasible_command_is_feasible():
     with pytest.raises(UsageError) as info:
-        params.resolve(hexabot_parameters.HexabotParams, {}, {"vx": 0.6})
+        params.resolve(HexabotParams, {}, {"vx": 0.6})
     largest = float(str(info.value).split("vx = ")[1].split(" m/s")[0])
-    params.resolve(hexabot_parameters.HexabotParams, {}, {"vx": largest * 0.999})
+    params.resolve(HexabotParams, {}, {"vx": largest * 0.999})
 
 
 # --- the run folder and metrics recomputed independently ---------------------------------------------
@@ -445,7 +446,7 @@ def test_cli_run_folder_and_metrics_recomputed_from_the_trajectory(tmp_path, cap
     assert {"velocity.png", "body.png", "slip.png"} <= names
     header = (out / "timeseries.csv").read_text().splitlines()[0].split(",")
     assert header[:7] == ["t", "x", "y", "z", "roll", "pitch", "yaw"]
-    assert len(header) == hexabot_parameters.CSV_COLUMNS  # the run-cost estimate counts these
+    assert len(header) == hexabot_parameters.csv_columns(HexabotParams.ROBOT)  # the run-cost estimate counts these
     assert {f"contact_{leg}" for leg in LEGS} <= set(header)
     assert {f"q_{leg}_{j}" for leg in LEGS for j in hx.JOINTS} <= set(header)
 
@@ -499,16 +500,16 @@ def test_cli_run_folder_and_metrics_recomputed_from_the_trajectory(tmp_path, cap
 
 def test_rolling_feet_correction_is_what_makes_the_speed_right(monkeypatch):
     """A sphere foot rolling without slip moves its centre by r dtheta: uncorrected, the body runs ~3 % fast."""
-    from hexabot_sim.control import hexabot as control
+    from hexabot_sim.control import walker as control
 
     corrected = walk(vx=0.1, duration=8.5).metrics
-    original = control.HexabotController.__init__
+    original = control.WalkingController.__init__
 
     def without_rolling(self, *args, **kwargs):
         original(self, *args, **kwargs)
         self.foot_radius = 0.0  # plan as if the foot were a point
 
-    monkeypatch.setattr(control.HexabotController, "__init__", without_rolling)
+    monkeypatch.setattr(control.WalkingController, "__init__", without_rolling)
     uncorrected = walk(vx=0.1, duration=8.5).metrics
     assert abs(corrected["vx_error"].value) < 0.005
     assert uncorrected["vx_error"].value > 0.015  # r = 8 mm times the foot's pitch change per stance
@@ -517,4 +518,4 @@ def test_rolling_feet_correction_is_what_makes_the_speed_right(monkeypatch):
 
 def test_an_hour_long_walk_is_refused_with_the_estimate():
     with pytest.raises(UsageError, match="GB in memory"):
-        params.resolve(hexabot_parameters.HexabotParams, {}, {"duration": 3600})
+        params.resolve(HexabotParams, {}, {"duration": 3600})

@@ -11,12 +11,12 @@ from helpers import walk, walk_params
 
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import hexabot as hx
-from hexabot_sim.robots.hexabot import metrics as hexabot_metrics
-from hexabot_sim.robots.hexabot import parameters as hexabot_parameters
-from hexabot_sim.robots.hexabot import scene as hexabot_scene
 from hexabot_sim.robots.hexabot import walk as scenario
 from hexabot_sim.terrain import Ground, RoughPatch
 from hexabot_sim.terrain.ground import SQUARE as TERRAIN_SQUARE
+from hexabot_sim.walking import metrics as hexabot_metrics
+from hexabot_sim.walking import parameters as hexabot_parameters
+from hexabot_sim.walking import scene as hexabot_scene
 
 SLOPE = {"slope_deg": 10.0, "touchdown": "sensed", "level_body": "on", "duration": 10.0}
 

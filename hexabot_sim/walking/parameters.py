@@ -1,15 +1,15 @@
-"""The walking hexabot's parameters and what it can walk: ranges, gait feasibility, terrain refusals."""
+"""A walk's parameters and what the robot can walk: ranges, gait feasibility, terrain refusals (any legged robot)."""
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
-from hexabot_sim.control.gait import GAITS, Command, Gait, GaitPlanner
-from hexabot_sim.kinematics import hexabot as hx
+from hexabot_sim.control.gait import GAITS, Command, Gait, GaitPlanner, gaits_for
+from hexabot_sim.kinematics import legged
 from hexabot_sim.params import allowed, apart, check_run_cost, param
 from hexabot_sim.simulate import step_count
 from hexabot_sim.terrain import Ground, Kerb, Limits, RoughPatch, Slope
@@ -19,7 +19,6 @@ from hexabot_sim.terrain.heightfield import MAX_POINTS as HFIELD_MAX_POINTS
 
 INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")
 
-LAYOUT = hx.DEFAULT_LAYOUT
 
 SETTLE_TIME: float = 0.5  # [s] standing on the neutral stance before the gait clock starts
 
@@ -27,9 +26,8 @@ SPEED_MARGIN: float = 0.9  # planned joint speeds must stay below this fraction 
 
 LOADED_FRACTION: float = 0.05  # a foot counts as loaded above this fraction of the robot's weight
 
-TORQUE_LIMIT: float = 1.5  # [N m] the joints' actuatorfrcrange (models/hexabot.xml)
 
-CSV_COLUMNS: int = 37  # columns of timeseries.csv
+CSV_FIXED_COLUMNS: int = 13  # columns of timeseries.csv besides the legs' (4 each: contact, 3 joints)
 
 # Cost of a run for params.check_run_cost, measured on the 2-core development machine (10 s vs 60 s
 # walks): seconds per physics step (controller + mj_step: 25 us in bench.py, with a margin for a loaded
@@ -74,8 +72,28 @@ ACCELERATION_HEADROOM: float = 1.2  # the limit is at least this times the plann
 
 
 @dataclasses.dataclass(frozen=True)
-class HexabotParams:
-    """Parameters of the walking-hexabot scenarios (body frame: x forward, y left, z up)."""
+class WalkingRobot:
+    """What the walking scenarios need to know of a robot besides its parameters.
+
+    Attributes:
+        name: The robot's name, e.g. "hexabot".
+        layout: Its legs and body (kinematics.legged.Layout).
+        scene: The model file (models/<scene>.xml) of the robot on a floor, with cameras and a "home" keyframe.
+        torque_limit: The joints' actuatorfrcrange [N m].
+    """
+
+    name: str
+    layout: legged.Layout
+    scene: str
+    torque_limit: float
+
+
+@dataclasses.dataclass(frozen=True)
+class WalkParams:
+    """Parameters of a walk (body frame: x forward, y left, z up). Each robot's subclass sets ROBOT, and the
+    gait's choices and default (its gaits are the ones for its number of legs, control.gait.gaits_for)."""
+
+    ROBOT: ClassVar[WalkingRobot]
 
     gait: str = param("tripod", "", "which legs swing when", choices=tuple(GAITS))
     vx: float = param(0.1, "m/s", "commanded forward speed", ge=-1.0, le=1.0, typo=("mm/s", 1e-3))
@@ -139,7 +157,9 @@ class HexabotParams:
         step_s, row_s, row_bytes = RUN_COST
         if self.on_ground() or self.slope_deg or self.roughness or self.kerb_height:
             step_s = TERRAIN_STEP_SECONDS
-        check_run_cost(n, n + 1, CSV_COLUMNS, step_s, row_s, row_bytes, "lower 'duration' or raise 'timestep'")
+        check_run_cost(
+            n, n + 1, csv_columns(self.ROBOT), step_s, row_s, row_bytes, "lower 'duration' or raise 'timestep'"
+        )
         problem = feasibility(self)
         if problem:
             raise ValueError(problem)
@@ -149,12 +169,16 @@ class HexabotParams:
 
     def gait_duty_range(self) -> tuple[float, float]:
         """Smallest duty that keeps the robot statically supported with this gait's phase pattern."""
-        base = GAITS[self.gait].duty
+        base = self.gaits()[self.gait].duty
         return base, 1.0
 
     def the_gait(self) -> Gait:
-        g = GAITS[self.gait]
+        g = self.gaits()[self.gait]
         return g if not self.duty else dataclasses.replace(g, duty=self.duty)
+
+    def gaits(self) -> dict[str, Gait]:
+        """The gaits of a robot with this many legs, by name."""
+        return gaits_for(self.ROBOT.layout.n_legs)
 
     def command(self) -> Command:
         return Command(self.vx, self.vy, self.yaw_rate)
@@ -164,13 +188,13 @@ class HexabotParams:
         return self.touchdown == "sensed" or self.level_body == "on"
 
 
-def neutral(p: HexabotParams) -> np.ndarray:
+def neutral(p: WalkParams) -> np.ndarray:
     """Neutral foot centres (6, 3) in the body frame for the run's stand height."""
-    layout = dataclasses.replace(LAYOUT, stand_height=p.stand_height)
+    layout = dataclasses.replace(p.ROBOT.layout, stand_height=p.stand_height)
     return layout.neutral_feet_body()
 
 
-def _plan_cycle(p: HexabotParams, cmd: Command, samples: int = 240) -> tuple[np.ndarray, float]:
+def _plan_cycle(p: WalkParams, cmd: Command, samples: int = 240) -> tuple[np.ndarray, float]:
     """Targets (n, 6, 3) in the hip frames over two steady gait cycles, and their time step."""
     dt = p.period / samples
     planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), dt)
@@ -178,7 +202,8 @@ def _plan_cycle(p: HexabotParams, cmd: Command, samples: int = 240) -> tuple[np.
     while planner.time < 3 * p.period - 1e-9:
         chunks.append(planner.plan(cmd, planner.max_chunk)[1:])
     body = np.concatenate(chunks)[int(samples * 1.0) :]  # drop the first cycle (start-up from neutral)
-    hip = np.einsum("lji,klj->kli", LAYOUT.hip_rotations(), body - LAYOUT.hip_positions())
+    layout = p.ROBOT.layout
+    hip = np.einsum("lji,klj->kli", layout.hip_rotations(), body - layout.hip_positions())
     return hip, dt
 
 
@@ -188,9 +213,9 @@ _CYCLE_PROBLEMS: dict[tuple[Any, ...], str] = {}
 CYCLE_CACHE_SIZE: int = 1 << 14
 
 
-def _cycle_problem(p: HexabotParams, cmd: Command) -> str:
+def _cycle_problem(p: WalkParams, cmd: Command) -> str:
     """'' if every leg can follow the planned cycle, else why not (reach, joint range or joint speed)."""
-    key = (p.gait, p.duty, p.period, p.step_height, p.stand_height, p.max_joint_speed, cmd)
+    key = (p.ROBOT, p.gait, p.duty, p.period, p.step_height, p.stand_height, p.max_joint_speed, cmd)
     problem = _CYCLE_PROBLEMS.get(key)
     if problem is None:
         if len(_CYCLE_PROBLEMS) >= CYCLE_CACHE_SIZE:
@@ -199,11 +224,11 @@ def _cycle_problem(p: HexabotParams, cmd: Command) -> str:
     return problem
 
 
-def _cycle_problem_computed(p: HexabotParams, cmd: Command) -> str:
+def _cycle_problem_computed(p: WalkParams, cmd: Command) -> str:
     hip, dt = _plan_cycle(p, cmd)
-    q, ok = hx.ik_hip_batch(LAYOUT, hip)
+    q, ok = legged.ik_hip_batch(p.ROBOT.layout, hip)
     if not ok.all():
-        leg = hx.LEGS[int(np.argwhere(~ok)[0][1])]
+        leg = p.ROBOT.layout.legs[int(np.argwhere(~ok)[0][1])]
         return f"foot {leg} would leave its reachable workspace or joint ranges"
     speed = np.abs(np.diff(q, axis=0)).max() / dt
     if speed > SPEED_MARGIN * p.max_joint_speed:
@@ -211,7 +236,7 @@ def _cycle_problem_computed(p: HexabotParams, cmd: Command) -> str:
     return ""
 
 
-def feasibility(p: HexabotParams) -> str:
+def feasibility(p: WalkParams) -> str:
     """'' if the legs can deliver the command, else a one-line reason with the largest feasible command."""
     if not math.isfinite(p.vx + p.vy + p.yaw_rate):
         return "vx, vy and yaw_rate must be finite"
@@ -251,13 +276,13 @@ def feasibility(p: HexabotParams) -> str:
     )
 
 
-def walking_direction(p: HexabotParams) -> np.ndarray:
+def walking_direction(p: WalkParams) -> np.ndarray:
     """Horizontal unit vector (2,) of the commanded walk in the world at the start (+x when standing or turning)."""
     speed = math.hypot(p.vx, p.vy)
     return np.array([p.vx, p.vy]) / speed if speed > 0 else np.array([1.0, 0.0])
 
 
-def terrain(p: HexabotParams) -> Ground:
+def terrain(p: WalkParams) -> Ground:
     """The run's ground: slope direction from the walking direction, heightfield over the walk's area."""
     along = walking_direction(p)
     uphill = {"uphill": along, "downhill": -along, "across": np.array([-along[1], along[0]])}[p.slope_heading]
@@ -282,7 +307,7 @@ def terrain(p: HexabotParams) -> Ground:
     )
 
 
-def depth_range(p: HexabotParams) -> tuple[float, float]:
+def depth_range(p: WalkParams) -> tuple[float, float]:
     """(smallest, largest) depth [m] of the stance feet below the hips that keeps every planned target reachable.
 
     The steady cycle of the command (stance and swing, with the lift) is shifted up and down as a whole:
@@ -294,7 +319,7 @@ def depth_range(p: HexabotParams) -> tuple[float, float]:
     def ok(shift: float) -> bool:
         shifted = hip.copy()
         shifted[..., 2] += shift
-        return bool(hx.ik_hip_batch(LAYOUT, shifted)[1].all())
+        return bool(legged.ik_hip_batch(p.ROBOT.layout, shifted)[1].all())
 
     limits = []
     for sign in (1.0, -1.0):
@@ -306,7 +331,7 @@ def depth_range(p: HexabotParams) -> tuple[float, float]:
     return p.stand_height - limits[0], p.stand_height + limits[1]
 
 
-def largest_climbable_kerb(p: HexabotParams) -> float:
+def largest_climbable_kerb(p: WalkParams) -> float:
     """Highest kerb [m] the walk can climb: a swing clears it and the legs can hold the cycle raised by it.
 
     Clearing: the foot lifts step_height above the ground it left, and its centre must pass the kerb's
@@ -314,14 +339,15 @@ def largest_climbable_kerb(p: HexabotParams) -> float:
     robot stumble, 15 deg of roll; with 0.04 m it walked up cleanly). Holding: the whole planned cycle
     raised by the kerb height stays inside the reach and the joint ranges (depth_range).
     """
-    return min(p.step_height - LAYOUT.foot_radius, p.stand_height - depth_range(p)[0])
+    return min(p.step_height - p.ROBOT.layout.foot_radius, p.stand_height - depth_range(p)[0])
 
 
-def terrain_problem(p: HexabotParams) -> str:
+def terrain_problem(p: WalkParams) -> str:
     """'' if the ground can be walked as asked, else a one-line reason (the terrain types' own refusals, with
     what this robot can take, and a level body's reach on a slope)."""
     ground = terrain(p)
-    underside = p.stand_height + LAYOUT.foot_radius - LAYOUT.plate[2]  # the plate's underside above the ground
+    layout = p.ROBOT.layout
+    underside = p.stand_height + layout.foot_radius - layout.plate[2]  # the plate's underside above the ground
     limits = Limits(
         friction=p.friction,
         climbable=largest_climbable_kerb(p) if ground.obstacles else math.inf,
@@ -353,3 +379,8 @@ def terrain_problem(p: HexabotParams) -> str:
             "(or set level_body=off)"
         )
     return ""
+
+
+def csv_columns(robot: WalkingRobot) -> int:
+    """Columns of a walk's timeseries.csv (the run-cost estimate counts them)."""
+    return CSV_FIXED_COLUMNS + 4 * robot.layout.n_legs

@@ -1,4 +1,4 @@
-"""The walking hexabot's scene: MJCF of robot and ground, perturbations, and its controller."""
+"""A walk's scene: MJCF of robot and ground, perturbations, and its controller."""
 
 from __future__ import annotations
 
@@ -9,63 +9,64 @@ import numpy as np
 
 from hexabot_sim import models
 from hexabot_sim.control.gait import GaitPlanner
-from hexabot_sim.control.hexabot import GroundController, GroundSettings, HexabotController, WalkSettings
 from hexabot_sim.control.resolved_rate import ResolvedRateGains
-from hexabot_sim.kinematics import hexabot as hx
-from hexabot_sim.robots.hexabot.parameters import (
+from hexabot_sim.control.walker import GroundController, GroundSettings, WalkingController, WalkSettings
+from hexabot_sim.kinematics import legged
+from hexabot_sim.terrain import Ground
+from hexabot_sim.walking.parameters import (
     ACCELERATION_HEADROOM,
     ACCELERATION_LIMIT,
-    LAYOUT,
     SCENE_EXTENT,
     SETTLE_TIME,
     SLOPE_CAMERA_DISTANCE,
     SLOPE_CAMERA_HEIGHT,
     TERRAIN_NOSLIP_ITERATIONS,
-    HexabotParams,
+    WalkParams,
     _plan_cycle,
     depth_range,
     neutral,
     terrain,
 )
-from hexabot_sim.terrain import Ground
 
 
-def _perturbations(p: HexabotParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Seeded servo trims (18,) [rad], body CoM offset (3,) [m] and per-foot friction factors (6,)."""
+def _perturbations(p: WalkParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Seeded servo trims (3 n_legs,) [rad], body CoM offset (3,) [m] and per-foot friction factors (n_legs,)."""
+    n = p.ROBOT.layout.n_legs
     rng = np.random.default_rng(p.seed)
-    trims = rng.uniform(-1.0, 1.0, 18) * math.radians(p.trim_error_deg)
+    trims = rng.uniform(-1.0, 1.0, 3 * n) * math.radians(p.trim_error_deg)
     angle = rng.uniform(0.0, 2 * math.pi)
     com = np.array([math.cos(angle), math.sin(angle), 0.0]) * p.com_offset
-    friction = 1.0 + rng.uniform(-1.0, 1.0, 6) * p.friction_spread
+    friction = 1.0 + rng.uniform(-1.0, 1.0, n) * p.friction_spread
     return trims, com, friction
 
 
-def build_xml(p: HexabotParams) -> str:
-    """The hexabot scene with the run's options, stance, friction, perturbations and ground written in."""
-    root = models.load_tree("hexabot_scene")
+def build_xml(p: WalkParams) -> str:
+    """The robot's scene with the run's options, stance, friction, perturbations and ground written in."""
+    layout = p.ROBOT.layout
+    root = models.load_tree(p.ROBOT.scene)
     models.find(root, "option").attrib.update(timestep=models.fmt(p.timestep), integrator=p.integrator)
     _, com, friction = _perturbations(p)
     torso = models.find(root, "body", "torso")
     torso.find("inertial").set("pos", models.fmt(com))
     feet = neutral(p)
-    q0, _ = hx.ik_hip_batch(LAYOUT, hx.body_to_hip(LAYOUT, feet))
-    z0 = p.stand_height + LAYOUT.foot_radius
+    q0, _ = legged.ik_hip_batch(layout, legged.body_to_hip(layout, feet))
+    z0 = p.stand_height + layout.foot_radius
     pose = [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0]
     ground = terrain(p)
     if not ground.flat:
         pose, q0 = _add_terrain(root, p, ground, feet, q0)
     torso.set("pos", models.fmt(pose[:3]))
-    for leg, factor in zip(hx.LEGS, friction, strict=True):
+    for leg, factor in zip(layout.legs, friction, strict=True):
         foot = models.find(root, "geom", f"{leg}_foot")
         foot.set("friction", models.fmt([p.friction * factor, 0.005, 0.0001]))
     key = models.find(root, "key", "home")
     key.set("qpos", models.fmt([*pose, *q0.ravel()]))
-    key.set("ctrl", models.fmt([*q0.ravel(), *np.zeros(18)]))
+    key.set("ctrl", models.fmt([*q0.ravel(), *np.zeros(q0.size)]))
     return models.to_xml(root)
 
 
-def _add_terrain(root, p: HexabotParams, ground: Ground, feet: np.ndarray, q0: np.ndarray):
-    """Writes the ground into the scene tree; the start pose (7,) and joint angles (6, 3) standing on it.
+def _add_terrain(root, p: WalkParams, ground: Ground, feet: np.ndarray, q0: np.ndarray):
+    """Writes the ground into the scene tree; the start pose (7,) and joint angles (n_legs, 3) standing on it.
 
     With the ground-finding controller the body starts level, its feet on the ground under their
     neutral points (IK). With the planned controller it starts parallel to a slope, or level on its
@@ -99,15 +100,16 @@ def _add_terrain(root, p: HexabotParams, ground: Ground, feet: np.ndarray, q0: n
         models.find(root, "body", "torso").append(
             ET.Element("camera", name="slope", mode="trackcom", pos=models.fmt(eye), xyaxes=models.fmt(xyaxes))
         )
-    r = LAYOUT.foot_radius
+    layout = p.ROBOT.layout
+    r = layout.foot_radius
     normal = ground.normal()
     if p.on_ground() and not (ground.slope.tilted and p.level_body == "off"):
         # Level body; every foot centre r (along the normal) above the ground under its neutral point.
-        g = ground.height(feet[:, 0], feet[:, 1]) + r / normal[2]  # (6,)
+        g = ground.height(feet[:, 0], feet[:, 1]) + r / normal[2]  # (n_legs,)
         z0 = p.stand_height + float(g.mean())
         target = feet.copy()
         target[:, 2] = g - z0
-        q = hx.ik_body(LAYOUT, target)
+        q = legged.ik_body(layout, target)
         return [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0], q
     if ground.slope.tilted:  # parallel to the slope, above whatever stands on it under the feet
         lift = max(0.0, float(ground.surface(feet[:, 0], feet[:, 1]).max()))
@@ -117,15 +119,15 @@ def _add_terrain(root, p: HexabotParams, ground: Ground, feet: np.ndarray, q0: n
     return [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0], q0
 
 
-def acceleration_limit(p: HexabotParams) -> float:
+def acceleration_limit(p: WalkParams) -> float:
     """Commanded joint-acceleration limit [rad/s^2]: ACCELERATION_LIMIT, or more where the steady cycle needs it."""
     hip, dt = _plan_cycle(p, p.command())
-    q, _ = hx.ik_hip_batch(LAYOUT, hip)  # (n, 6, 3)
+    q, _ = legged.ik_hip_batch(p.ROBOT.layout, hip)  # (n, n_legs, 3)
     peak = float(np.abs(np.diff(q, 2, axis=0)).max()) / dt**2
     return max(ACCELERATION_LIMIT, ACCELERATION_HEADROOM * peak)
 
 
-def make_controller(p: HexabotParams, model: mujoco.MjModel, data: mujoco.MjData) -> HexabotController:
+def make_controller(p: WalkParams, model: mujoco.MjModel, data: mujoco.MjData) -> WalkingController:
     """The walking controller of a run (the ground-finding one for sensed touchdown or a levelled body)."""
     trims, _, _ = _perturbations(p)
     planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), p.timestep, start_time=SETTLE_TIME)
@@ -134,11 +136,11 @@ def make_controller(p: HexabotParams, model: mujoco.MjModel, data: mujoco.MjData
         trims=tuple(trims.tolist()),
     )  # fmt: skip
     gains = ResolvedRateGains(p.task_gain, 0.01, 0.01, p.max_joint_speed, acceleration_limit(p))
-    q0 = model.key("home").qpos[7:].reshape(6, 3)
+    q0 = model.key("home").qpos[7:].reshape(-1, 3)
     if not p.on_ground():
-        return HexabotController(model, data, LAYOUT, planner, gains, settings, q0)
+        return WalkingController(model, data, p.ROBOT.layout, planner, gains, settings, q0)
     ground = GroundSettings(
         sensed=p.touchdown == "sensed", level=p.level_body == "on", stand_height=p.stand_height,
         depth_range=depth_range(p),
     )  # fmt: skip
-    return GroundController(model, data, LAYOUT, planner, gains, settings, q0, ground)
+    return GroundController(model, data, p.ROBOT.layout, planner, gains, settings, q0, ground)

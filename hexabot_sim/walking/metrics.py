@@ -1,4 +1,4 @@
-"""What a hexabot walk measured: speed, drift, slip, attitude, contacts and terrain figures of merit."""
+"""What a walk measured: speed, drift, slip, attitude, contacts and terrain figures of merit."""
 
 from __future__ import annotations
 
@@ -8,20 +8,17 @@ import math
 import mujoco
 import numpy as np
 
-from hexabot_sim.control.hexabot import HexabotController
-from hexabot_sim.kinematics import hexabot as hx
+from hexabot_sim.control.walker import WalkingController
 from hexabot_sim.result import Metric
-from hexabot_sim.robots.hexabot.parameters import (
+from hexabot_sim.terrain import Ground
+from hexabot_sim.walking.parameters import (
     FALL_TILT_DEG,
-    LAYOUT,
     LOADED_FRACTION,
     SETTLE_TIME,
-    TORQUE_LIMIT,
-    HexabotParams,
+    WalkParams,
     largest_climbable_kerb,
     walking_direction,
 )
-from hexabot_sim.terrain import Ground
 
 
 def rpy_from_quat(quat: np.ndarray) -> np.ndarray:
@@ -37,38 +34,45 @@ def rpy_from_quat(quat: np.ndarray) -> np.ndarray:
 class Contacts:
     """Per recorded row: foot loads, contact-point slip, joint torques, body-ground contact."""
 
-    load: np.ndarray  # (n, 6) normal force of each foot [N]
-    slip: np.ndarray  # (n, 6) horizontal speed of the foot's material point at its contact [m/s]
-    point: np.ndarray  # (n, 6, 3) contact point [m] (NaN where the foot is off the ground)
-    torque: np.ndarray  # (n, 18) joint actuator torque [N m]
+    load: np.ndarray  # (n, n_legs) normal force of each foot [N]
+    slip: np.ndarray  # (n, n_legs) horizontal speed of the foot's material point at its contact [m/s]
+    point: np.ndarray  # (n, n_legs, 3) contact point [m] (NaN where the foot is off the ground)
+    torque: np.ndarray  # (n, 3 n_legs) joint actuator torque [N m]
     body_contact: np.ndarray  # (n,) the plate touches the ground
 
     def loaded(self, total_mass: float) -> np.ndarray:
-        """(n, 6) the feet that carry load: more than LOADED_FRACTION of a sixth of the robot's weight."""
-        return self.load > LOADED_FRACTION * total_mass * 9.81 / 6
+        """(n, n_legs) the feet that carry load: more than LOADED_FRACTION of their share of the robot's weight."""
+        return self.load > LOADED_FRACTION * total_mass * 9.81 / self.load.shape[1]
 
 
 def replay_contacts(
-    model: mujoco.MjModel, t: np.ndarray, qpos: np.ndarray, qvel: np.ndarray, ctrl: np.ndarray
+    model: mujoco.MjModel,
+    t: np.ndarray,
+    qpos: np.ndarray,
+    qvel: np.ndarray,
+    ctrl: np.ndarray,
+    legs: tuple[str, ...],
 ) -> Contacts:
-    """Recomputes contacts, slip and torques at every recorded row with mj_forward (the recorded state in)."""
+    """Recomputes contacts, slip and torques at every recorded row with mj_forward (the recorded state in);
+    `legs`: the robot's leg names (its geoms `<leg>_foot`, bodies `<leg>_tibia`)."""
     data = mujoco.MjData(model)
     n = len(t)
-    foot_geoms = {model.geom(f"{leg}_foot").id: i for i, leg in enumerate(hx.LEGS)}
-    tibia = [model.body(f"{leg}_tibia").id for leg in hx.LEGS]
+    foot_geoms = {model.geom(f"{leg}_foot").id: i for i, leg in enumerate(legs)}
+    tibia = [model.body(f"{leg}_tibia").id for leg in legs]
     torso_geom = model.geom("torso").id
-    load = np.zeros((n, 6))
-    slip = np.zeros((n, 6))
-    point = np.full((n, 6, 3), np.nan)
-    torque = np.empty((n, 18))
+    m = len(legs)
+    load = np.zeros((n, m))
+    slip = np.zeros((n, m))
+    point = np.full((n, m, 3), np.nan)
+    torque = np.empty((n, 3 * m))
     body_contact = np.zeros(n, dtype=bool)
-    force = np.zeros(6)
+    force = np.zeros(6)  # mj_contactForce's wrench
     jacp = np.zeros((3, model.nv))  # (3, nv)
     for k in range(n):
         data.qpos[:], data.qvel[:], data.ctrl[:] = qpos[k], qvel[k], ctrl[min(k + 1, n - 1)]
         data.time = t[k]
         mujoco.mj_forward(model, data)
-        torque[k] = data.qfrc_actuator[6:24]
+        torque[k] = data.qfrc_actuator[6 : 6 + 3 * m]
         for c in range(data.ncon):
             contact = data.contact[c]
             leg = foot_geoms.get(contact.geom1, foot_geoms.get(contact.geom2))
@@ -86,7 +90,7 @@ def replay_contacts(
     return Contacts(load=load, slip=slip, point=point, torque=torque, body_contact=body_contact)
 
 
-def steady_window(p: HexabotParams, t: np.ndarray) -> np.ndarray:
+def steady_window(p: WalkParams, t: np.ndarray) -> np.ndarray:
     """Rows of the steady walk: after settling, the ramp and one more period, whole cycles to the end."""
     start = SETTLE_TIME + 2 * p.period
     cycles = math.floor((t[-1] - start) / p.period + 1e-9)
@@ -119,7 +123,7 @@ def _null_why(metric: Metric, why: str) -> Metric:
 
 
 def walking_metrics(
-    p: HexabotParams, t: np.ndarray, qpos: np.ndarray, qvel: np.ndarray, contacts: Contacts, total_mass: float
+    p: WalkParams, t: np.ndarray, qpos: np.ndarray, qvel: np.ndarray, contacts: Contacts, total_mass: float
 ) -> dict[str, Metric]:
     """The walking metrics of a run, from its recorded state and contacts."""
     window = steady_window(p, t)
@@ -158,7 +162,7 @@ def walking_metrics(
         short = "not a straight walk (no speed commanded, or turning)"
     slow = f"commanded under {LEAST_SPEED:g} (m/s or rad/s): the robot's own creep would dominate the ratio"
     # Height and attitude.
-    height_cmd = p.stand_height + LAYOUT.foot_radius
+    height_cmd = p.stand_height + p.ROBOT.layout.foot_radius
     z = qpos[window, 2]
     roll, pitch = np.degrees(rpy[window, 0]), np.degrees(rpy[window, 1])
     # Slip of loaded feet, per stance.
@@ -167,7 +171,7 @@ def walking_metrics(
     slip_distance = float((contacts.slip[window] * loaded[window]).sum() * dt)
     touchdowns = int((np.diff(loaded[window].astype(int), axis=0) == 1).sum())
     # Energy: positive and negative joint work both cost (hobby servos do not recover energy).
-    power = np.abs(contacts.torque * qvel[:, 6:24]).sum(axis=1)
+    power = np.abs(contacts.torque * qvel[:, 6 : 6 + contacts.torque.shape[1]]).sum(axis=1)
     work = float(power[window].sum() * dt)
     tilt = np.degrees(np.arccos(np.clip(1 - 2 * (qpos[:, 4] ** 2 + qpos[:, 5] ** 2), -1.0, 1.0)))
     fell = bool(contacts.body_contact.any() or (tilt > FALL_TILT_DEG).any())
@@ -224,7 +228,7 @@ def walking_metrics(
         ),
         "peak_joint_torque": Metric(peak_torque, "N*m", "largest joint torque of the run"),
         "torque_limit_fraction": Metric(
-            peak_torque / TORQUE_LIMIT, "1", f"peak_joint_torque / the {TORQUE_LIMIT} N*m limit"
+            peak_torque / p.ROBOT.torque_limit, "1", f"peak_joint_torque / the {p.ROBOT.torque_limit} N*m limit"
         ),
         "fell": Metric(fell, "", f"the plate touched the ground or tilted beyond {FALL_TILT_DEG:g} deg"),
     }
@@ -234,16 +238,16 @@ TOUCHDOWN_TOLERANCE: float = 0.02  # [s] a touchdown further than this from the 
 
 
 def terrain_metrics(
-    p: HexabotParams,
+    p: WalkParams,
     ground: Ground,
     t: np.ndarray,
     qpos: np.ndarray,
-    controller: HexabotController,
+    controller: WalkingController,
     bearing: np.ndarray,
     planned: np.ndarray,
 ) -> dict[str, Metric]:
-    """Attitude relative to gravity, height above the local ground, progress, touchdowns, levelling limits,
-    and how often the feet the plan has in stance (`planned`, (n, 6)) carry load (`bearing`: loaded and planned)."""
+    """Attitude relative to gravity, height above the local ground, progress, touchdowns, levelling limits, and how
+    often the feet the plan has in stance (`planned`, (n, n_legs)) carry load (`bearing`: loaded and planned)."""
     window = steady_window(p, t)
     rpy = np.degrees(rpy_from_quat(qpos[window, 3:7]))  # z-y-x angles: roll and pitch are relative to gravity
     roll, pitch = rpy[:, 0], rpy[:, 1]

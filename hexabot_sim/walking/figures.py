@@ -1,4 +1,4 @@
-"""The walking hexabot's figures: path, gait diagram, velocity, body attitude, slip, terrain."""
+"""A walk's figures: path, gait diagram, velocity, body attitude, slip, terrain."""
 
 from __future__ import annotations
 
@@ -8,11 +8,10 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from hexabot_sim.kinematics import hexabot as hx
 from hexabot_sim.result import ScenarioResult
-from hexabot_sim.robots.hexabot.metrics import Contacts
-from hexabot_sim.robots.hexabot.parameters import LAYOUT, SETTLE_TIME, walking_direction
 from hexabot_sim.terrain import Ground
+from hexabot_sim.walking.metrics import Contacts
+from hexabot_sim.walking.parameters import SETTLE_TIME, walking_direction
 
 LEG_COLOURS = {
     "lf": "tab:blue",
@@ -44,6 +43,7 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     from hexabot_sim import plots
 
     p, c = result.params, result.columns
+    legs = p.ROBOT.layout.legs
     contacts: Contacts = result.extras["contacts"]
     t = c["t"]
     out: dict[str, Any] = {}
@@ -55,8 +55,8 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     height = float(np.clip(7.0 * span_y / span_x, 3.0, 8.0))  # equal axes, a frame that fits the walk
     fig, ax = plots.figure(figsize=(10, height + 1.2))
     ax.plot(c["x"], c["y"], color="k", lw=1.5, label="body (plate centre)")
-    loaded = np.stack([c[f"contact_{leg}"] for leg in hx.LEGS], axis=1) > 0.5
-    for i, leg in enumerate(hx.LEGS):
+    loaded = np.stack([c[f"contact_{leg}"] for leg in legs], axis=1) > 0.5
+    for i, leg in enumerate(legs):
         down = np.flatnonzero(np.diff(loaded[:, i].astype(int)) == 1) + 1
         pts = contacts.point[down, i]
         ax.plot(pts[:, 0], pts[:, 1], "o", ms=3.5, mfc="none", color=LEG_COLOURS[leg], label=f"{leg} touchdowns")
@@ -84,14 +84,14 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     if not show.any():
         show = t >= 0
     fig, ax = plots.figure(figsize=(9, 4.5))
-    for i, leg in enumerate(hx.LEGS):
-        y = len(hx.LEGS) - 1 - i
+    for i, leg in enumerate(legs):
+        y = len(legs) - 1 - i
         ts = t[show]
         ax.fill_between(ts, y - 0.35, y + 0.35, where=loaded[show, i], step="post", color=LEG_COLOURS[leg], alpha=0.8,
                         label="stance (foot loaded)" if i == 0 else None)  # fmt: skip
         ax.fill_between(ts, y + 0.38, y + 0.45, where=planned[show, i], step="post", color="k",
                         label="planned stance" if i == 0 else None)  # fmt: skip
-    ax.set_yticks(range(len(hx.LEGS)), list(reversed(hx.LEGS)))
+    ax.set_yticks(range(len(legs)), list(reversed(legs)))
     ax.set_xlabel("t [s]")
     ax.set_xlim(t[show][0], t[show][-1])
     plots.legend_above(ax, ncol=2)
@@ -118,7 +118,7 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
 
     # Body height and attitude.
     fig, axes = plots.figure(2, 1, figsize=(9, 6), sharex=True)
-    planned_h = (p.stand_height + LAYOUT.foot_radius) * 1000
+    planned_h = (p.stand_height + p.ROBOT.layout.foot_radius) * 1000
     axes[0].plot(t, c["z"] * 1000, color="tab:blue", label="body height")
     axes[0].axhline(planned_h, **plots.TARGET_STYLE, label="planned height")
     axes[0].set_ylabel("height [mm]")
@@ -137,7 +137,7 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
 
     # Foot slip: contact-point speed of the loaded feet.
     fig, ax = plots.figure(figsize=(9, 4.5))
-    for i, leg in enumerate(hx.LEGS):
+    for i, leg in enumerate(legs):
         slip = np.where(loaded[:, i], contacts.slip[:, i] * 1000, np.nan)
         ax.plot(t, slip, lw=0.8, color=LEG_COLOURS[leg], label=leg)
     ax.set_xlabel("t [s]")
@@ -160,12 +160,13 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
 
 
 def _foot_centres(result: ScenarioResult, every: int) -> tuple[np.ndarray, np.ndarray]:
-    """Rows (k,) of the recording, one in `every`, and the world position of each foot centre there (k, 6, 3)."""
+    """Rows (k,) of the recording, one in `every`, and the world position of each foot centre there (k, n_legs, 3)."""
     model, traj = result.model, result.trajectory
+    legs = result.params.ROBOT.layout.legs
     data = mujoco.MjData(model)
-    sites = [model.site(f"{leg}_foot").id for leg in hx.LEGS]
+    sites = [model.site(f"{leg}_foot").id for leg in legs]
     rows = np.arange(0, len(traj.t), every)
-    feet = np.empty((len(rows), 6, 3))
+    feet = np.empty((len(rows), len(sites), 3))
     for k, row in enumerate(rows):
         data.qpos[:] = traj.qpos[row]
         mujoco.mj_kinematics(model, data)
@@ -179,6 +180,7 @@ def _terrain_figure(result: ScenarioResult, ground: Ground) -> Any:
     from hexabot_sim import plots
 
     p, c = result.params, result.columns
+    legs = p.ROBOT.layout.legs
     contacts: Contacts = result.extras["contacts"]
     t = c["t"]
     # Horizontal axis: distance along the commanded direction for a straight walk, else time.
@@ -189,9 +191,9 @@ def _terrain_figure(result: ScenarioResult, ground: Ground) -> Any:
         return xy @ along if straight else times
 
     rows, feet = _foot_centres(result, max(1, round(0.01 / p.timestep)))  # every 10 ms
-    r = LAYOUT.foot_radius
+    r = p.ROBOT.layout.foot_radius
     fig, axes = plots.figure(
-        1 + len(hx.LEGS), 1, figsize=(10, 11), sharex=True, gridspec_kw={"height_ratios": [1.6] + [1.0] * 6}
+        1 + len(legs), 1, figsize=(10, 11), sharex=True, gridspec_kw={"height_ratios": [1.6] + [1.0] * len(legs)}
     )
     ax = axes[0]
     s_body = axis(np.c_[c["x"], c["y"]], t)
@@ -201,9 +203,9 @@ def _terrain_figure(result: ScenarioResult, ground: Ground) -> Any:
     ax.plot(s_body, c["z"] * 1000, color="k", lw=1.2, label="body origin (plate centre)")
     ax.set_ylabel("height [mm]")
     plots.legend_above(ax, ncol=2)
-    loaded = np.stack([c[f"contact_{leg}"] for leg in hx.LEGS], axis=1) > 0.5
+    loaded = np.stack([c[f"contact_{leg}"] for leg in legs], axis=1) > 0.5
     low, high = np.inf, -np.inf
-    for i, leg in enumerate(hx.LEGS):
+    for i, leg in enumerate(legs):
         ax = axes[1 + i]
         s_foot = axis(feet[:, i, :2], t[rows])
         g = ground.height(feet[:, i, 0], feet[:, i, 1]) * 1000

@@ -1,0 +1,131 @@
+"""A legged robot walking on contact physics: run, analyse and watch live (each robot's scenario module binds its
+parameter class to these, e.g. robots/hexabot/walk.py)."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import mujoco
+import numpy as np
+
+from hexabot_sim.kinematics import legged
+from hexabot_sim.result import Live, Metric, Progress, ScenarioResult, at_home
+from hexabot_sim.simulate import simulate, step_count
+from hexabot_sim.walking.figures import _moving_mean, figures
+from hexabot_sim.walking.metrics import (
+    replay_contacts,
+    rpy_from_quat,
+    steady_window,
+    terrain_metrics,
+    walking_metrics,
+)
+from hexabot_sim.walking.parameters import WalkParams, terrain
+from hexabot_sim.walking.scene import build_xml, make_controller
+
+__all__ = ["analyse", "figures", "live", "run"]
+
+
+def run(name: str, p: WalkParams, progress: Progress | None = None) -> ScenarioResult:
+    """Stands the robot on its neutral stance, then walks with the command and records everything."""
+    xml = build_xml(p)
+    model, data = at_home(xml)
+    controller = make_controller(p, model, data)
+    n_steps = step_count(p.duration, p.timestep)
+    started = time.perf_counter()
+    traj = simulate(model, data, n_steps, controller=controller, progress=progress, record_ctrl=True)
+    wall = time.perf_counter() - started
+    return analyse(name, p, model, xml, traj, controller, wall)
+
+
+def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
+    """Columns, metrics and figure data of a walk."""
+    t, qpos, qvel, ctrl = traj.t, traj.qpos, traj.qvel, traj.ctrl
+    legs = p.ROBOT.layout.legs
+    contacts = replay_contacts(model, t, qpos, qvel, ctrl, legs)
+    total_mass = float(model.body_subtreemass[model.body("torso").id])
+    metrics = walking_metrics(p, t, qpos, qvel, contacts, total_mass)
+    gait = p.the_gait()
+    metrics |= {
+        "stride": Metric(math.hypot(p.vx, p.vy) * gait.duty * p.period, "m", "body travel per stance at the command"),
+        "duty": Metric(gait.duty, "1", "stance fraction of the gait cycle"),
+        "real_time_factor": Metric(t[-1] / wall, "1", "simulated time / wall time of the simulation loop"),
+    }
+    ground = terrain(p)
+    loaded = contacts.loaded(total_mass)
+    planned = controller.planner.in_stance(t)  # (n, n_legs)
+    if not ground.flat or p.on_ground():  # flat runs with the planned controller keep their metrics as they were
+        metrics |= terrain_metrics(p, ground, t, qpos, controller, loaded & planned, planned)
+    rpy = rpy_from_quat(qpos[:, 3:7])
+    # Command in force at every row: the chunk's command (re-planned every chunk) times the ramp's factor.
+    plan_t = np.array([c[0] for c in controller.commands])
+    idx = np.clip(np.searchsorted(plan_t, t, side="right") - 1, 0, len(plan_t) - 1)
+    plan = np.array([c[1:] for c in controller.commands])[idx] * np.asarray(controller.scale(t))[:, None]
+    c, s = np.cos(rpy[:, 2]), np.sin(rpy[:, 2])
+    vx_b = c * qvel[:, 0] + s * qvel[:, 1]
+    vy_b = -s * qvel[:, 0] + c * qvel[:, 1]
+    columns: dict[str, np.ndarray] = {"t": t, "x": qpos[:, 0], "y": qpos[:, 1], "z": qpos[:, 2]}
+    columns |= {"roll": rpy[:, 0], "pitch": rpy[:, 1], "yaw": np.unwrap(rpy[:, 2])}
+    columns |= {"vx_body": vx_b, "vy_body": vy_b, "yaw_rate": qvel[:, 5]}
+    columns |= {"cmd_vx": plan[:, 0], "cmd_vy": plan[:, 1], "cmd_yaw_rate": plan[:, 2]}
+    for i, leg in enumerate(legs):
+        columns[f"contact_{leg}"] = loaded[:, i].astype(float)
+    for i, leg in enumerate(legs):
+        for j, joint in enumerate(legged.JOINTS):
+            columns[f"q_{leg}_{joint}"] = qpos[:, 7 + 3 * i + j]
+    units = {"t": "s", "x": "m", "y": "m", "z": "m", "roll": "rad", "pitch": "rad", "yaw": "rad"}
+    units |= {"vx_body": "m/s", "vy_body": "m/s", "yaw_rate": "rad/s", "cmd_vx": "m/s", "cmd_vy": "m/s"}
+    units |= {"cmd_yaw_rate": "rad/s"}
+    units |= {k: ("1" if k.startswith("contact_") else "rad") for k in columns if k not in units}
+    trail = qpos[:, :3].copy()
+    trail[:, 2] = ground.height(trail[:, 0], trail[:, 1]) + 0.002  # the body's path drawn on the ground
+    period_rows = max(1, round(p.period / p.timestep))
+    speed = np.hypot(_moving_mean(vx_b, period_rows), _moving_mean(vy_b, period_rows))
+    overlay = [
+        lambda k: f"{p.gait} gait, speed {speed[k] * 1000:.0f} mm/s (command {math.hypot(*plan[k, :2]) * 1000:.0f})",
+        lambda k: "feet down: " + " ".join(leg for i, leg in enumerate(legs) if loaded[k, i]),
+    ]
+    return ScenarioResult(
+        scenario=name,
+        params=p,
+        model=model,
+        model_xml=xml,
+        trajectory=traj,
+        columns=columns,
+        column_units=units,
+        metrics=metrics,
+        summary=["mean_vx", "mean_vy", "mean_yaw_rate", "lateral_drift", "heading_drift", "slip_per_stance", "fell"],
+        camera="slope" if p.slope_deg else "track",
+        trail=trail,
+        overlay=overlay,
+        extras={
+            "contacts": contacts,
+            "planned_stance": planned,
+            "window": steady_window(p, t),
+            "terrain": ground,
+            "touchdowns": getattr(controller, "events", []),
+        },
+    )
+
+
+def live(p: WalkParams) -> Live:
+    """The robot on its neutral stance with its walking controller, for the interactive viewer."""
+    model, data = at_home(build_xml(p))
+    controller = make_controller(p, model, data)  # the same controller a run uses (terrain, levelling)
+
+    def step() -> None:
+        controller(model, data)
+        mujoco.mj_step(model, data)
+
+    def speed_text(d: mujoco.MjData) -> str:
+        return f"{p.gait} gait, speed {math.hypot(d.qvel[0], d.qvel[1]) * 1000:4.0f} mm/s, x = {d.qpos[0]:6.3f} m"
+
+    ground = terrain(p)
+
+    def trail(d: mujoco.MjData) -> np.ndarray:
+        return np.array([d.qpos[0], d.qpos[1], float(ground.height(d.qpos[0], d.qpos[1])) + 0.002])
+
+    return Live(
+        model, data, step, p.timestep, p.duration, camera="slope" if p.slope_deg else "track", track_body="torso",
+        trail=trail, overlay=[speed_text],
+    )  # fmt: skip
