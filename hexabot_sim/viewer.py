@@ -165,6 +165,7 @@ class Recording:
     scenario: str | None  # from run.json, None if it cannot be read
     params: dict[str, Any]
     xml_path: Path
+    xml: str  # model.xml's text, checked by models.read_run_model (it references no other file)
     t: np.ndarray  # (n,) [s]
     qpos: np.ndarray  # (n, nq)
     qvel: np.ndarray  # (n, nv)
@@ -202,7 +203,10 @@ def load_recording(folder: Path) -> Recording:
             raise UsageError(f"{traj_path}: '{name}' must have one row per time (shape ({len(t)}, k))")
         if not np.all(np.isfinite(arrays[name])):
             raise UsageError(f"{traj_path}: '{name}' holds values that are not finite numbers")
-    return Recording(folder, scenario, params, xml_path, t, arrays["qpos"], arrays["qvel"], arrays["ctrl"])
+    from hexabot_sim.models import read_run_model
+
+    xml = read_run_model(xml_path)
+    return Recording(folder, scenario, params, xml_path, xml, t, arrays["qpos"], arrays["qvel"], arrays["ctrl"])
 
 
 TRAJECTORY_LIMIT = 4 << 30  # [B] the most trajectory.npz may hold once unpacked (a zip bomb is refused unread)
@@ -382,7 +386,7 @@ def replay(
 
     folder = rec.folder
     try:
-        model = mujoco.MjModel.from_xml_path(str(rec.xml_path))
+        model = mujoco.MjModel.from_xml_string(rec.xml)
     except Exception as e:
         raise UsageError(f"cannot load {rec.xml_path}: {' '.join(str(e).split())}") from None
     if rec.qpos.shape[1] != model.nq or rec.qvel.shape[1] != model.nv:

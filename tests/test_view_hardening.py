@@ -103,3 +103,63 @@ def test_a_missing_folder_that_is_not_utf8_is_named_readably(capsys):
 
     code, _, err = cli(capsys, "view", os.fsdecode(b"no/such\xff"))
     assert code == 2 and "no/such\\\\xff" in err and "udc" not in err, err
+
+
+# A replayed model.xml is untrusted: MuJoCo would follow its <include>s and file attributes anywhere (a FIFO blocks,
+# /dev/zero or a big file fills memory) and a few lines (<replicate>, a huge texture) take minutes or all memory.
+_HOSTILE_MODELS = {
+    "include": '<mujoco><include file="/etc/passwd"/></mujoco>',
+    "include-fifo": '<mujoco><include file="FIFO"/></mujoco>',
+    "mesh-file": '<mujoco><asset><mesh name="m" file="/etc/hostname"/></asset><worldbody/></mujoco>',
+    "meshdir": '<mujoco><compiler meshdir="/etc"/><worldbody/></mujoco>',
+    "texture-file": '<mujoco><asset><texture name="t" type="2d" file="/etc/passwd"/></asset></mujoco>',
+    "replicate": '<mujoco><worldbody><replicate count="1000" offset="0 0 1"><replicate count="1000" '
+    'offset="1 0 0"><body><geom size="0.1"/></body></replicate></replicate></worldbody></mujoco>',
+    "huge-texture": '<mujoco><asset><texture name="t" type="2d" builtin="checker" width="60000" height="60000" '
+    'rgb1="1 1 1" rgb2="0 0 0"/></asset></mujoco>',
+    "huge-hfield": '<mujoco><asset><hfield name="h" nrow="100000" ncol="100000" size="1 1 1 1"/></asset></mujoco>',
+    "deep": "<mujoco><worldbody>" + "<body>" * 5000 + "</body>" * 5000 + "</worldbody></mujoco>",
+    "entities": '<!DOCTYPE mujoco [<!ENTITY a "aaaaaaaaaa">]><mujoco model="&a;"/>',
+    "not-xml": "<mujoco><worldbody>",
+    "not-utf8": b"<mujoco model='\xff'/>",
+    "other-root": "<html/>",
+    "oversized": None,  # a good model, the limit lowered below it
+}
+
+
+@pytest.mark.parametrize("kind", sorted(_HOSTILE_MODELS))
+def test_a_hostile_model_xml_is_one_line_and_never_followed(run_folder, tmp_path, monkeypatch, capsys, kind):
+    import os
+    import shutil
+
+    from hexabot_sim import models
+
+    folder = tmp_path / "copy"
+    shutil.copytree(run_folder, folder)
+    text = _HOSTILE_MODELS[kind]
+    if kind == "oversized":
+        monkeypatch.setattr(models, "RUN_MODEL_LIMIT", 1000)
+    else:
+        if "FIFO" in str(text):
+            os.mkfifo(tmp_path / "fifo")
+            text = text.replace("FIFO", str(tmp_path / "fifo"))
+        (folder / "model.xml").write_bytes(text if isinstance(text, bytes) else text.encode())
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    code, _, err = cli(capsys, "view", str(folder))
+    assert code == 2, err
+    line = err.strip()
+    assert len(line.splitlines()) == 1 and "Traceback" not in err and "internal error" not in err
+    assert "model" in line and "display" not in line and "root:" not in line
+
+
+def test_the_models_runs_write_pass_the_replay_check(run_folder):
+    from hexabot_sim import models, params, scenarios
+
+    assert models.read_run_model(run_folder / "model.xml")
+    for name in ("leg-step", "hexabot-walk", "hexabot-rough", "hexabot-slope", "hexabot-kerb"):
+        scenario = scenarios.get(name)
+        xml = scenario._module().build_xml(params.resolve(scenario.params_type, scenario.defaults))
+        path = run_folder.parent / f"{name}.xml"
+        path.write_text(xml)
+        assert models.read_run_model(path) == xml
