@@ -27,6 +27,7 @@ from hexabot_sim.errors import (
     Interrupted,
     OutputError,
     UsageError,
+    printable,
     stop_request,
 )
 
@@ -447,8 +448,7 @@ def cmd_view(args: argparse.Namespace) -> int:
     folder = Path(args.target)
     replaying = folder.is_dir() or os.sep in args.target or args.target in (".", "..")
     if replaying and not folder.is_dir():
-        shown = os.fsencode(args.target).decode("utf-8", "backslashreplace")  # bytes that are not UTF-8 as \xNN
-        raise UsageError(f"run folder {shown!r} does not exist")
+        raise UsageError(f"run folder {printable(args.target)!r} does not exist")
     if replaying and (args.sets or args.config):
         raise UsageError("--set and --config choose a scenario's parameters; a run folder replays its own")
     if gl.loaded_backend() is None:
@@ -799,6 +799,12 @@ def _main(argv: list[str]) -> int:
             return _interrupted(cause)
         if _debug_requested(argv):
             raise
+        if isinstance(e, OSError) and e.errno == errno.ENAMETOOLONG:  # a path typed (or built from one typed) too long
+            shown = printable(os.fsdecode(e.filename)) if e.filename is not None else "a path given"
+            _eprint(
+                f"{PROG}: error: {shown!r}: name too long (a file or folder name is at most 255 bytes, a path 4095)"
+            )
+            return 2
         text = " ".join(str(e).split())[:300]
         _eprint(
             f"{PROG}: internal error: {type(e).__name__}{': ' + text if text else ''} -- this is a bug in "

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from hexabot_sim.errors import UsageError
+from hexabot_sim.errors import UsageError, printable
 from hexabot_sim.params import read_bounded
 
 if TYPE_CHECKING:
@@ -91,11 +91,6 @@ def load(folder: str) -> Run:
     if len(names) < 1 or len(set(names)) != len(names) or not all(names):
         raise UsageError(f"{shown}: the first line of {table.name} is not a header of distinct column names")
     return run
-
-
-def printable(text: str) -> str:
-    """`text` (a path, possibly with bytes that are not UTF-8) as text that can be printed and written anywhere."""
-    return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
 
 
 def load_all(folders: Sequence[str]) -> list[Run]:

@@ -6,6 +6,11 @@ import contextlib
 from collections.abc import Iterator
 
 
+def printable(text: str) -> str:
+    """`text` (a path, possibly with bytes that are not UTF-8: shown as \\xNN) as text printable anywhere."""
+    return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+
+
 class HexabotError(Exception):
     """Base class of every error hexabot-sim raises on purpose."""
 

@@ -176,3 +176,23 @@ def test_clean_stopped_after_removing_says_what_it_removed(tmp_path, monkeypatch
     monkeypatch.setattr(shutil, "rmtree", rmtree_then_ctrl_c)
     code, _, err = cli(capsys, "clean", str(tmp_path))
     assert code == 130 and "1 stale folder removed" in err and "nothing written" not in err, err
+
+
+@pytest.mark.parametrize("command", ["clean", "view", "compare-first", "compare-second"])
+@pytest.mark.parametrize("name", ["a" * 300, "/".join(["b" * 200] * 30)], ids=["long-name", "long-path"])
+def test_a_path_too_long_is_one_line_exit_2(two_runs, capsys, command, name):
+    # Path.is_dir() raises ENAMETOOLONG (it returns False only for a missing file): it was an internal error.
+    argv = {
+        "clean": ["clean", name],
+        "view": ["view", name],
+        "compare-first": ["compare", name, str(two_runs[0])],
+        "compare-second": ["compare", str(two_runs[0]), name],
+    }[command]
+    code, _, err = cli(capsys, *argv)
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1 and "internal error" not in err and "name too long" in err
+
+
+def test_clean_names_a_folder_that_is_not_utf8_readably(tmp_path, capsys):
+    code, _, err = cli(capsys, "clean", os.fsdecode(bytes(tmp_path) + b"/no\xff"))
+    assert code == 2 and "no\\\\xff" in err and "udc" not in err, err
