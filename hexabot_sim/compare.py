@@ -129,12 +129,12 @@ class Row:
         return any(v != self.values[0] for v in self.values[1:])
 
     def differences(self) -> list[tuple[float, float | None] | None]:
-        """(value - first, relative) for each run after the first; None where not numbers."""
+        """(value - first, relative) for each run after the first; None where not numbers or it overflows."""
         first = self.values[0]
         out: list[tuple[float, float | None] | None] = []
         for v in self.values[1:]:
-            if _is_number(first) and _is_number(v):
-                d = float(v) - float(first)
+            d = float(v) - float(first) if _is_number(first) and _is_number(v) else math.nan
+            if math.isfinite(d):  # not when the difference of two finite values overflows (-1e308 to 1e308)
                 # Relative only against a reference that is not small beside the other value (at most +-9900 %):
                 # a difference from a value near zero (1e-9 vs 0.05) is shown absolute only.
                 meaningful = abs(float(first)) >= RELATIVE_FLOOR * max(abs(float(first)), abs(float(v))) > 0
@@ -145,7 +145,13 @@ class Row:
 
 
 def _is_number(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+    """A finite int or float that a float can hold (a run.json may hold a 400-digit integer)."""
+    if not isinstance(v, (int, float)) or isinstance(v, bool):
+        return False
+    try:
+        return math.isfinite(float(v))
+    except OverflowError:
+        return False
 
 
 def rows(runs: Sequence[Run]) -> list[Row]:

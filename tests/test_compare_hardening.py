@@ -72,3 +72,22 @@ def test_folder_names_that_are_not_utf8_are_compared(runs, tmp_path):
     assert proc.returncode == 0, proc.stderr
     record = json.loads((tmp_path / os.fsdecode(b"c\xfd") / "compare.json").read_text())
     assert [r["label"] for r in record["runs"]] == ["r\\xff", "q\\xfe"]
+
+
+@pytest.mark.parametrize("kind", ["metrics", "params"])
+def test_an_integer_no_float_can_hold_in_run_json_is_not_a_bug(runs, tmp_path, capsys, kind):
+    odd = tmp_path / "odd"
+    shutil.copytree(runs / "a", odd)
+    record = json.loads((odd / "run.json").read_text())
+    name = next(iter(record[kind]))
+    record[kind][name] = 10**400  # valid JSON; float() of it overflows
+    (odd / "run.json").write_text(json.dumps(record))
+    code, out, err = cli(capsys, "compare", str(runs / "a"), str(odd), "--out", str(tmp_path / "c"), "--no-plots")
+    assert code == 0 and "internal error" not in err, err
+    assert "differs" in out or kind == "params"
+
+
+def test_a_difference_that_overflows_is_not_written_as_inf():
+    row = compare.Row("metric", "x", "1", (-1e308, 1e308))
+    assert row.differences() == [None]
+    assert compare._difference(row.differences()[0], False) == "differs"
