@@ -855,12 +855,16 @@ def _raise_interrupted(signum: int, frame: Any) -> None:
 
 
 def _ensure_std_streams() -> None:
-    """Opens /dev/null on a closed stdin/stdout/stderr, so no file we create takes their numbers."""
+    """Opens /dev/null on a closed stdin/stdout/stderr, so no file we create takes their numbers.
+
+    Inheritable, as the standard streams are: os.open's are not, and a child (glfw's library probe, the GL probes,
+    ffmpeg) started without a stderr fails (glfw's made `view` say that glfw is not installed).
+    """
     for fd in (0, 1, 2):
         try:
             os.fstat(fd)
         except OSError:
-            os.open(os.devnull, os.O_RDWR)  # takes the lowest free number: this one
+            os.set_inheritable(os.open(os.devnull, os.O_RDWR), True)  # takes the lowest free number: this one
     if sys.stdout is None:  # started with stdout closed: say so at the first write
         sys.stdout = _ClosedStdout()
     if sys.stderr is None:

@@ -674,3 +674,18 @@ def test_an_encoder_failure_on_a_full_disk_fails_the_run(tmp_path, monkeypatch, 
     else:
         video, _ = output.write_video(folder, result, settings, "egl")
         assert video == {"written": False, "reason": "rendering failed: OSError: [Errno 32] Broken pipe"}
+
+
+def test_closed_standard_streams_are_reopened_for_children_too(tmp_path):
+    # os.open's descriptors are not inheritable: a child started with no stderr fails (glfw's library probe did,
+    # and `view` with stderr closed said that glfw was not installed).
+    code = (
+        "import subprocess, sys\n"
+        "from hexabot_sim.__main__ import _ensure_std_streams\n"
+        "_ensure_std_streams()\n"
+        "probe = 'import os, sys; [os.fstat(fd) for fd in (0, 1, 2)]; input(); sys.stderr.write(\"x\")'\n"
+        "sys.exit(subprocess.run([sys.executable, '-c', probe], input=b'\\n', stdout=subprocess.PIPE).returncode)\n"
+    )
+    proc = subprocess.run(f"{sys.executable} -c \"$CODE\" 2>&- <&-", shell=True, cwd=tmp_path,
+                          env={**os.environ, "CODE": code}, timeout=120)  # fmt: skip
+    assert proc.returncode == 0
