@@ -671,7 +671,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
             plots.use_agg()
             with output.package_style():
-                files += output.write_figures(compare.figures(runs), run.path)
+                files += output.write_figures(compare.figures(runs, _eprint), run.path)
         output.write_json(run.path / compare.JSON_NAME, compare.record(runs, table, shared, files))
     assert run.final is not None
     _COMPLETED[:] = [f"the compare folder {output.display_path(run.final)} is complete"]

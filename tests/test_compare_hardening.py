@@ -91,3 +91,30 @@ def test_a_difference_that_overflows_is_not_written_as_inf():
     row = compare.Row("metric", "x", "1", (-1e308, 1e308))
     assert row.differences() == [None]
     assert compare._difference(row.differences()[0], False) == "differs"
+
+
+def test_a_large_csv_is_read_in_chunks_with_a_line_at_every_quarter(runs, tmp_path, capsys, monkeypatch):
+    # a 2 GB CSV (what a run may write) took ~80 s to read in silence, all of it in memory
+    import numpy as np
+
+    monkeypatch.setattr(compare, "CHUNK_ROWS", 7)
+    monkeypatch.setattr(compare, "MAX_POINTS", 10)
+    monkeypatch.setattr(compare, "ANNOUNCE_BYTES", 1)
+    run = compare.load(str(runs / "a"))
+    whole = np.loadtxt(run.csv, delimiter=",", skiprows=1, ndmin=2)
+    heard = []
+    names, data = compare._read(run, heard.append)
+    step = -(-len(whole) // 10)
+    assert names[0] == "t" and np.array_equal(data, whole[::step]) and len(data) <= 10
+    assert heard[0].startswith("compare: reading a/timeseries.csv (") and heard[1:] == [
+        f"compare: reading a/timeseries.csv: {p} %" for p in (25, 50, 75)
+    ]
+    broken = tmp_path / "broken"
+    shutil.copytree(runs / "a", broken)
+    lines = (broken / "timeseries.csv").read_text().splitlines()
+    lines[20] = lines[20].replace(",", ",x", 1)  # data row 19 (0-based), in the third chunk
+    (broken / "timeseries.csv").write_text("\n".join(lines) + "\n")
+    with pytest.raises(compare.UsageError, match="at row 19,"):
+        compare._read(compare.load(str(broken)))
+    code, _, err = cli(capsys, "compare", str(runs / "a"), str(runs / "b"), "--out", str(tmp_path / "c"))
+    assert code == 0 and "compare: reading a/timeseries.csv: 75 %" in err
