@@ -410,9 +410,11 @@ def cmd_clean(args: argparse.Namespace) -> int:
             shutil.rmtree(path)
         except OSError as e:
             raise OutputError(f"could not remove {output.display_path(path)!r}: {e.strerror or e}") from None
-        print(f"removed {output.display_path(path)}")
         removed += 1
-        _DONE_SO_FAR[:] = [f"{removed} stale folder{'s' if removed > 1 else ''} removed before it, listed above"]
+        done = f"{removed} stale folder{'s' if removed > 1 else ''} removed before it"
+        _DONE_SO_FAR[:] = [f"{done}, listed above"]
+        _COMPLETED[:] = [f"{done}, the last {output.display_path(path)}"]  # if stdout fails, stderr names it
+        print(f"removed {output.display_path(path)}")
     if not stale:
         cells = tempfile.gettempdir()
         print(f"no staging folders left by interrupted runs in {args.folder} (nor sweep cells in {cells})")

@@ -196,3 +196,13 @@ def test_a_path_too_long_is_one_line_exit_2(two_runs, capsys, command, name):
 def test_clean_names_a_folder_that_is_not_utf8_readably(tmp_path, capsys):
     code, _, err = cli(capsys, "clean", os.fsdecode(bytes(tmp_path) + b"/no\xff"))
     assert code == 2 and "no\\\\xff" in err and "udc" not in err, err
+
+
+def test_clean_with_stdout_closed_says_on_stderr_what_it_removed(tmp_path):
+    dead = _dead_pid()
+    for suffix in ("0a1b2c3d", "0a1b2c3e"):
+        (tmp_path / f"{output.STAGING_PREFIX}{dead}-{suffix}{output.STAGING_SUFFIX}").mkdir()
+    proc = subprocess.run(f"{sys.executable} -m hexabot_sim clean . >&-", shell=True, cwd=tmp_path,
+                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert proc.returncode == 1 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+    assert "(1 stale folder removed before it, the last .hexabot-sim-staging-" in proc.stderr, proc.stderr
