@@ -230,7 +230,8 @@ def _read_trajectory(path: Path) -> dict[str, np.ndarray]:
                 raise bad(f"the archive has no {', '.join(missing)}")
             unpacked = sum(info.file_size for info in members.values())
             if unpacked > TRAJECTORY_LIMIT:
-                raise bad(f"it would unpack to {unpacked / 2**30:.1f} GiB (the limit is {TRAJECTORY_LIMIT >> 30} GiB)")
+                limit = f"{TRAJECTORY_LIMIT / 2**30:g} GiB = {TRAJECTORY_LIMIT} bytes"  # exact: 4.0 GiB vs 4 GiB
+                raise bad(f"it would unpack to {unpacked} bytes, more than {limit}")
             arrays = {}
             for name in ("t", "qpos", "qvel", "ctrl"):
                 if f"{name}.npy" not in members:

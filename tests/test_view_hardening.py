@@ -163,3 +163,19 @@ def test_the_models_runs_write_pass_the_replay_check(run_folder):
         path = run_folder.parent / f"{name}.xml"
         path.write_text(xml)
         assert models.read_run_model(path) == xml
+
+
+def test_a_trajectory_just_over_the_limit_is_told_in_numbers_that_differ(run_folder, tmp_path, monkeypatch, capsys):
+    import shutil
+    import zipfile
+
+    from hexabot_sim import viewer
+
+    folder = tmp_path / "copy"
+    shutil.copytree(run_folder, folder)
+    with zipfile.ZipFile(folder / "trajectory.npz") as archive:
+        unpacked = sum(info.file_size for info in archive.infolist())
+    monkeypatch.setattr(viewer, "TRAJECTORY_LIMIT", unpacked - 1)  # over by one byte: '4.0 GiB (the limit is 4 GiB)'
+    monkeypatch.delenv("DISPLAY", raising=False)
+    code, _, err = cli(capsys, "view", str(folder))
+    assert code == 2 and f"{unpacked} bytes" in err and f"{unpacked - 1} bytes" in err, err
