@@ -109,7 +109,8 @@ RUN_MODEL_TAGS = frozenset(
 _FILE_ATTRIBUTES = frozenset(
     "file fileback filedown filefront fileleft fileright fileup meshdir texturedir assetdir content_type".split()
 )
-# (tag, the attributes whose product is bounded, the bound): a texture or heightfield that big is a memory bomb.
+# (tag, the attributes whose product is bounded, the bound on its sum over the file): textures, heightfields or an
+# offscreen buffer that big are a memory bomb (runs write ~0.4 Mpx of textures and one heightfield).
 _PIXEL_LIMITS = (
     ("texture", ("width", "height"), 1 << 24),
     ("global", ("offwidth", "offheight"), 1 << 24),
@@ -142,7 +143,7 @@ def read_run_model(path: Path) -> str:
         raise bad(f"it is not well-formed XML ({e})") from None
     if root.tag != "mujoco":
         raise bad(f"its root element is <{root.tag}>, not <mujoco>")
-    count = 0
+    count, totals = 0, {}
     stack = [(root, 1)]
     while stack:
         element, depth = stack.pop()
@@ -156,13 +157,16 @@ def read_run_model(path: Path) -> str:
         if files:
             raise bad(f"<{element.tag}> names a file ({files[0]}=...)")
         for tag, names, limit in _PIXEL_LIMITS:
-            if element.tag == tag and all(name in element.attrib for name in names):
+            if element.tag == tag and any(name in element.attrib for name in names):
                 bound = HFIELD_MAX_POINTS if limit is None else limit
-                try:
-                    product = int(element.attrib[names[0]]) * int(element.attrib[names[1]])
+                try:  # one side given: count it as square
+                    sides = [abs(int(element.attrib[n])) for n in names if n in element.attrib]
                 except ValueError:
                     raise bad(f"<{tag}> {names[0]}/{names[1]} are not integers") from None
-                if product > bound:
-                    raise bad(f"<{tag}> has {names[0]} x {names[1]} = {product}, more than {bound}")
+                totals[tag] = totals.get(tag, 0) + sides[0] * sides[-1]
+                if totals[tag] > bound:
+                    raise bad(
+                        f"its <{tag}> elements have {names[0]} x {names[1]} = {totals[tag]} in all, more than {bound}"
+                    )
         stack.extend((child, depth + 1) for child in element)
     return text

@@ -118,6 +118,10 @@ _HOSTILE_MODELS = {
     "huge-texture": '<mujoco><asset><texture name="t" type="2d" builtin="checker" width="60000" height="60000" '
     'rgb1="1 1 1" rgb2="0 0 0"/></asset></mujoco>',
     "huge-hfield": '<mujoco><asset><hfield name="h" nrow="100000" ncol="100000" size="1 1 1 1"/></asset></mujoco>',
+    "many-textures": "<mujoco><asset>"
+    + "".join(f'<texture name="t{i}" type="2d" builtin="flat" width="2048" height="2048"/>' for i in range(8))
+    + "</asset></mujoco>",
+    "one-side-texture": '<mujoco><asset><texture name="t" type="cube" builtin="flat" width="100000"/></asset></mujoco>',
     "deep": "<mujoco><worldbody>" + "<body>" * 5000 + "</body>" * 5000 + "</worldbody></mujoco>",
     "entities": '<!DOCTYPE mujoco [<!ENTITY a "aaaaaaaaaa">]><mujoco model="&a;"/>',
     "not-xml": "<mujoco><worldbody>",
