@@ -816,7 +816,12 @@ def _main(argv: list[str]) -> int:
 
 
 def _eprint(text: str) -> None:
-    """One line on stderr; a closed or full stderr must not change the exit code (nothing else can be told)."""
+    """One line on stderr; a closed or full stderr must not change the exit code (nothing else can be told).
+
+    Control characters (a path or a run.json name holding a newline, CR or ESC) are shown as \\xNN: one line, and
+    nothing that rewrites the terminal.
+    """
+    text = printable(text)
     try:
         print(text, file=sys.stderr, flush=True)
     except UnicodeEncodeError:  # e.g. a path in a non-UTF-8 locale

@@ -214,7 +214,8 @@ def text(runs: Sequence[Run], table: Sequence[Row]) -> str:
             unit = f" [{row.unit}]" if row.unit and row.unit != "1" else ""
             diffs = [] if kind == "param" else [_difference(d, not row.differs) for d in row.differences()]
             diffs += [""] * (len(labels) - 1 - len(diffs))
-            lines.append([f"{'*' if row.differs else ' '} {row.name}{unit}", *map(_show, row.values), *diffs])
+            cells = [f"{'*' if row.differs else ' '} {row.name}{unit}", *map(_show, row.values), *diffs]
+            lines.append([printable(cell) for cell in cells])  # names and values from run.json: no ESC, no CR
         lines.append(None)  # type: ignore[arg-type]
     widths = [max(len(line[k]) for line in lines if line is not None) for k in range(len(header))]
     widths = [min(w, 40) for w in widths]

@@ -118,3 +118,18 @@ def test_a_large_csv_is_read_in_chunks_with_a_line_at_every_quarter(runs, tmp_pa
         compare._read(compare.load(str(broken)))
     code, _, err = cli(capsys, "compare", str(runs / "a"), str(runs / "b"), "--out", str(tmp_path / "c"))
     assert code == 0 and "compare: reading a/timeseries.csv: 75 %" in err
+
+
+def test_control_characters_in_names_never_reach_the_terminal(runs, tmp_path, capsys):
+    # ESC and CR in a folder name or a run.json name recoloured or overwrote the terminal; a newline split the line
+    odd = tmp_path / "esc\x1b[31mRED"
+    shutil.copytree(runs / "b", odd)
+    record = json.loads((odd / "run.json").read_text())
+    record["metrics"]["clear\x1b[2J\rx"] = 1.0
+    (odd / "run.json").write_text(json.dumps(record))
+    out_dir = tmp_path / "o\ru\x9bt"
+    code, out, err = cli(capsys, "compare", str(runs / "a"), str(odd), "--out", str(out_dir), "--no-plots")
+    assert code == 0, err
+    assert not any(c in out + err for c in "\x1b\r\x9b") and "esc\\x1b[31mRED" in out and "clear\\x1b[2J\\x0dx" in out
+    code, _, err = cli(capsys, "compare", str(runs / "a"), str(tmp_path / "no\nsuch\x1b"))
+    assert code == 2 and err.count("\n") == 1 and "\x1b" not in err, err
