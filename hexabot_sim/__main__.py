@@ -406,8 +406,10 @@ def cmd_clean(args: argparse.Namespace) -> int:
         if args.dry_run:
             print(f"would remove {output.display_path(path)}")
             continue
+        if not os.path.lexists(path):
+            continue  # another clean (or its owner) removed it meanwhile
         try:
-            shutil.rmtree(path)
+            shutil.rmtree(path, onerror=_gone_is_fine)
         except OSError as e:
             raise OutputError(f"could not remove {output.display_path(path)!r}: {e.strerror or e}") from None
         removed += 1
@@ -419,6 +421,12 @@ def cmd_clean(args: argparse.Namespace) -> int:
         cells = tempfile.gettempdir()
         print(f"no staging folders left by interrupted runs in {args.folder} (nor sweep cells in {cells})")
     return 0
+
+
+def _gone_is_fine(function: Any, path: str, info: Any) -> None:
+    """rmtree's error handler for clean: what another clean running at the same time removed first is no error."""
+    if not isinstance(info[1], FileNotFoundError):
+        raise info[1]
 
 
 def _view_speed(text: str) -> float:

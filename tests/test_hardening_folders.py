@@ -206,3 +206,18 @@ def test_clean_with_stdout_closed_says_on_stderr_what_it_removed(tmp_path):
                           capture_output=True, text=True, timeout=120)  # fmt: skip
     assert proc.returncode == 1 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
     assert "(1 stale folder removed before it, the last .hexabot-sim-staging-" in proc.stderr, proc.stderr
+
+
+def test_two_cleans_at_once_are_no_error(tmp_path):
+    # the second clean found the first's folders gone: "could not remove ...: No such file or directory", exit 1
+    dead = _dead_pid()
+    for k in range(30):
+        folder = tmp_path / f"{output.STAGING_PREFIX}{dead}-{k:08x}{output.STAGING_SUFFIX}"
+        for j in range(100):
+            (folder / f"s{j}").mkdir(parents=True)
+            (folder / f"s{j}" / "f").touch()
+    exe = [sys.executable, "-m", "hexabot_sim", "clean", str(tmp_path)]
+    procs = [subprocess.Popen(exe, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for _ in range(3)]
+    results = [(p.wait(timeout=120), p.stderr.read()) for p in procs]
+    assert all(code == 0 and err == "" for code, err in results), results
+    assert list(tmp_path.iterdir()) == []
