@@ -409,7 +409,7 @@ def cmd_clean(args: argparse.Namespace) -> int:
         if not os.path.lexists(path):
             continue  # another clean (or its owner) removed it meanwhile
         try:
-            shutil.rmtree(path, onerror=_gone_is_fine)
+            shutil.rmtree(path, **{"onexc" if sys.version_info >= (3, 12) else "onerror": _gone_is_fine})
         except OSError as e:
             raise OutputError(f"could not remove {output.display_path(path)!r}: {e.strerror or e}") from None
         removed += 1
@@ -425,8 +425,9 @@ def cmd_clean(args: argparse.Namespace) -> int:
 
 def _gone_is_fine(function: Any, path: str, info: Any) -> None:
     """rmtree's error handler for clean: what another clean running at the same time removed first is no error."""
-    if not isinstance(info[1], FileNotFoundError):
-        raise info[1]
+    error = info[1] if isinstance(info, tuple) else info  # onerror's exc_info (3.11), onexc's exception (3.12+)
+    if not isinstance(error, FileNotFoundError):
+        raise error
 
 
 def _view_speed(text: str) -> float:
