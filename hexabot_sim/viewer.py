@@ -245,6 +245,8 @@ def _read_trajectory(path: Path) -> dict[str, np.ndarray]:
         raise
     except zipfile.BadZipFile:
         raise bad("not a NumPy .npz archive (a zip of .npy arrays)") from None
+    except MemoryError:  # an .npy header may declare any shape: numpy allocates it before reading the data
+        raise bad("an array's header declares more values than memory holds") from None
     except (OSError, EOFError, ValueError, RuntimeError, zipfile.LargeZipFile) as e:
         why = " ".join(str(e).split()) or type(e).__name__
         if "pickle" in why.lower():  # numpy's text advises allow_pickle, which would run the file's code

@@ -47,11 +47,21 @@ def _damage(folder, kind):
         q = qpos.copy()
         q[0, 0] = np.nan
         path.write_bytes(_npz({"t": t, "qpos": q, "qvel": qvel}))
+    elif kind == "huge-header":  # an .npy header declaring 10**12 rows over a few bytes of data
+        header = io.BytesIO()
+        np.lib.format.write_array_header_1_0(header, {"descr": "<f8", "fortran_order": False, "shape": (10**12,)})
+        path.write_bytes(_npz({"qpos": qpos, "qvel": qvel}))
+        import zipfile
+
+        with zipfile.ZipFile(path, "a") as archive:
+            archive.writestr("t.npy", header.getvalue() + bytes(64))
     elif kind == "bomb":
         pass  # the archive is fine; the limit on what it may unpack to is lowered below
 
 
-@pytest.mark.parametrize("kind", ["empty", "garbage", "truncated", "missing-member", "object", "text", "nan", "bomb"])
+@pytest.mark.parametrize(
+    "kind", ["empty", "garbage", "truncated", "missing-member", "object", "text", "nan", "huge-header", "bomb"]
+)
 def test_a_damaged_trajectory_is_one_line_before_any_display(run_folder, tmp_path, monkeypatch, capsys, kind):
     import shutil
 
