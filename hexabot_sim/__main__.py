@@ -409,7 +409,10 @@ def cmd_clean(args: argparse.Namespace) -> int:
         if not os.path.lexists(path):
             continue  # another clean (or its owner) removed it meanwhile
         try:
-            shutil.rmtree(path, **{"onexc" if sys.version_info >= (3, 12) else "onerror": _gone_is_fine})
+            if sys.version_info >= (3, 12):
+                shutil.rmtree(path, onexc=_gone_is_fine)
+            else:
+                shutil.rmtree(path, onerror=_gone_is_fine)
         except OSError as e:
             raise OutputError(f"could not remove {output.display_path(path)!r}: {e.strerror or e}") from None
         removed += 1

@@ -284,7 +284,7 @@ def _read(run: Run, announce: Callable[[str], None] | None = None) -> tuple[list
                     try:
                         data = np.loadtxt(io.StringIO(text), delimiter=",", ndmin=2)  # (n, len(header))
                     except ValueError as e:  # numpy counts rows from the chunk's start
-                        why = re.sub(r"at row (\d+)", lambda m, offset=done: f"at row {int(m[1]) + offset}", str(e))
+                        why = _shift_rows(str(e), done)
                         raise UsageError(
                             f"{shown}: {run.csv.name} is not a numeric table ({' '.join(why.split())[:120]})"
                         ) from None
@@ -302,6 +302,11 @@ def _read(run: Run, announce: Callable[[str], None] | None = None) -> tuple[list
     if done == 0:
         raise UsageError(f"{shown}: {run.csv.name} is not a numeric table (it has no rows)")
     return names, np.concatenate(kept)
+
+
+def _shift_rows(message: str, offset: int) -> str:
+    """numpy's 'at row N' in a chunk's error, counted from the file's first data row instead."""
+    return re.sub(r"at row (\d+)", lambda m: f"at row {int(m[1]) + offset}", message)
 
 
 def shared_columns(headers: Sequence[Sequence[str]]) -> list[str]:

@@ -143,7 +143,7 @@ def read_run_model(path: Path) -> str:
         raise bad(f"it is not well-formed XML ({e})") from None
     if root.tag != "mujoco":
         raise bad(f"its root element is <{root.tag}>, not <mujoco>")
-    count, totals = 0, {}
+    count, totals = 0, dict[str, int]()
     stack = [(root, 1)]
     while stack:
         element, depth = stack.pop()

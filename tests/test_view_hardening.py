@@ -69,9 +69,9 @@ def test_a_damaged_trajectory_is_one_line_before_any_display(run_folder, tmp_pat
     shutil.copytree(run_folder, folder)
     _damage(folder, kind)
     if kind == "bomb":
-        from hexabot_sim import viewer
+        from hexabot_sim import recording
 
-        monkeypatch.setattr(viewer, "TRAJECTORY_LIMIT", 1000)
+        monkeypatch.setattr(recording, "TRAJECTORY_LIMIT", 1000)
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     code, _, err = cli(capsys, "view", str(folder))
@@ -183,13 +183,13 @@ def test_a_trajectory_just_over_the_limit_is_told_in_numbers_that_differ(run_fol
     import shutil
     import zipfile
 
-    from hexabot_sim import viewer
+    from hexabot_sim import recording
 
     folder = tmp_path / "copy"
     shutil.copytree(run_folder, folder)
     with zipfile.ZipFile(folder / "trajectory.npz") as archive:
         unpacked = sum(info.file_size for info in archive.infolist())
-    monkeypatch.setattr(viewer, "TRAJECTORY_LIMIT", unpacked - 1)  # over by one byte: '4.0 GiB (the limit is 4 GiB)'
+    monkeypatch.setattr(recording, "TRAJECTORY_LIMIT", unpacked - 1)  # over by one byte: '4.0 GiB (the limit is 4 GiB)'
     monkeypatch.delenv("DISPLAY", raising=False)
     code, _, err = cli(capsys, "view", str(folder))
     assert code == 2 and f"{unpacked} bytes" in err and f"{unpacked - 1} bytes" in err, err
