@@ -459,6 +459,8 @@ def cmd_view(args: argparse.Namespace) -> int:
     """`view NAME` (live) or `view RUN_DIR` (replay) in MuJoCo's viewer: a window, so GLFW and a display."""
     from hexabot_sim import gl, viewer
 
+    if not args.target:  # Path("") is ".": it replayed the working folder
+        raise UsageError("view needs a scenario name or a run folder; got an empty one")
     folder = Path(args.target)
     replaying = folder.is_dir() or os.sep in args.target or args.target in (".", "..")
     if replaying and not folder.is_dir():

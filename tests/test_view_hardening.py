@@ -193,3 +193,10 @@ def test_a_trajectory_just_over_the_limit_is_told_in_numbers_that_differ(run_fol
     monkeypatch.delenv("DISPLAY", raising=False)
     code, _, err = cli(capsys, "view", str(folder))
     assert code == 2 and f"{unpacked} bytes" in err and f"{unpacked - 1} bytes" in err, err
+
+
+def test_an_empty_target_is_refused_not_read_as_the_working_folder(run_folder, monkeypatch, capsys):
+    monkeypatch.chdir(run_folder)  # a run folder: "" replayed it as "."
+    monkeypatch.delenv("DISPLAY", raising=False)
+    code, _, err = cli(capsys, "view", "")
+    assert code == 2 and "empty" in err, err
