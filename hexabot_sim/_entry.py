@@ -4,7 +4,8 @@ import sys
 
 
 def console() -> None:
-    """Loads the command line (numpy, MuJoCo, ...) and runs it; Ctrl-C during the loading exits 130 in one line."""
+    """Loads the command line (numpy, MuJoCo, ...) and runs it; Ctrl-C during the loading exits 130 in one line,
+    SIGTERM and SIGHUP 143 and 129 (they killed the process without a word, as a signal death, not an exit code)."""
     import signal
 
     from hexabot_sim.signals import RECEIVED_SIGNALS, quiet_interruptions
@@ -13,8 +14,9 @@ def console() -> None:
         RECEIVED_SIGNALS.append(signum)  # remembered even if an import swallows the exception
         raise KeyboardInterrupt
 
-    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
-        signal.signal(signal.SIGINT, interrupted)
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        if signal.getsignal(sig) is not signal.SIG_IGN:
+            signal.signal(sig, interrupted)
     quiet_interruptions()
     try:
         from hexabot_sim.cli import console as run
@@ -27,9 +29,11 @@ def console() -> None:
             cause = cause.__cause__ or cause.__context__
         if cause is None:
             raise
+        signum = RECEIVED_SIGNALS[-1] if RECEIVED_SIGNALS else signal.SIGINT
+        what = "interrupted" if signum == signal.SIGINT else f"stopped by {signal.Signals(signum).name}"
         try:
-            sys.stderr.write("hexabot-sim: interrupted; nothing written\n")
+            sys.stderr.write(f"hexabot-sim: {what}; nothing written\n")
         except (OSError, ValueError):
             pass
-        raise SystemExit(130) from None
+        raise SystemExit(128 + signum) from None
     run()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import errno
 import os
 import time
 import warnings
@@ -173,6 +174,19 @@ def _check_path(name: str, value: Any, optional: bool = True) -> None:
     if not (isinstance(value, (str, os.PathLike)) or (optional and value is None)):
         allowed = "a path (str or os.PathLike)" + (" or None" if optional else "")
         raise UsageError(f"'{name}' must be {allowed}; got {type(value).__name__}")
+    if value is None:
+        return
+    raw = os.fsencode(value)
+    if b"\0" in raw:
+        raise UsageError(f"'{name}' holds a NUL byte, which no file name can; got {value!r}")
+    if len(raw) > 4095 or any(len(part) > 255 for part in raw.split(b"/")):
+        raise UsageError(f"'{name}' is too long: a file or folder name is at most 255 bytes, a path 4095")
+
+
+def _check_flag(name: str, value: Any) -> None:
+    """A yes/no argument is a bool: force="no" is true in Python, and would replace a folder."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise UsageError(f"'{name}' must be True or False; got {value!r}")
 
 
 def _check_callable(name: str, value: Any) -> None:
@@ -282,6 +296,8 @@ class Result:
             hexabot_sim.errors.OutputError: the folder could not be written.
         """
         _check_path("out", out)
+        for flag, value in (("force", force), ("plots", plots), ("video", video)):
+            _check_flag(flag, value)
         _check_callable("progress", progress)
         settings = video_options.settings(quality, size, fps) if video else None
         backend, reason = None, output.NOT_REQUESTED
@@ -326,14 +342,16 @@ class Result:
         size: tuple[int, int] | str = (640, 480),
         fps: int = 30,
         progress: Callable[[int, int], None] | None = None,
+        force: bool = False,
     ) -> Path:
         """Renders the run as an MP4 (H.264) at `path`, in real time, as `hexabot-sim run --video` does.
 
         Args:
-            path: The file to write (replaced if it exists).
+            path: The file to write: a new one, or with `force` an existing file to replace.
             quality: "preview" (fast) or "high" (multisampling, shadows).
             size: (width, height) [px] or "WxH": even sides, 64x64 to 3840x2160, at most 4:1.
             fps: Frames per second, 1 to 240.
+            force: Replace `path` if it exists (a regular file; never a folder, FIFO or device).
 
         Returns:
             The path written.
@@ -343,6 +361,7 @@ class Result:
             hexabot_sim.errors.OutputError: no working OpenGL or ffmpeg here, or rendering failed.
         """
         _check_path("path", path, optional=False)
+        _check_flag("force", force)
         _check_callable("progress", progress)
         settings = video_options.settings(quality, size, fps)
         if self.raw.camera is None or self.raw.trajectory is None:
@@ -358,17 +377,44 @@ class Result:
             raise UsageError(f"the folder {str(folder)!r} for the video does not exist")
         if not os.access(folder, os.W_OK | os.X_OK):
             raise OutputError(f"the folder {str(folder)!r} for the video cannot be written")
+        _check_replace(path, force)
         staging = path.with_name(f".{path.name}.partial-{os.getpid()}.mp4")
         try:
             record, _ = output.write_video(folder, self.raw, settings, backend, progress, name=staging.name)
             if not record["written"]:
                 raise OutputError(f"no video: {record['reason']}")
-            os.replace(staging, path)
+            _check_replace(path, force)  # again: the file may have appeared while the video rendered
+            if force:
+                os.replace(staging, path)
+            else:
+                _publish_new(staging, path)
         except OSError as e:
             raise OutputError(f"writing the video {str(path)!r} failed: {e.strerror or e}") from None
         finally:
             staging.unlink(missing_ok=True)
         return path
+
+
+def _check_replace(path: Path, force: bool) -> None:
+    """An existing `path` is replaced only with force, and only if it is a file (or a link, itself replaced)."""
+    if not os.path.lexists(path):
+        return
+    if not force:
+        raise UsageError(f"video path {str(path)!r} exists; pass force=True to replace it, or choose another name")
+    if not (path.is_symlink() or path.is_file()):
+        raise UsageError(f"video path {str(path)!r} exists and is not a regular file; it is never replaced")
+
+
+def _publish_new(staging: Path, path: Path) -> None:
+    """Renames `staging` to `path` only if `path` does not exist (a hard link never replaces; rename would)."""
+    try:
+        os.link(staging, path)
+    except FileExistsError:
+        raise UsageError(f"video path {str(path)!r} appeared while the video rendered; it was left alone") from None
+    except OSError as e:
+        if e.errno not in (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EMLINK):
+            raise
+        os.replace(staging, path)  # a file system without hard links: checked just before
 
 
 def _short(metric: Metric) -> str:

@@ -4,16 +4,19 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import io
+import itertools
 import json
 import math
+import re
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from hexabot_sim.errors import UsageError
+from hexabot_sim.errors import UsageError, printable
 from hexabot_sim.params import read_bounded
 
 if TYPE_CHECKING:
@@ -24,6 +27,8 @@ JSON_NAME = "compare.json"
 RUN_JSON = "run.json"
 PANELS_PER_FIGURE: int = 6  # shared columns per overlay figure (overlay.png, overlay_2.png, ...)
 MAX_POINTS: int = 20_000  # points drawn per line; longer columns are thinned evenly (the CSV keeps them all)
+CHUNK_ROWS: int = 1 << 18  # CSV rows parsed at a time (memory stays bounded whatever the CSV's size)
+ANNOUNCE_BYTES: int = 200 << 20  # a CSV this large (~8 s to read) is read with a line at every quarter
 MAX_JSON_BYTES: int = 16 << 20  # a run.json is a few kB; one larger than this is not read
 MAX_HEADER_BYTES: int = 1 << 16  # a CSV header line is at most this long
 RELATIVE_FLOOR: float = 0.01  # a relative difference needs a reference at least this fraction of the other value
@@ -93,11 +98,6 @@ def load(folder: str) -> Run:
     return run
 
 
-def printable(text: str) -> str:
-    """`text` (a path, possibly with bytes that are not UTF-8) as text that can be printed and written anywhere."""
-    return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
-
-
 def load_all(folders: Sequence[str]) -> list[Run]:
     """Loads two or more distinct run folders; labels are their folder names (made unique)."""
     if len(folders) < 2:
@@ -134,12 +134,12 @@ class Row:
         return any(v != self.values[0] for v in self.values[1:])
 
     def differences(self) -> list[tuple[float, float | None] | None]:
-        """(value - first, relative) for each run after the first; None where not numbers."""
+        """(value - first, relative) for each run after the first; None where not numbers or it overflows."""
         first = self.values[0]
         out: list[tuple[float, float | None] | None] = []
         for v in self.values[1:]:
-            if _is_number(first) and _is_number(v):
-                d = float(v) - float(first)
+            d = float(v) - float(first) if _is_number(first) and _is_number(v) else math.nan
+            if math.isfinite(d):  # not when the difference of two finite values overflows (-1e308 to 1e308)
                 # Relative only against a reference that is not small beside the other value (at most +-9900 %):
                 # a difference from a value near zero (1e-9 vs 0.05) is shown absolute only.
                 meaningful = abs(float(first)) >= RELATIVE_FLOOR * max(abs(float(first)), abs(float(v))) > 0
@@ -150,7 +150,13 @@ class Row:
 
 
 def _is_number(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+    """A finite int or float that a float can hold (a run.json may hold a 400-digit integer)."""
+    if not isinstance(v, (int, float)) or isinstance(v, bool):
+        return False
+    try:
+        return math.isfinite(float(v))
+    except OverflowError:
+        return False
 
 
 def rows(runs: Sequence[Run]) -> list[Row]:
@@ -208,7 +214,8 @@ def text(runs: Sequence[Run], table: Sequence[Row]) -> str:
             unit = f" [{row.unit}]" if row.unit and row.unit != "1" else ""
             diffs = [] if kind == "param" else [_difference(d, not row.differs) for d in row.differences()]
             diffs += [""] * (len(labels) - 1 - len(diffs))
-            lines.append([f"{'*' if row.differs else ' '} {row.name}{unit}", *map(_show, row.values), *diffs])
+            cells = [f"{'*' if row.differs else ' '} {row.name}{unit}", *map(_show, row.values), *diffs]
+            lines.append([printable(cell) for cell in cells])  # names and values from run.json: no ESC, no CR
         lines.append(None)  # type: ignore[arg-type]
     widths = [max(len(line[k]) for line in lines if line is not None) for k in range(len(header))]
     widths = [min(w, 40) for w in widths]
@@ -251,21 +258,55 @@ def record(runs: Sequence[Run], table: Sequence[Row], shared: Sequence[str], fil
 # Overlays of the shared columns
 
 
-def _read(run: Run) -> tuple[list[str], np.ndarray]:
+def _read(run: Run, announce: Callable[[str], None] | None = None) -> tuple[list[str], np.ndarray]:
+    """The CSV's columns, every row checked, at most MAX_POINTS rows kept (evenly: what the overlay draws).
+
+    Read in chunks of CHUNK_ROWS, so a 2 GB CSV neither fills memory nor reads in silence: a CSV of at least
+    ANNOUNCE_BYTES is announced to `announce` at the start and at every quarter.
+    """
     shown = repr(printable(str(run.path)))
     names = header(run)
+    kept, done, at = [], 0, 1  # row blocks kept, rows read, next quarter to announce
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error")  # numpy warns of a table with no rows: refused below
-            data = np.loadtxt(run.csv, delimiter=",", skiprows=1, ndmin=2, encoding="utf-8")  # (n, len(header))
-    except (ValueError, UnicodeDecodeError, UserWarning) as e:
-        why = "it has no rows" if isinstance(e, UserWarning) else " ".join(str(e).split())[:120]
-        raise UsageError(f"{shown}: {run.csv.name} is not a numeric table ({why})") from None
+        size = run.csv.stat().st_size
+        with open(run.csv, "rb") as stream:
+            lines = sum(1 for _ in stream) - 1  # data rows (at most: blank lines are skipped)
+            step = max(1, math.ceil(lines / MAX_POINTS))
+            stream.seek(0)
+            stream.readline()
+            talk = announce if size >= ANNOUNCE_BYTES else None
+            if talk:
+                talk(f"compare: reading {run.label}/{run.csv.name} ({size / 1e6:.0f} MB)")
+            while chunk := list(itertools.islice(stream, CHUNK_ROWS)):
+                text = b"".join(chunk).decode("utf-8")
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", UserWarning)  # a chunk of blank lines: no rows (checked below)
+                    try:
+                        data = np.loadtxt(io.StringIO(text), delimiter=",", ndmin=2)  # (n, len(header))
+                    except ValueError as e:  # numpy counts rows from the chunk's start
+                        why = _shift_rows(str(e), done)
+                        raise UsageError(
+                            f"{shown}: {run.csv.name} is not a numeric table ({' '.join(why.split())[:120]})"
+                        ) from None
+                if len(data) and data.shape[1] != len(names):
+                    raise UsageError(f"{shown}: {run.csv.name} has rows of another width than its header")
+                kept.append(data[(done + np.arange(len(data))) % step == 0])
+                done += len(data)
+                while talk and at < 4 and stream.tell() >= size * at / 4:
+                    talk(f"compare: reading {run.label}/{run.csv.name}: {25 * at} %")
+                    at += 1
+    except UnicodeDecodeError:
+        raise UsageError(f"{shown}: {run.csv.name} is not a numeric table (not UTF-8 text)") from None
     except OSError as e:
         raise UsageError(f"{shown}: {run.csv.name} cannot be read: {e.strerror or e}") from None
-    if data.shape[0] == 0 or data.shape[1] != len(names):
-        raise UsageError(f"{shown}: {run.csv.name} has no rows, or rows of another width than its header")
-    return names, data
+    if done == 0:
+        raise UsageError(f"{shown}: {run.csv.name} is not a numeric table (it has no rows)")
+    return names, np.concatenate(kept)
+
+
+def _shift_rows(message: str, offset: int) -> str:
+    """numpy's 'at row N' in a chunk's error, counted from the file's first data row instead."""
+    return re.sub(r"at row (\d+)", lambda m: f"at row {int(m[1]) + offset}", message)
 
 
 def shared_columns(headers: Sequence[Sequence[str]]) -> list[str]:
@@ -292,14 +333,14 @@ def header(run: Run) -> list[str]:
     return text.strip().split(",")
 
 
-def figures(runs: Sequence[Run]) -> dict[str, Figure]:
+def figures(runs: Sequence[Run], announce: Callable[[str], None] | None = None) -> dict[str, Figure]:
     """{file stem: figure}: each shared column against the first shared one (e.g. t), every run overlaid."""
     from hexabot_sim import plots
 
     shared = shared_columns([header(r) for r in runs])
     if len(shared) < 2:
         return {}
-    tables = [_read(r) for r in runs]
+    tables = [_read(r, announce) for r in runs]
     x_name, ys = shared[0], shared[1:]
     units = {**runs[0].units["columns"]}
     out: dict[str, Figure] = {}
@@ -308,8 +349,7 @@ def figures(runs: Sequence[Run]) -> dict[str, Figure]:
         fig, axes = plots.figure(len(chunk), 1, figsize=(10, 2.2 * len(chunk) + 1.2), sharex=True, squeeze=False)
         for ax, name in zip(axes[:, 0], chunk, strict=True):
             for k, (run, (names, data)) in enumerate(zip(runs, tables, strict=True)):
-                step = max(1, math.ceil(len(data) / MAX_POINTS))
-                x, y = data[::step, names.index(x_name)], data[::step, names.index(name)]
+                x, y = data[:, names.index(x_name)], data[:, names.index(name)]  # thinned by _read
                 style = "-" if len(data) > 50 else "o-"
                 ax.plot(x, y, style, color=f"C{k}", lw=1.2, ms=3, label=run.label, alpha=0.85)
             unit = units.get(name, "")

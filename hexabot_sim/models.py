@@ -92,3 +92,81 @@ def to_xml(root: ET.Element) -> str:
     """Serialises the (edited) tree: the exact text that is compiled and saved as model.xml."""
     ET.indent(root, space="  ")
     return ET.tostring(root, encoding="unicode") + "\n"
+
+
+# A run folder's model.xml is untrusted input when it is replayed (`view RUN_DIR`): MuJoCo would follow its <include>s
+# and file attributes anywhere on disk (or block on a FIFO, or read /dev/zero), and a few lines (<replicate count>,
+# a 60000 px texture) would take it minutes or all memory to compile. The replay compiles only what a run writes:
+# one self-contained MJCF file of the elements the committed models and the terrain use, of bounded size.
+RUN_MODEL_LIMIT = 64 << 20  # [B] model.xml read at most (the largest a run writes, 2e6 heightfield points, ~16 MB)
+RUN_MODEL_ELEMENTS = 20_000  # runs write ~200
+RUN_MODEL_DEPTH = 32  # runs write 7
+RUN_MODEL_TAGS = frozenset(
+    "accelerometer actuator asset body camera compiler default framequat freejoint geom global gyro headlight hfield "
+    "inertial joint key keyframe light material mujoco option position sensor site statistic texture touch velocity "
+    "visual worldbody".split()
+)
+_FILE_ATTRIBUTES = frozenset(
+    "file fileback filedown filefront fileleft fileright fileup meshdir texturedir assetdir content_type".split()
+)
+# (tag, the attributes whose product is bounded, the bound on its sum over the file): textures, heightfields or an
+# offscreen buffer that big are a memory bomb (runs write ~0.4 Mpx of textures and one heightfield).
+_PIXEL_LIMITS = (
+    ("texture", ("width", "height"), 1 << 24),
+    ("global", ("offwidth", "offheight"), 1 << 24),
+    ("hfield", ("nrow", "ncol"), None),  # None: the terrain's own HFIELD_MAX_POINTS
+)
+
+
+def read_run_model(path: Path) -> str:
+    """The MJCF text of a run folder's model.xml, checked to be what a run writes (UsageError in one line if not).
+
+    Compile it with `mujoco.MjModel.from_xml_string`: it references no other file.
+    """
+    from hexabot_sim.terrain.heightfield import MAX_POINTS as HFIELD_MAX_POINTS
+    from hexabot_sim.params import read_bounded
+
+    data = read_bounded(path, "model file", RUN_MODEL_LIMIT, "a run's model.xml is at most a few MB")
+
+    def bad(why: str) -> UsageError:
+        return UsageError(f"cannot replay {path}: {why}; a run of hexabot-sim writes one self-contained MJCF model")
+
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise bad("it is not UTF-8 text") from None
+    if "<!DOCTYPE" in text or "<!ENTITY" in text:
+        raise bad("it has a document type declaration (entities)")
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as e:
+        raise bad(f"it is not well-formed XML ({e})") from None
+    if root.tag != "mujoco":
+        raise bad(f"its root element is <{root.tag}>, not <mujoco>")
+    count, totals = 0, dict[str, int]()
+    stack = [(root, 1)]
+    while stack:
+        element, depth = stack.pop()
+        count += 1
+        if count > RUN_MODEL_ELEMENTS or depth > RUN_MODEL_DEPTH:
+            raise bad(f"it has more than {RUN_MODEL_ELEMENTS} elements or nests deeper than {RUN_MODEL_DEPTH}")
+        if not isinstance(element.tag, str) or element.tag not in RUN_MODEL_TAGS:
+            allowed = ", ".join(sorted(RUN_MODEL_TAGS))
+            raise bad(f"it has an element <{element.tag}> (allowed: {allowed})")
+        files = sorted(_FILE_ATTRIBUTES.intersection(element.attrib))
+        if files:
+            raise bad(f"<{element.tag}> names a file ({files[0]}=...)")
+        for tag, names, limit in _PIXEL_LIMITS:
+            if element.tag == tag and any(name in element.attrib for name in names):
+                bound = HFIELD_MAX_POINTS if limit is None else limit
+                try:  # one side given: count it as square
+                    sides = [abs(int(element.attrib[n])) for n in names if n in element.attrib]
+                except ValueError:
+                    raise bad(f"<{tag}> {names[0]}/{names[1]} are not integers") from None
+                totals[tag] = totals.get(tag, 0) + sides[0] * sides[-1]
+                if totals[tag] > bound:
+                    raise bad(
+                        f"its <{tag}> elements have {names[0]} x {names[1]} = {totals[tag]} in all, more than {bound}"
+                    )
+        stack.extend((child, depth + 1) for child in element)
+    return text

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from hexabot_sim.errors import OutputError, SimulationError, UsageError
+from hexabot_sim.errors import OutputError, SimulationError, UsageError, printable
 from hexabot_sim.signals import PUBLISHED, RECEIVED_SIGNALS, signals_held, stop_request
 from hexabot_sim.video import NOT_REQUESTED, VideoSettings
 
@@ -476,11 +476,11 @@ def write_text(path: Path, text: str) -> None:
 
 
 def display_path(path: Path) -> str:
-    """`path` relative to the working directory when it is below it."""
+    """`path` relative to the working directory when it is below it; bytes that are not UTF-8 shown as \\xNN."""
     try:
-        return os.path.relpath(path) if Path(path).resolve().is_relative_to(Path.cwd()) else str(path)
-    except ValueError:
-        return str(path)
+        return printable(os.path.relpath(path) if Path(path).resolve().is_relative_to(Path.cwd()) else str(path))
+    except (OSError, ValueError):  # OSError: a name too long to resolve
+        return printable(str(path))
 
 
 @contextmanager

@@ -67,3 +67,64 @@ def test_folder_names_that_are_not_utf8_are_compared(runs, tmp_path):
     assert proc.returncode == 0, proc.stderr
     record = json.loads((tmp_path / os.fsdecode(b"c\xfd") / "compare.json").read_text())
     assert [r["label"] for r in record["runs"]] == ["r\\xff", "q\\xfe"]
+
+
+@pytest.mark.parametrize("kind", ["metrics", "params"])
+def test_an_integer_no_float_can_hold_in_run_json_is_not_a_bug(runs, tmp_path, capsys, kind):
+    odd = tmp_path / "odd"
+    shutil.copytree(runs / "a", odd)
+    record = json.loads((odd / "run.json").read_text())
+    name = next(iter(record[kind]))
+    record[kind][name] = 10**400  # valid JSON; float() of it overflows
+    (odd / "run.json").write_text(json.dumps(record))
+    code, out, err = cli(capsys, "compare", str(runs / "a"), str(odd), "--out", str(tmp_path / "c"), "--no-plots")
+    assert code == 0 and "internal error" not in err, err
+    assert "differs" in out or kind == "params"
+
+
+def test_a_difference_that_overflows_is_not_written_as_inf():
+    row = compare.Row("metric", "x", "1", (-1e308, 1e308))
+    assert row.differences() == [None]
+    assert compare._difference(row.differences()[0], False) == "differs"
+
+
+def test_a_large_csv_is_read_in_chunks_with_a_line_at_every_quarter(runs, tmp_path, capsys, monkeypatch):
+    # a 2 GB CSV (what a run may write) took ~80 s to read in silence, all of it in memory
+    import numpy as np
+
+    monkeypatch.setattr(compare, "CHUNK_ROWS", 7)
+    monkeypatch.setattr(compare, "MAX_POINTS", 10)
+    monkeypatch.setattr(compare, "ANNOUNCE_BYTES", 1)
+    run = compare.load(str(runs / "a"))
+    whole = np.loadtxt(run.csv, delimiter=",", skiprows=1, ndmin=2)
+    heard = []
+    names, data = compare._read(run, heard.append)
+    step = -(-len(whole) // 10)
+    assert names[0] == "t" and np.array_equal(data, whole[::step]) and len(data) <= 10
+    assert heard[0].startswith("compare: reading a/timeseries.csv (") and heard[1:] == [
+        f"compare: reading a/timeseries.csv: {p} %" for p in (25, 50, 75)
+    ]
+    broken = tmp_path / "broken"
+    shutil.copytree(runs / "a", broken)
+    lines = (broken / "timeseries.csv").read_text().splitlines()
+    lines[20] = lines[20].replace(",", ",x", 1)  # data row 19 (0-based), in the third chunk
+    (broken / "timeseries.csv").write_text("\n".join(lines) + "\n")
+    with pytest.raises(compare.UsageError, match="at row 19,"):
+        compare._read(compare.load(str(broken)))
+    code, _, err = cli(capsys, "compare", str(runs / "a"), str(runs / "b"), "--out", str(tmp_path / "c"))
+    assert code == 0 and "compare: reading a/timeseries.csv: 75 %" in err
+
+
+def test_control_characters_in_names_never_reach_the_terminal(runs, tmp_path, capsys):
+    # ESC and CR in a folder name or a run.json name recoloured or overwrote the terminal; a newline split the line
+    odd = tmp_path / "esc\x1b[31mRED"
+    shutil.copytree(runs / "b", odd)
+    record = json.loads((odd / "run.json").read_text())
+    record["metrics"]["clear\x1b[2J\rx"] = 1.0
+    (odd / "run.json").write_text(json.dumps(record))
+    out_dir = tmp_path / "o\ru\x9bt"
+    code, out, err = cli(capsys, "compare", str(runs / "a"), str(odd), "--out", str(out_dir), "--no-plots")
+    assert code == 0, err
+    assert not any(c in out + err for c in "\x1b\r\x9b") and "esc\\x1b[31mRED" in out and "clear\\x1b[2J\\x0dx" in out
+    code, _, err = cli(capsys, "compare", str(runs / "a"), str(tmp_path / "no\nsuch\x1b"))
+    assert code == 2 and err.count("\n") == 1 and "\x1b" not in err, err

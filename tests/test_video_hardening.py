@@ -70,3 +70,37 @@ def test_a_real_video_passes_the_mp4_check(tmp_path, gl_backend):
     assert output.mp4_problem(path) is None
     path.write_bytes(path.read_bytes()[:-100])
     assert "truncated" in output.mp4_problem(path)
+
+
+def test_result_video_never_replaces_a_file_without_force(tmp_path, gl_backend):
+    result = hs.run("pendulum", duration=0.1)
+    users = tmp_path / "results.csv"
+    users.write_text("the user's data\n")
+    with pytest.raises(UsageError, match="exists; pass force=True"):
+        result.video(users, size=(64, 64), fps=10)
+    assert users.read_text() == "the user's data\n"
+    os.mkfifo(tmp_path / "fifo")
+    with pytest.raises(UsageError, match="not a regular file"):
+        result.video(tmp_path / "fifo", size=(64, 64), fps=10, force=True)
+    assert (tmp_path / "fifo").is_fifo()
+    with pytest.raises(UsageError, match="True or False"):
+        result.video(users, size=(64, 64), fps=10, force="no")
+    assert output.mp4_problem(result.video(users, size=(64, 64), fps=10, force=True)) is None
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fifo", "results.csv"]  # no partial file left
+
+
+@pytest.mark.parametrize("path", ["a" * 300 + ".mp4", "/".join(["b" * 200] * 30), "v\0.mp4"])
+def test_result_video_to_an_impossible_name_is_a_usage_error(tmp_path, monkeypatch, path):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(UsageError, match=r"too long|NUL"):
+        hs.run("pendulum", duration=0.05).video(path, size=(64, 64), fps=10)
+
+
+@pytest.mark.parametrize("flag", ["force", "plots", "video"])
+def test_result_save_flags_are_bools(tmp_path, flag):
+    # force="no" is true in Python: it replaced a user's non-empty folder
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "keep").write_text("user")
+    with pytest.raises(UsageError, match="True or False"):
+        hs.run("pendulum", duration=0.05).save(tmp_path / "out", **{flag: "no"})
+    assert (tmp_path / "out" / "keep").read_text() == "user"

@@ -14,7 +14,7 @@ from hexabot_sim import signals
 from hexabot_sim.cli import commands, study
 from hexabot_sim.cli.common import COMPLETED, DONE_SO_FAR, PROG, eprint
 from hexabot_sim.cli.parser import build_parser
-from hexabot_sim.errors import HexabotError
+from hexabot_sim.errors import HexabotError, printable
 from hexabot_sim.signals import PENDING_SIGNALS, PUBLISHED, RECEIVED_SIGNALS, Interrupted, stop_request
 
 __all__ = ["build_parser", "console", "main"]
@@ -130,6 +130,10 @@ def _main(argv: list[str]) -> int:
             return _interrupted(cause)
         if _debug_requested(argv):
             raise
+        if isinstance(e, OSError) and e.errno == errno.ENAMETOOLONG:  # a path typed (or built from one typed) too long
+            shown = printable(os.fsdecode(e.filename)) if e.filename is not None else "a path given"
+            eprint(f"{PROG}: error: {shown!r}: name too long (a file or folder name is at most 255 bytes, a path 4095)")
+            return 2
         text = " ".join(str(e).split())[:300]
         eprint(
             f"{PROG}: internal error: {type(e).__name__}{': ' + text if text else ''} -- this is a bug in "
@@ -160,12 +164,16 @@ def _interrupted(error: KeyboardInterrupt) -> int:
 
 
 def _ensure_std_streams() -> None:
-    """Opens /dev/null on a closed stdin/stdout/stderr, so no file we create takes their numbers."""
+    """Opens /dev/null on a closed stdin/stdout/stderr, so no file we create takes their numbers.
+
+    Inheritable, as the standard streams are: os.open's are not, and a child (glfw's library probe, the GL probes,
+    ffmpeg) started without a stderr fails (glfw's made `view` say that glfw is not installed).
+    """
     for fd in (0, 1, 2):
         try:
             os.fstat(fd)
         except OSError:
-            os.open(os.devnull, os.O_RDWR)  # takes the lowest free number: this one
+            os.set_inheritable(os.open(os.devnull, os.O_RDWR), True)  # takes the lowest free number: this one
     if sys.stdout is None:  # started with stdout closed: say so at the first write
         sys.stdout = _ClosedStdout()
     if sys.stderr is None:

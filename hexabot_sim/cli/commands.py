@@ -16,7 +16,7 @@ from hexabot_sim import params as params_mod
 from hexabot_sim import registry, video
 from hexabot_sim.cli.common import COMPLETED, DONE_SO_FAR, PROG, eprint
 from hexabot_sim.cli.progress import ProgressBar
-from hexabot_sim.errors import OutputError, UsageError
+from hexabot_sim.errors import OutputError, UsageError, printable
 
 if TYPE_CHECKING:  # the API imports MuJoCo, whose OpenGL backend each command chooses first
     from hexabot_sim import api
@@ -184,28 +184,43 @@ def cmd_clean(args: argparse.Namespace) -> int:
         if args.dry_run:
             print(f"would remove {output.display_path(path)}")
             continue
+        if not os.path.lexists(path):
+            continue  # another clean (or its owner) removed it meanwhile
         try:
-            shutil.rmtree(path)
+            if sys.version_info >= (3, 12):
+                shutil.rmtree(path, onexc=_gone_is_fine)
+            else:
+                shutil.rmtree(path, onerror=_gone_is_fine)
         except OSError as e:
             raise OutputError(f"could not remove {output.display_path(path)!r}: {e.strerror or e}") from None
-        print(f"removed {output.display_path(path)}")
         removed += 1
-        DONE_SO_FAR[:] = [f"{removed} stale folder{'s' if removed > 1 else ''} removed before it, listed above"]
+        done = f"{removed} stale folder{'s' if removed > 1 else ''} removed before it"
+        DONE_SO_FAR[:] = [f"{done}, listed above"]
+        COMPLETED[:] = [f"{done}, the last {output.display_path(path)}"]  # if stdout fails, stderr names it
+        print(f"removed {output.display_path(path)}")
     if not stale:
         cells = tempfile.gettempdir()
         print(f"no staging folders left by interrupted runs in {args.folder} (nor sweep cells in {cells})")
     return 0
 
 
+def _gone_is_fine(function: Any, path: str, info: Any) -> None:
+    """rmtree's error handler for clean: what another clean running at the same time removed first is no error."""
+    error = info[1] if isinstance(info, tuple) else info  # onerror's exc_info (3.11), onexc's exception (3.12+)
+    if not isinstance(error, FileNotFoundError):
+        raise error
+
+
 def cmd_view(args: argparse.Namespace) -> int:
     """`view NAME` (live) or `view RUN_DIR` (replay) in MuJoCo's viewer: a window, so GLFW and a display."""
     from hexabot_sim import api, gl, viewer
 
+    if not args.target:  # Path("") is ".": it replayed the working folder
+        raise UsageError("view needs a scenario name or a run folder; got an empty one")
     folder = Path(args.target)
     replaying = folder.is_dir() or os.sep in args.target or args.target in (".", "..")
     if replaying and not folder.is_dir():
-        shown = os.fsencode(args.target).decode("utf-8", "backslashreplace")  # bytes that are not UTF-8 as \xNN
-        raise UsageError(f"run folder {shown!r} does not exist")
+        raise UsageError(f"run folder {printable(args.target)!r} does not exist")
     if replaying and (args.sets or args.config):
         raise UsageError("--set and --config choose a scenario's parameters; a run folder replays its own")
     if gl.loaded_backend() is None:

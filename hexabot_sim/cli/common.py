@@ -5,6 +5,8 @@ from __future__ import annotations
 import contextlib
 import sys
 
+from hexabot_sim.errors import printable
+
 PROG = "hexabot-sim"
 
 # What was completed before standard output failed, for the error message (e.g. the run folder).
@@ -15,7 +17,12 @@ DONE_SO_FAR: list[str] = []
 
 
 def eprint(text: str) -> None:
-    """One line on stderr; a closed or full stderr must not change the exit code (nothing else can be told)."""
+    """One line on stderr; a closed or full stderr must not change the exit code (nothing else can be told).
+
+    Control characters (a path or a run.json name holding a newline, CR or ESC) are shown as \\xNN: one line, and
+    nothing that rewrites the terminal.
+    """
+    text = printable(text)
     try:
         print(text, file=sys.stderr, flush=True)
     except UnicodeEncodeError:  # e.g. a path in a non-UTF-8 locale

@@ -10,7 +10,7 @@ from typing import Any
 
 from hexabot_sim import params as params_mod
 from hexabot_sim import registry
-from hexabot_sim.cli.common import COMPLETED, PROG
+from hexabot_sim.cli.common import COMPLETED, PROG, eprint
 from hexabot_sim.cli.progress import SweepProgress
 from hexabot_sim.errors import UsageError
 
@@ -120,7 +120,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
             plots.use_agg()
             with output.package_style():
-                files += output.write_figures(compare.figures(runs), run.path)
+                files += output.write_figures(compare.figures(runs, eprint), run.path)
         output.write_json(run.path / compare.JSON_NAME, compare.record(runs, table, shared, files))
     assert run.final is not None
     COMPLETED[:] = [f"the compare folder {output.display_path(run.final)} is complete"]

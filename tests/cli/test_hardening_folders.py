@@ -169,3 +169,48 @@ def test_clean_stopped_after_removing_says_what_it_removed(tmp_path, monkeypatch
     monkeypatch.setattr(shutil, "rmtree", rmtree_then_ctrl_c)
     code, _, err = cli(capsys, "clean", str(tmp_path))
     assert code == 130 and "1 stale folder removed" in err and "nothing written" not in err, err
+
+
+@pytest.mark.parametrize("command", ["clean", "view", "compare-first", "compare-second"])
+@pytest.mark.parametrize("name", ["a" * 300, "/".join(["b" * 200] * 30)], ids=["long-name", "long-path"])
+def test_a_path_too_long_is_one_line_exit_2(two_runs, capsys, command, name):
+    # Path.is_dir() raises ENAMETOOLONG (it returns False only for a missing file): it was an internal error.
+    argv = {
+        "clean": ["clean", name],
+        "view": ["view", name],
+        "compare-first": ["compare", name, str(two_runs[0])],
+        "compare-second": ["compare", str(two_runs[0]), name],
+    }[command]
+    code, _, err = cli(capsys, *argv)
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1 and "internal error" not in err and "name too long" in err
+
+
+def test_clean_names_a_folder_that_is_not_utf8_readably(tmp_path, capsys):
+    code, _, err = cli(capsys, "clean", os.fsdecode(bytes(tmp_path) + b"/no\xff"))
+    assert code == 2 and "no\\\\xff" in err and "udc" not in err, err
+
+
+def test_clean_with_stdout_closed_says_on_stderr_what_it_removed(tmp_path):
+    dead = _dead_pid()
+    for suffix in ("0a1b2c3d", "0a1b2c3e"):
+        (tmp_path / f"{output.STAGING_PREFIX}{dead}-{suffix}{output.STAGING_SUFFIX}").mkdir()
+    proc = subprocess.run(f"{sys.executable} -m hexabot_sim clean . >&-", shell=True, cwd=tmp_path,
+                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert proc.returncode == 1 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+    assert "(1 stale folder removed before it, the last .hexabot-sim-staging-" in proc.stderr, proc.stderr
+
+
+def test_two_cleans_at_once_are_no_error(tmp_path):
+    # the second clean found the first's folders gone: "could not remove ...: No such file or directory", exit 1
+    dead = _dead_pid()
+    for k in range(30):
+        folder = tmp_path / f"{output.STAGING_PREFIX}{dead}-{k:08x}{output.STAGING_SUFFIX}"
+        for j in range(100):
+            (folder / f"s{j}").mkdir(parents=True)
+            (folder / f"s{j}" / "f").touch()
+    exe = [sys.executable, "-m", "hexabot_sim", "clean", str(tmp_path)]
+    procs = [subprocess.Popen(exe, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for _ in range(3)]
+    results = [(p.wait(timeout=120), p.stderr.read()) for p in procs]
+    assert all(code == 0 and err == "" for code, err in results), results
+    assert list(tmp_path.iterdir()) == []

@@ -669,3 +669,56 @@ def test_an_encoder_failure_on_a_full_disk_fails_the_run(tmp_path, monkeypatch, 
     else:
         video, _ = output.write_video(folder, result, settings, "egl")
         assert video == {"written": False, "reason": "rendering failed: OSError: [Errno 32] Broken pipe"}
+
+
+def test_closed_standard_streams_are_reopened_for_children_too(tmp_path):
+    # os.open's descriptors are not inheritable: a child started with no stderr fails (glfw's library probe did,
+    # and `view` with stderr closed said that glfw was not installed).
+    code = (
+        "import subprocess, sys\n"
+        "from hexabot_sim.cli import _ensure_std_streams\n"
+        "_ensure_std_streams()\n"
+        "probe = 'import os, sys; [os.fstat(fd) for fd in (0, 1, 2)]; input(); sys.stderr.write(\"x\")'\n"
+        "sys.exit(subprocess.run([sys.executable, '-c', probe], input=b'\\n', stdout=subprocess.PIPE).returncode)\n"
+    )
+    proc = subprocess.run(f"{sys.executable} -c \"$CODE\" 2>&- <&-", shell=True, cwd=tmp_path,
+                          env={**os.environ, "CODE": code}, timeout=120)  # fmt: skip
+    assert proc.returncode == 0
+
+
+# The console script with the loading of the command line held for 2 s, saying "loading" on stdout when it begins.
+_SLOW_LOADING = """import sys, time
+from hexabot_sim._entry import console
+class Slow:
+    def find_spec(self, name, path=None, target=None):
+        if name == "hexabot_sim.cli":
+            print("loading", flush=True)
+            time.sleep(2)
+sys.meta_path.insert(0, Slow())
+sys.argv[0] = "x"
+console()
+"""
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
+def test_a_stop_signal_while_loading_ends_in_one_line(tmp_path, sig):
+    """SIGTERM or SIGHUP while the console script loads: it killed the process without a word (a signal death)."""
+    out = tmp_path / "r"
+    argv = [
+        sys.executable,
+        "-c",
+        _SLOW_LOADING,
+        "run",
+        "pendulum",
+        "--set",
+        "duration=30",
+        "--no-plots",
+        "--out",
+        str(out),
+    ]
+    proc = subprocess.Popen(argv, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert proc.stdout.readline() == b"loading\n"
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + sig and not out.exists(), (proc.returncode, err)
+    assert err.decode().strip() == f"hexabot-sim: stopped by {sig.name}; nothing written", err
