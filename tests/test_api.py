@@ -66,6 +66,7 @@ def test_bad_input_gives_the_cli_message_as_a_value_error(tmp_path, capsys, scen
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_python_values_are_checked_too():
     with pytest.raises(UsageError, match=r"did you mean 100 mm/s = 0.1 m/s"):
         hs.run("leg-step", amplitude=100)
@@ -106,6 +107,7 @@ def test_figures_are_figures(leg):
     assert "foot_position" in figures
 
 
+@pytest.mark.slow
 def test_save_writes_the_same_run_folder_as_the_cli(tmp_path, capsys):
     assert main(["run", "pendulum", "--set", "duration=1", "--out", str(tmp_path / "cli")]) == 0
     capsys.readouterr()
@@ -127,6 +129,7 @@ def test_save_writes_the_same_run_folder_as_the_cli(tmp_path, capsys):
     assert hs.run("pendulum", duration=0.1).save(folder, force=True, plots=False) == folder
 
 
+@pytest.mark.slow
 def test_video(tmp_path, gl_backend):
     import imageio.v2 as imageio
 
@@ -142,6 +145,7 @@ def test_video(tmp_path, gl_backend):
         hs.run("leg-sweep", amplitudes=[0.02], omegas=[1], workers=1).video(tmp_path / "sweep.mp4")
 
 
+@pytest.mark.slow
 def test_import_and_use_never_touch_the_callers_matplotlib(tmp_path):
     script = textwrap.dedent(
         """
@@ -173,6 +177,7 @@ def test_import_and_use_never_touch_the_callers_matplotlib(tmp_path):
     assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr
 
 
+@pytest.mark.slow
 def test_quickstart_notebook_runs_top_to_bottom(tmp_path, gl_backend):
     nbformat = pytest.importorskip("nbformat", reason="the notebook test needs the 'test' extra (nbformat)")
     nbclient = pytest.importorskip("nbclient", reason="the notebook test needs the 'test' extra (nbclient)")

@@ -17,6 +17,7 @@ def two_runs(tmp_path_factory):
     return root
 
 
+@pytest.mark.slow
 def test_compare_two_pendulum_runs(two_runs, tmp_path, capsys):
     capsys.readouterr()
     out = tmp_path / "cmp"

@@ -58,6 +58,7 @@ def test_relative_differences_only_against_a_reference_that_is_not_near_zero():
     assert "%" not in compare._difference((d1, rel1), False)
 
 
+@pytest.mark.slow
 def test_folder_names_that_are_not_utf8_are_compared(runs, tmp_path):
     for name in (b"r\xff", b"q\xfe"):
         shutil.copytree(runs / "a", tmp_path / os.fsdecode(name))

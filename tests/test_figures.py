@@ -88,6 +88,7 @@ def _readable_ticks(fig):
                 assert "times" not in label.get_text(), f"tick label {label.get_text()!r}"
 
 
+@pytest.mark.slow
 def test_leg_figures_legends_ticks_and_labels(leg_outside):
     figures = _drawn(leg.figures(leg_outside))
     for fig in figures.values():
@@ -99,6 +100,7 @@ def test_leg_figures_legends_ticks_and_labels(leg_outside):
     assert "world frame: hip at (0, 0, 300) mm, start at (50, 0, 220) mm" in figures["foot_position"].get_suptitle()
 
 
+@pytest.mark.slow
 def test_pendulum_figures_and_energy_label():
     figures = _drawn(pendulum.figures(_run("pendulum", duration=2)))
     for fig in figures.values():
@@ -110,6 +112,7 @@ def test_pendulum_figures_and_energy_label():
     assert "E(t) − E(0)" in energy[1].get_ylabel()
 
 
+@pytest.mark.slow
 def test_rrp_velocity_draws_mujoco_for_all_six_and_one_unit_per_axis():
     fig = rrp_velocity.figures(_run("rrp-velocity", duration=3))["velocity"]
     FigureCanvasAgg(fig).draw()
@@ -123,6 +126,7 @@ def test_rrp_velocity_draws_mujoco_for_all_six_and_one_unit_per_axis():
     assert units == ["[m/s]", "[rad/s]", "[rad]", "[m]", "[m²]"]
 
 
+@pytest.mark.slow
 def test_leg_sweep_figure_on_a_small_grid():
     result = _run("leg-sweep", amplitudes="0.03,0.05", omegas="1,2", workers=1)
     fig = _drawn({"sweep": leg_sweep.figures(result)["sweep"]})["sweep"]
@@ -140,6 +144,7 @@ def test_leg_sweep_figure_on_a_small_grid():
     assert one.axes[0].get_ylim()[0] > 0 and not [line for line in one.axes[0].get_lines() if line.get_marker() == "o"]
 
 
+@pytest.mark.slow
 def test_plots_module_picks_no_matplotlib_backend():
     code = "import matplotlib; matplotlib.use('svg'); import hexabot_sim.plots; print(matplotlib.get_backend())"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout

@@ -29,6 +29,7 @@ def test_the_layer_contracts_are_kept():
     assert "0 broken" in done.stdout
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("module", "line", "contract"),
     [

@@ -9,6 +9,7 @@ from hexabot_sim.__main__ import main
 from hexabot_sim.robots.hexabot.walk import HexabotParams
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sets", [{"vx": 1e-9}, {"vx": 5e-4}, {"vx": 0.0, "vy": 1e-9}])
 def test_a_walk_that_barely_moves_has_no_per_metre_or_relative_figures(tmp_path, sets):
     out = tmp_path / "w"

@@ -1,3 +1,5 @@
+import pytest
+
 """Headless video: real-time length, size, content; skipped with the reason where no GL works."""
 
 import io
@@ -59,6 +61,7 @@ def test_video_is_written_real_time_and_shows_the_link(tmp_path, capsys, gl_back
     )
 
 
+@pytest.mark.slow
 def test_high_quality_preset_and_custom_size(tmp_path, capsys, gl_backend):
     out_dir = tmp_path / "r"
     argv = ["run", "pendulum-undamped", "--video", "--quality", "high", "--size", "320x240", "--fps", "10"]

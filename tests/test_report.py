@@ -63,6 +63,7 @@ def check_page(folder: Path) -> _Page:
     return page
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scenario", list(registry.SCENARIOS))
 def test_every_scenario_has_a_report(tmp_path, scenario):
     assert set(SHORT) == set(registry.SCENARIOS)
@@ -176,6 +177,7 @@ def browser_runs(tmp_path_factory, gl_backend):
     }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["pendulum", "hexabot-walk", "leg-sweep"])
 def test_report_in_headless_chromium(browser_runs, chromium, name, tmp_path):
     folder = browser_runs[name]

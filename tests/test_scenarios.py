@@ -43,6 +43,7 @@ def test_results_name_no_figure_set():
     assert "figures" not in {f.name for f in dataclasses.fields(ScenarioResult)}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(registry.SCENARIOS))
 def test_figures_of_a_short_run(name):
     scenario = registry.get(name)
@@ -57,6 +58,7 @@ def test_figures_of_a_short_run(name):
     assert all(isinstance(fig, Figure) and fig.axes for fig in figures.values())
 
 
+@pytest.mark.slow
 def test_listing_scenarios_does_not_import_matplotlib():
     code = (
         "import sys; from hexabot_sim import registry; "

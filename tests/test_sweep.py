@@ -73,6 +73,7 @@ def test_sweep_of_a_sweep_is_refused():
         sweep.plan("leg-sweep", ["periods=1,2"], {}, {})
 
 
+@pytest.mark.slow
 def test_same_bytes_on_one_or_two_workers_and_a_divergent_cell_is_a_row(tmp_path, capsys):
     one = sweep_ok(capsys, tmp_path / "one", "--workers", "1")
     sweep_ok(capsys, tmp_path / "two", "--workers", "2", "--no-plots")
@@ -121,6 +122,7 @@ def test_keep_runs_writes_each_cell_as_a_run_folder(tmp_path, capsys):
                  "--out", str(tmp_path / "cmp")]) == 0  # fmt: skip
 
 
+@pytest.mark.slow
 def test_local_cluster_gives_the_same_bytes_as_the_local_pool(tmp_path, capsys):
     distributed = pytest.importorskip("distributed", reason="the 'cluster' extra (distributed) is not installed")
     sweep_ok(capsys, tmp_path / "pool", "--workers", "2", "--no-plots")
@@ -151,6 +153,7 @@ def test_progress_gives_cells_and_an_eta_in_logs():
     assert len(lines) == 11  # every 10 %
 
 
+@pytest.mark.slow
 def test_sigterm_stops_the_workers_and_leaves_nothing(tmp_path):
     argv = ["sweep", "pendulum", "--grid", "damping=0.1:0.4:4", "--set", "duration=2000", "--workers", "2"]
     proc = subprocess.Popen(
@@ -181,6 +184,7 @@ def test_sigterm_stops_the_workers_and_leaves_nothing(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_sweep_folder_has_a_report_page(tmp_path, capsys):
     out = tmp_path / "sweep"
     code = main(["sweep", "pendulum", "--grid", "damping=0.01,0.02", "--set", "duration=0.5", "--out", str(out)])

@@ -59,6 +59,7 @@ def test_progress_speaks_while_no_cell_finishes(monkeypatch):
     assert len([line for line in lines if line.startswith("sweep-test: 0% (0/1 cells")]) >= 3, lines
 
 
+@pytest.mark.slow
 def test_a_peer_that_accepts_but_is_no_scheduler_is_refused_in_bounded_time():
     """A TCP server on loopback that accepts and says nothing: Client() alone waited until the peer hung up."""
     import socket
@@ -116,6 +117,7 @@ def _dask_cli(*args, log):
     return subprocess.Popen([dask, *args], stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("victim", ["worker", "scheduler"])
 def test_kill_9_of_a_real_worker_or_scheduler_mid_sweep_is_one_line_in_bounded_time(tmp_path, victim):
     """A real `dask scheduler` and `dask worker --no-nanny` on 127.0.0.1; once the worker runs a cell, one of them

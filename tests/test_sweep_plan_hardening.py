@@ -115,6 +115,7 @@ def test_the_walk_checks_a_gait_cycle_once_for_all_cells_that_share_it(monkeypat
     assert len(p.cells) == 100 and len(computed) <= 2  # standing and walking, not 200
 
 
+@pytest.mark.slow
 def test_a_sweep_that_would_take_too_long_is_refused_with_its_estimate(tmp_path, capsys):
     p = sweep.plan("hexabot-walk", ["duration=600:1200:10", "roughness=0:0.02:1000"], {}, {})
     with pytest.raises(UsageError, match=r"this sweep would take ~\d.* days \(10000 cells, .* on 2 local processes\); "

@@ -34,6 +34,7 @@ def fake_encoder(request, tmp_path, monkeypatch, gl_backend):
     return request.param
 
 
+@pytest.mark.slow
 def test_a_run_whose_encoder_made_no_video_says_so(fake_encoder, tmp_path, capsys):
     out = tmp_path / "r"
     code = main(["run", "pendulum", "--set", "duration=0.2", "--video", "--size", "64x64", "--fps", "10",
@@ -45,6 +46,7 @@ def test_a_run_whose_encoder_made_no_video_says_so(fake_encoder, tmp_path, capsy
     assert "no video" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_result_video_whose_encoder_made_nothing_raises(fake_encoder, tmp_path):
     result = hs.run("pendulum", duration=0.2)
     with pytest.raises(OutputError, match="encoder failed"):

@@ -231,12 +231,14 @@ def showing(colours: list[tuple[float, float, float]], least: int):
     return lambda image: all(colour_pixels(image, rgb) >= least for rgb in colours)
 
 
+@pytest.mark.slow
 def test_pendulum_live_is_drawn(xdisplay, tmp_path) -> None:
     image, out = watch(xdisplay, ["pendulum"], tmp_path / "pendulum_live.png", ready=showing([BLUE], 300))
     assert_drawn(image, [BLUE], least=300)
     assert "last state shown: t =" in out
 
 
+@pytest.mark.slow
 def test_leg_step_live_is_drawn(xdisplay, tmp_path) -> None:
     image, out = watch(
         xdisplay, ["leg-step", "--set", "mode=kinematic"], tmp_path / "leg_live.png",
@@ -247,6 +249,7 @@ def test_leg_step_live_is_drawn(xdisplay, tmp_path) -> None:
     assert 0.5 < t < 12.6  # it advanced in real time, not to the end
 
 
+@pytest.mark.slow
 def test_hexabot_replay_reaches_the_final_state(xdisplay, tmp_path) -> None:
     folder = tmp_path / "walk"
     assert main(["run", "hexabot-walk", "--set", "duration=2", "--out", str(folder), "--no-plots"]) == 0

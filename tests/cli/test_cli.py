@@ -1,3 +1,5 @@
+import pytest
+
 """The command line through main([...]): run folders, exit codes, one-line errors, determinism."""
 
 import json
@@ -21,6 +23,7 @@ def run_ok(capsys, *argv):
     return out, err
 
 
+@pytest.mark.slow
 def test_run_folder_contents(tmp_path, capsys):
     out_dir = tmp_path / "run"
     out, _ = run_ok(capsys, "run", "pendulum", "--out", str(out_dir))
@@ -171,6 +174,7 @@ def test_divergence_exit_1_names_time_and_cause_writes_nothing(tmp_path, capsys)
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_without_gl_csv_and_plots_are_still_written(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(gl, "choose", lambda: (None, "no working OpenGL (egl: test says no)", ""))
     out_dir = tmp_path / "r"
@@ -191,6 +195,7 @@ def test_list_shows_scenarios_parameters_units(capsys):
     assert "mass" in out and "[kg]" in out and "[N*m*s/rad]" in out and "one of RK4" in out
 
 
+@pytest.mark.slow
 def test_check_reports_versions(capsys):
     out, _ = run_ok(capsys, "check")
     assert mujoco.__version__ in out and "gl egl" in out and "ffmpeg" in out

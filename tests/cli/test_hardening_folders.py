@@ -119,6 +119,7 @@ def test_run_and_sweep_never_write_over_their_config(tmp_path, capsys):
         assert config.read_text() == "damping = 0.01\n"
 
 
+@pytest.mark.slow
 def test_a_folder_name_that_is_not_utf8_is_a_legal_out(tmp_path):
     """b'r\\xff' is a legal Linux name: the run and the sweep are written there, and say so on stdout."""
     env = {**os.environ, "MUJOCO_GL": "egl"}

@@ -133,6 +133,7 @@ def test_runs_in_the_same_second_get_their_own_folders(tmp_path, monkeypatch, ca
     assert "pendulum-STAMP-3" in out  # the summary names the folder the run really went to
 
 
+@pytest.mark.slow
 def test_concurrent_default_runs_all_survive(tmp_path):
     """Four processes started together, no --out: four complete, distinct run folders."""
     procs = [
@@ -224,6 +225,7 @@ def _wait_for_staging(tmp_path, proc, timeout=60.0):
         time.sleep(0.02)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT])
 def test_signals_stop_the_run_and_clean_up(tmp_path, sig):
     proc = _start(tmp_path, "run", "pendulum", "--set", "duration=3000", "--set", "timestep=0.001", "--out", "out")
@@ -237,6 +239,7 @@ def test_signals_stop_the_run_and_clean_up(tmp_path, sig):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_ctrl_c_while_the_walking_kernels_compile_stops_the_run_cleanly(tmp_path):
     """The first hexabot run on a machine compiles the numba kernels (seconds): Ctrl-C then must stop the
     run in one line, not break numba's compiler ("no compiled object yet", reported as an internal error)."""
@@ -258,6 +261,7 @@ def test_ctrl_c_while_the_walking_kernels_compile_stops_the_run_cleanly(tmp_path
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_leg_sweep_stops_promptly_and_leaves_no_worker(tmp_path):
     proc = _start(tmp_path, "run", "leg-sweep", "--set", "workers=2", "--out", "sweep")
     _wait_for_staging(tmp_path, proc)
@@ -324,6 +328,7 @@ def _run_cli(tmp_path, *argv, env=None, **kwargs):
     )
 
 
+@pytest.mark.slow
 def test_stdout_full_or_closed(tmp_path):
     with open("/dev/full", "w") as full:
         proc = _run_cli(tmp_path, "run", "pendulum", *FAST, "--out", "r", stdout=full)
@@ -343,6 +348,7 @@ def test_stdout_full_or_closed(tmp_path):
     assert proc.returncode == 0 and proc.stderr == ""
 
 
+@pytest.mark.slow
 def test_broken_mujoco_gl_does_not_break_commands_without_video(tmp_path):
     for value in ("nonsense", "osmesa"):
         env = {"MUJOCO_GL": value}
@@ -353,6 +359,7 @@ def test_broken_mujoco_gl_does_not_break_commands_without_video(tmp_path):
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
 
 
+@pytest.mark.slow
 def test_broken_mujoco_gl_falls_back_for_video_and_says_so(tmp_path):
     from hexabot_sim import gl
 
@@ -365,6 +372,7 @@ def test_broken_mujoco_gl_falls_back_for_video_and_says_so(tmp_path):
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
 
 
+@pytest.mark.slow
 def test_missing_ffmpeg_still_gives_csv_and_plots(tmp_path):
     proc = _run_cli(
         tmp_path, "run", "pendulum", "--set", "duration=0.2", "--video", "--out", "r",
@@ -379,6 +387,7 @@ def test_missing_ffmpeg_still_gives_csv_and_plots(tmp_path):
     assert not (tmp_path / "r" / "video.mp4").exists()
 
 
+@pytest.mark.slow
 def test_an_encoder_that_stops_reading_does_not_hang_the_run(tmp_path, monkeypatch, capsys):
     """An 'ffmpeg' that answers -version and then never reads its frames: the stuck write is stopped after
     FRAME_TIMEOUT, the run keeps its CSV and says why there is no video, and the encoder is gone."""
@@ -414,6 +423,7 @@ def _cmdline(proc: Path) -> bytes:
         return b""
 
 
+@pytest.mark.slow
 def test_no_mujoco_log_dropped_on_divergence(tmp_path):
     proc = _run_cli(tmp_path, "run", "pendulum", "--set", "stiffness=1e4", "--set", "timestep=0.05", "--out", "r")
     assert proc.returncode == 1 and "diverged" in one_line_error(proc.stderr)
@@ -438,6 +448,7 @@ def test_video_size_refused(tmp_path, capsys, size):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_progress_lines_when_stderr_is_not_a_terminal(tmp_path):
     proc = _run_cli(tmp_path, "run", "leg-step", "--set", "mode=kinematic", "--no-plots", "--out", "r")
     assert proc.returncode == 0, proc.stderr
@@ -539,6 +550,7 @@ def test_signals_are_held_during_publish_even_with_other_threads():
     assert seen == ["block done"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("when", ["before", "after"])
 def test_a_stop_request_during_the_publish_does_not_deny_the_published_run(tmp_path, when):
     """SIGTERM while the run folder is being published (held) or just after: the run is complete, so the command
@@ -588,6 +600,7 @@ def test_ctrl_c_while_loading_ends_in_one_line(tmp_path):
     assert staging_left(tmp_path) == []
 
 
+@pytest.mark.slow
 def test_closed_stderr_keeps_the_exit_code(tmp_path):
     read, write = os.pipe()
     os.close(read)

@@ -53,6 +53,7 @@ def test_compiled_rate_step_equals_the_python_one(acceleration):
         assert (change > acceleration * 0.002 - 1e-9).sum() > 10
 
 
+@pytest.mark.slow
 def test_kernels_work_where_no_cache_directory_is_writable():
     """A read-only install with no writable user cache: numba cannot cache, the kernels compile per process."""
     code = (
@@ -107,6 +108,7 @@ def _warm_up_in_a_new_process(cache, prelude=""):
     return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, env=env)
 
 
+@pytest.mark.slow
 def test_an_unusable_numba_cache_does_not_stop_a_walk(tmp_path):
     """A corrupted cache file (truncated, foreign) or a full disk under the cache: the kernels are compiled in
     memory with a one-line note naming the folder (they ended the run as an internal error, found by fuzzing)."""

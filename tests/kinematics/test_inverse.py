@@ -136,6 +136,7 @@ def _expected_count(robot: str, q: np.ndarray, p: dict[str, float], chain) -> in
     return 1
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("robot", "lengths"),
     [("rrp", {}), ("elbow", {}), ("elbow", {"d": 0.0}), ("scara", {}), ("stanford", {}), ("stanford", {"d2": 0.0}),

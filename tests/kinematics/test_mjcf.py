@@ -204,6 +204,7 @@ def test_models_follow_the_conventions(compiled):
 # --- Kinematics against SerialChain --------------------------------------------------------------------
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", [*GENERATED, "leg", "based", "modified"])
 def test_sites_and_jacobians_are_the_chains(name, compiled):
     """At N random q (N_CONSTRUCTED for chains built here): sites = chain.frames(q), mj_jacSite = chain's Jacobians."""

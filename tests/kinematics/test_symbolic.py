@@ -31,6 +31,7 @@ def test_robot_list_is_complete() -> None:
     assert set(ROBOTS) == set(robots.ROBOTS)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ROBOTS)
 def test_lambdified_matches_numeric_chain(chains: dict, name: str) -> None:
     """T01..T0tool, J (direct) and J (differentiation), evaluated, equal the numeric chain's frames and Jacobian.
@@ -73,6 +74,7 @@ def test_direct_and_differentiation_jacobians_are_identical(chains: dict, name: 
     assert sp.simplify(symbolic.jacobian(sc) - symbolic.jacobian_by_differentiation(sc)) == sp.zeros(6, sc.n)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", THREE_DOF)
 def test_unsimplified_jacobians_are_equal_by_sympy_simplify(name: str) -> None:
     """Without the module's own simplifier: sympy.simplify proves the raw direct and differentiated J equal."""
@@ -81,6 +83,7 @@ def test_unsimplified_jacobians_are_equal_by_sympy_simplify(name: str) -> None:
     assert sp.simplify(difference) == sp.zeros(6, sc.n)
 
 
+@pytest.mark.slow
 def test_leg_matches_report_000(chains: dict) -> None:
     """Report 000: T04 (eq. 8), the Jacobian (eq. 15) and det Jv = l2 l3 sin q3 (l1 + l2 c2 + l3 c23), same sign."""
     sc = chains["leg"]

@@ -229,6 +229,7 @@ def forward_walk():
     return walk(vx=0.15, duration=45.0)
 
 
+@pytest.mark.slow
 def test_flat_ground_drift_slip_sag_attitude(forward_walk):
     m = forward_walk.metrics
     assert m["distance"].value >= 6.0
@@ -257,6 +258,7 @@ def test_gait_timing_matches_the_plan(forward_walk):
     assert not (measured & mid_swing).any()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("overrides", "tolerance"),
     [
@@ -284,6 +286,7 @@ def test_speed_and_yaw_rate_tracking(overrides, tolerance):
     assert m["fell"].value is False
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "overrides",
     [
@@ -300,6 +303,7 @@ def test_no_fall_low_friction_and_timesteps(overrides):
     assert abs(m["vx_error"].value) <= 0.05
 
 
+@pytest.mark.slow
 def test_heading_hold_removes_the_drift_of_an_imperfect_robot():
     """+-1 deg servo trims, 1 cm CoM offset, +-20 % friction: heading hold keeps the path straight."""
     perturbed = {"vx": 0.15, "duration": 25.0, "trim_error_deg": 1.0, "com_offset": 0.01, "friction_spread": 0.2}
@@ -310,6 +314,7 @@ def test_heading_hold_removes_the_drift_of_an_imperfect_robot():
     assert abs(free["heading_drift"].value) > 5 * abs(held["heading_drift"].value)  # why heading hold exists
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("overrides", [{"vy": 0.1}, {"vx": 0.0, "vy": -0.1}, {"vx": 0.1, "yaw_rate": 0.1}])
 def test_heading_hold_on_a_symmetric_robot_walks_every_direction(overrides):
     """Heading hold asks for yaw-rate corrections as small as 1e-19 rad/s at the start: the plan stays sane."""
@@ -391,6 +396,7 @@ def test_infeasible_commands_are_refused_up_front(overrides, fragment):
     assert fragment in str(info.value)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("overrides", "pattern", "fix"),
     [
@@ -435,6 +441,7 @@ def test_refused_largest_feasible_command_is_feasible():
 # --- the run folder and metrics recomputed independently ---------------------------------------------
 
 
+@pytest.mark.slow
 def test_cli_run_folder_and_metrics_recomputed_from_the_trajectory(tmp_path, capsys):
     out = tmp_path / "walk"
     code = main(["run", "hexabot-walk", "--set", "duration=6", "--out", str(out)])
@@ -498,6 +505,7 @@ def test_cli_run_folder_and_metrics_recomputed_from_the_trajectory(tmp_path, cap
     assert record["units"]["metrics"]["lateral_drift"] == "mm/m"
 
 
+@pytest.mark.slow
 def test_rolling_feet_correction_is_what_makes_the_speed_right(monkeypatch):
     """A sphere foot rolling without slip moves its centre by r dtheta: uncorrected, the body runs ~3 % fast."""
     from hexabot_sim.control import walker as control

@@ -69,6 +69,7 @@ def test_slope_normal_is_what_was_asked(heading, uphill):
     assert ground.height(0.0, 0.1) - ground.height(0.0, 0.0) == pytest.approx(0.1 * math.tan(a) * uphill[1])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "overrides",
     [
@@ -105,6 +106,7 @@ def test_ground_height_agrees_with_mujoco_ray_casting(overrides):
     assert worst < 1e-6  # the heightfield is stored in float32
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("overrides", "top"), [({"roughness": 0.01}, 0.0), ({"kerb_height": 0.03, "step_height": 0.04}, 0.03)]
 )
@@ -193,6 +195,7 @@ def slope_runs():
     return runs
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("heading", ["uphill", "downhill", "across"])
 def test_levelled_body_on_a_10_degree_slope(slope_runs, heading):
     r = slope_runs[heading]
@@ -206,6 +209,7 @@ def test_levelled_body_on_a_10_degree_slope(slope_runs, heading):
     assert value(r, "height_above_ground_mean") == pytest.approx(0.098, abs=0.005)
 
 
+@pytest.mark.slow
 def test_without_levelling_the_body_tilts_with_the_slope(slope_runs):
     off, on = slope_runs["off"], slope_runs["uphill"]
     # Uphill along +x: the nose up by the slope (negative pitch in z-y-x angles), by the expected 10 deg.
@@ -214,6 +218,7 @@ def test_without_levelling_the_body_tilts_with_the_slope(slope_runs):
     assert not value(off, "fell") and abs(value(off, "speed_made_good_error")) <= 0.05
 
 
+@pytest.mark.slow
 def test_without_levelling_a_steep_slope_is_walked_parallel_to_it():
     """Beyond the steepest levelled slope the body starts and walks parallel to the ground (it once started level
     and failed with a raw inverse-kinematics message: the feet could not reach the slope from a level body)."""
@@ -224,6 +229,7 @@ def test_without_levelling_a_steep_slope_is_walked_parallel_to_it():
     assert not value(r, "fell") and abs(value(r, "speed_made_good_error")) <= 0.15
 
 
+@pytest.mark.slow
 def test_standing_still_on_the_slope_does_not_slide():
     r = walk(**{**SLOPE, "vx": 0.0, "duration": 8.0})
     assert abs(value(r, "distance_made_good")) < 0.002  # over 5.5 s of stepping in place
@@ -268,6 +274,7 @@ def rough_runs():
         return dict(zip(ROUGH_CASES, pool.map(rough_walk, ROUGH_CASES), strict=True))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", ROUGH_CASES, ids=[f"{g}-seed{s}-{v:g}mps-level_{lv}" for g, s, v, lv in ROUGH_CASES])
 def test_rough_ground_no_fall_speed_and_attitude(rough_runs, case):
     r = rough_runs[case]
@@ -287,6 +294,7 @@ def test_rough_ground_no_fall_speed_and_attitude(rough_runs, case):
     assert r["stance_loaded_fraction"] >= {"tripod": 0.85, "ripple": 0.6, "wave": 0.5}[case[0]], r
 
 
+@pytest.mark.slow
 def test_the_acceleration_limit_never_clips_the_planned_gait():
     # The tripod's plan stays under the 200 rad/s^2 that smooths the feedback (a foot stopped by a kerb).
     assert hexabot_scene.acceleration_limit(resolve()) == hexabot_parameters.ACCELERATION_LIMIT
@@ -299,6 +307,7 @@ def test_the_acceleration_limit_never_clips_the_planned_gait():
     assert abs(value(scenario.run("hexabot-walk", p), "vx_error")) <= 0.015  # clipped at 200: -5 %
 
 
+@pytest.mark.slow
 def test_sensed_touchdown_on_flat_ground_keeps_the_walk():
     r = walk(touchdown="sensed", duration=8.0)
     assert abs(value(r, "vx_error")) <= 0.02
@@ -312,6 +321,7 @@ def test_sensed_touchdown_on_flat_ground_keeps_the_walk():
     assert value(r, "stance_loaded_fraction_min") >= 0.98
 
 
+@pytest.mark.slow
 def test_a_3_cm_kerb_is_climbed():
     r = walk(kerb_height=0.03, step_height=0.04, touchdown="sensed", level_body="on", duration=14.0)
     c = r.columns
@@ -331,6 +341,7 @@ def test_the_cameras_near_plane_stays_at_the_robots_scale(overrides):
     assert model.vis.map.znear * model.stat.extent <= 0.05  # [m]
 
 
+@pytest.mark.slow
 def test_a_rough_slope_is_walked():
     """Terrain kinds compose (issue 18): 1 cm rough ground on an 8 deg slope, climbed at 0.1 m/s with a level body,
     feet finding the ground; measured -2.1 % speed and 1.2 deg of pitch (peak to peak)."""

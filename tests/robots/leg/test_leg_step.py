@@ -123,6 +123,7 @@ def test_default_step_stays_on_its_line(default_run):
     assert m["max_x_error"].value == pytest.approx(x_error, abs=1e-15)
 
 
+@pytest.mark.slow
 def test_desired_columns_are_the_exact_integral_of_the_command(any_run):
     p, r = any_run
     c = r.columns
@@ -139,6 +140,7 @@ def test_desired_columns_are_the_exact_integral_of_the_command(any_run):
     assert np.max(np.abs(np.diff(t) - p.timestep)) <= 1e-12 and t[0] == 0
 
 
+@pytest.mark.slow
 def test_measured_columns_are_fk_and_jacobian_of_the_joint_columns(any_run):
     _, r = any_run
     c = r.columns
@@ -282,6 +284,7 @@ def test_reach_backward_respects_the_joint_ranges():
     assert r.metrics["predicted_to_leave_workspace"].value is True
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("amplitude", "omega", "leaves"),
     [(0.05, 1.0, False), (0.01, 1.0, False), (0.1, 1.0, True), (0.08, 1.0, False), (0.08, math.pi / 6, True)],
@@ -445,6 +448,7 @@ def test_bad_input_exit_2_one_line_nothing_written(tmp_path, capsys, setting, fr
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_start_on_the_coxa_axis_is_not_called_outside_the_workspace(tmp_path, capsys):
     assert reachable(0.0, 0.0, -0.08, ranges=True)
     code = main(["run", "leg-step", "--set", "start_x=0", "--set", "duration=0.01", "--out", str(tmp_path / "r")])
@@ -452,6 +456,7 @@ def test_start_on_the_coxa_axis_is_not_called_outside_the_workspace(tmp_path, ca
     assert code == 0 or ("outside the workspace" not in err and "q1=" not in err), err
 
 
+@pytest.mark.slow
 def test_cli_run_writes_the_columns_and_metrics(tmp_path, capsys):
     out = tmp_path / "run"
     code = main(["run", "leg-step", "--out", str(out), "--no-plots"])

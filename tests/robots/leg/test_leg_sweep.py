@@ -27,6 +27,7 @@ def test_small_grid_matches_the_workspace_prediction():
     assert result.metrics["prediction_agreement"].value == 1.0
 
 
+@pytest.mark.slow
 def test_sweep_reports_cases_run_in_parallel_like_serially():
     s = registry.get("leg-sweep")
     grid = {"amplitudes": "0.08", "omegas": f"1,{math.pi / 6}", "periods": "1"}
@@ -53,6 +54,7 @@ def test_bad_grid(value, fragment):
     assert fragment in str(info.value)
 
 
+@pytest.mark.slow
 def test_cli_writes_grid_and_figures(tmp_path, capsys):
     out = tmp_path / "sweep"
     argv = ["run", "leg-sweep", "--set", "amplitudes=0.02,0.1", "--set", "omegas=1,2", "--set", "periods=0.5"]

@@ -22,6 +22,7 @@ def _rotation_vector(rot):
     return axial if angle < 1e-12 else axial * angle / np.sin(angle)
 
 
+@pytest.mark.slow
 def test_linear_and_angular_velocity_are_the_time_derivative_of_the_reports_pose(result):
     c = result.columns
     t = c["t"]
@@ -63,6 +64,7 @@ def test_det_and_singular_instants(result):
     assert np.allclose(found, expected, atol=1e-3)
 
 
+@pytest.mark.slow
 def test_cli_run_folder(tmp_path, capsys):
     out = tmp_path / "rrp"
     assert main(["run", "rrp-velocity", "--set", "duration=2", "--out", str(out)]) == 0
