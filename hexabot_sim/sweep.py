@@ -10,6 +10,7 @@ import logging
 import math
 import multiprocessing
 import os
+import platform
 import re
 import shutil
 import signal
@@ -399,21 +400,27 @@ def run_cell(job: CellJob) -> CellResult:
         files = None
         if job.keep_run:
             sim_seconds = time.perf_counter() - started
-            with tempfile.TemporaryDirectory(prefix=f"{CELL_PREFIX}{os.getpid()}-") as tmp:
-                _CELL_FOLDERS.append(tmp)  # removed by _worker_stopped if the sweep stops this worker
-                try:
-                    folder = Path(tmp)
-                    output.write_run(folder, scenario, job.params, result, sim_seconds=sim_seconds, plots=job.plots,
-                                     no_video_reason="not made in a sweep")  # fmt: skip
-                    files = {
-                        path.relative_to(folder).as_posix(): path.read_bytes()
-                        for path in sorted(folder.rglob("*"))
-                        if path.is_file()
-                    }
-                finally:
-                    _CELL_FOLDERS.remove(tmp)
+            try:
+                with tempfile.TemporaryDirectory(prefix=f"{CELL_PREFIX}{os.getpid()}-") as tmp:
+                    _CELL_FOLDERS.append(tmp)  # removed by _worker_stopped if the sweep stops this worker
+                    try:
+                        folder = Path(tmp)
+                        output.write_run(folder, scenario, job.params, result, sim_seconds=sim_seconds,
+                                         plots=job.plots, no_video_reason="not made in a sweep")  # fmt: skip
+                        files = {
+                            path.relative_to(folder).as_posix(): path.read_bytes()
+                            for path in sorted(folder.rglob("*"))
+                            if path.is_file()
+                        }
+                    finally:
+                        _CELL_FOLDERS.remove(tmp)
+            except OSError as e:  # the worker's disk, not the cell: every other cell would fail the same way
+                raise WorkerFailed(
+                    f"a worker ({platform.node()}) cannot write a kept run folder in its temporary folder "
+                    f"{tempfile.gettempdir()}: {e.strerror or e}"
+                ) from None
         return CellResult(job.index, metrics, units, docs, None, time.perf_counter() - started, files)
-    except (KeyboardInterrupt, MemoryError):
+    except (KeyboardInterrupt, MemoryError, WorkerFailed):
         raise
     except HexabotError as e:
         message = " ".join(str(e).split())
@@ -592,6 +599,8 @@ def run_cells(
                 if client is not None and getattr(client, "status", "running") != "running":
                     raise WorkerFailed(f"lost the Dask scheduler at {client.scheduler.address}") from None
                 raise WorkerFailed("a cell was cancelled by the executor (cluster shut down?)") from None
+            except WorkerFailed:
+                raise
             except Exception as e:
                 text = " ".join(str(e).split())[:300]
                 hint = " (is the same hexabot-sim installed on every worker?)" if isinstance(e, ImportError) else ""
