@@ -674,3 +674,20 @@ def test_an_encoder_failure_on_a_full_disk_fails_the_run(tmp_path, monkeypatch, 
     else:
         video, _ = output.write_video(folder, result, settings, "egl")
         assert video == {"written": False, "reason": "rendering failed: OSError: [Errno 32] Broken pipe"}
+
+
+def test_run_progress_in_logs_speaks_at_least_once_a_minute(monkeypatch):
+    """Issue 17: a run may take up to an hour, and its log lines came only at every quarter (15 min of silence)."""
+    import io
+    import time
+
+    from hexabot_sim.__main__ import ProgressBar
+
+    monkeypatch.setattr(ProgressBar, "PLAIN_SECONDS", 0.5)
+    stream = io.StringIO()
+    bar = ProgressBar("slow", stream)
+    bar(0, 1000)
+    time.sleep(0.6)
+    bar(3, 1000)
+    bar(4, 1000)  # not again at once
+    assert stream.getvalue().splitlines() == ["slow: 0% (0/1000)", "slow: 0% (3/1000)"], stream.getvalue()
