@@ -99,7 +99,7 @@ def run_cell(job: CellJob) -> CellResult:
         )
         files = job.keep(job, result, time.perf_counter() - started) if job.keep is not None else None
         return CellResult(job.index, metrics, units, docs, None, time.perf_counter() - started, files)
-    except (KeyboardInterrupt, MemoryError):
+    except (KeyboardInterrupt, MemoryError, WorkerFailed):
         raise
     except HexabotError as e:
         message = " ".join(str(e).split())
@@ -188,6 +188,8 @@ def run_cells(
                 if client is not None and getattr(client, "status", "running") != "running":
                     raise WorkerFailed(f"lost the Dask scheduler at {client.scheduler.address}") from None
                 raise WorkerFailed("a cell was cancelled by the executor (cluster shut down?)") from None
+            except WorkerFailed:
+                raise
             except Exception as e:
                 text = " ".join(str(e).split())[:300]
                 hint = " (is the same hexabot-sim installed on every worker?)" if isinstance(e, ImportError) else ""

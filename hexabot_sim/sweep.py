@@ -6,6 +6,7 @@ import csv
 import dataclasses
 import math
 import os
+import platform
 import tempfile
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -336,16 +337,22 @@ def kept_run(job: CellJob, result: Any, sim_seconds: float) -> dict[str, bytes]:
     since the worker may be on another machine than the sweep folder."""
     from hexabot_sim import output
 
-    with tempfile.TemporaryDirectory(prefix=f"{output.CELL_PREFIX}{os.getpid()}-") as tmp:
-        pool.CELL_FOLDERS.append(tmp)  # removed by the worker's signal handler if the sweep stops it
-        try:
-            folder = Path(tmp)
-            output.write_run(folder, registry.get(job.scenario), job.params, result, sim_seconds=sim_seconds,
-                             plots=job.plots, no_video_reason="not made in a sweep")  # fmt: skip
-            return {path.relative_to(folder).as_posix(): path.read_bytes() for path in sorted(folder.rglob("*"))
-                    if path.is_file()}  # fmt: skip
-        finally:
-            pool.CELL_FOLDERS.remove(tmp)
+    try:
+        with tempfile.TemporaryDirectory(prefix=f"{output.CELL_PREFIX}{os.getpid()}-") as tmp:
+            pool.CELL_FOLDERS.append(tmp)  # removed by the worker's signal handler if the sweep stops it
+            try:
+                folder = Path(tmp)
+                output.write_run(folder, registry.get(job.scenario), job.params, result, sim_seconds=sim_seconds,
+                                 plots=job.plots, no_video_reason="not made in a sweep")  # fmt: skip
+                return {path.relative_to(folder).as_posix(): path.read_bytes() for path in sorted(folder.rglob("*"))
+                        if path.is_file()}  # fmt: skip
+            finally:
+                pool.CELL_FOLDERS.remove(tmp)
+    except OSError as e:  # the worker's disk, not the cell: every other cell would fail the same way
+        raise pool.WorkerFailed(
+            f"a worker ({platform.node()}) cannot write a kept run folder in its temporary folder "
+            f"{tempfile.gettempdir()}: {e.strerror or e}"
+        ) from None
 
 
 def cell_folder(index: int, count: int) -> str:

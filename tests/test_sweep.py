@@ -122,6 +122,23 @@ def test_keep_runs_writes_each_cell_as_a_run_folder(tmp_path, capsys):
                  "--out", str(tmp_path / "cmp")]) == 0  # fmt: skip
 
 
+def test_a_worker_whose_temporary_folder_is_full_fails_the_sweep_in_one_line(tmp_path, capsys, monkeypatch):
+    """Issue 17 (TMPDIR on a full 2 MB tmpfs): every --keep-runs cell became a row 'internal error: OSError: No space
+    left on device (a bug, please report it)' and the sweep exited 0; the worker's disk is no cell's failure."""
+    from hexabot_sim import output
+
+    def full(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(output, "write_run", full)  # the local pool forks: its workers see this too
+    out = tmp_path / "sweep"
+    code = main(["sweep", "pendulum", "--grid", "damping=0.01,0.02", *FIXED, "--out", str(out), "--keep-runs",
+                 "--workers", "1"])  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and err[-1].startswith("hexabot-sim: error: a worker") and "No space left" in err[-1], err
+    assert "bug" not in err[-1] and not out.exists() and list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.slow
 def test_local_cluster_gives_the_same_bytes_as_the_local_pool(tmp_path, capsys):
     distributed = pytest.importorskip("distributed", reason="the 'cluster' extra (distributed) is not installed")

@@ -142,3 +142,10 @@ def test_the_cost_refusal_with_a_scheduler_counts_its_workers(tmp_path, capsys, 
 def test_two_texts_of_one_value_are_named():
     with pytest.raises(UsageError, match=r"the value 0 appears twice \(0 and 1e-330 read as the same value\)"):
         sweep.plan("pendulum", ["damping=0,1e-330"], {}, {})
+
+
+def test_one_dask_worker_thread_is_singular(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(sweep, "MAX_SWEEP_SECONDS", 1e-6, raising=False)
+    monkeypatch.setattr(sweep, "dask_executor", lambda address: contextlib.nullcontext((None, 1)))
+    line = refused(tmp_path, capsys, "pendulum", "--grid", "damping=0,1", "--scheduler", "tcp://x:1", *FIXED)
+    assert "(1 worker thread))" in line, line  # it said "1 worker threads"

@@ -8,22 +8,27 @@ from typing import Any
 
 
 class ProgressBar:
-    """Progress on stderr: a redrawn bar on a terminal, else a plain line every PLAIN_EVERY percent (logs)."""
+    """Progress on stderr: a redrawn bar on a terminal, else a plain line every PLAIN_EVERY percent and at least
+    every PLAIN_SECONDS while it is called (logs: a run allowed to take an hour was silent for 15 min between
+    quarters)."""
 
     PLAIN_EVERY: int = 25  # [%]
+    PLAIN_SECONDS: float = 60.0  # [s]
 
     def __init__(self, label: str, stream: Any = None) -> None:
         self.label = label
         self.stream = stream if stream is not None else sys.stderr
         self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
         self._last = -1
+        self._last_line = time.monotonic()
 
     def __call__(self, done: int, total: int) -> None:
         percent = 100 * done // max(total, 1)
         if not self.tty:
             step = percent // self.PLAIN_EVERY * self.PLAIN_EVERY
-            if step > self._last:
-                self._last = step
+            now = time.monotonic()
+            if step > self._last or now - self._last_line >= self.PLAIN_SECONDS:
+                self._last, self._last_line = max(step, self._last), now
                 self._write(f"{self.label}: {percent}% ({done}/{total})\n")
             return
         if percent == self._last and done != total:
@@ -54,12 +59,10 @@ class SweepProgress(ProgressBar):
     """Cells done / total with the elapsed time and an ETA; in logs a plain line every 10 % or PLAIN_SECONDS."""
 
     PLAIN_EVERY: int = 10  # [%]
-    PLAIN_SECONDS: float = 60.0  # [s] a log line at least this often while cells finish
 
     def __init__(self, label: str, stream: Any = None) -> None:
         super().__init__(label, stream)
-        self._start = time.monotonic()
-        self._last_line = self._start
+        self._start = self._last_line
 
     def __call__(self, done: int, total: int) -> None:
         now = time.monotonic()

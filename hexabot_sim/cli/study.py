@@ -37,7 +37,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         executors = contextlib.nullcontext((pool.local_executor(workers), workers))
     started = time.perf_counter()
     with executors as (executor, workers), output.run_folder(args.out, name, force=args.force) as run:
-        where = f"Dask scheduler {args.scheduler} ({workers} worker threads)" if args.scheduler else None
+        threads = f"{workers} worker thread{'s' if workers != 1 else ''}"
+        where = f"Dask scheduler {args.scheduler} ({threads})" if args.scheduler else None
         if where:  # the cluster's size is known once connected (the staging folder goes with the refusal)
             sweep.check_cost(plan, workers, where)
         where = where or f"{workers} local process{'es' if workers > 1 else ''}"

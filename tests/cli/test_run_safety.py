@@ -735,3 +735,20 @@ def test_a_stop_signal_while_loading_ends_in_one_line(tmp_path, sig):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 128 + sig and not out.exists(), (proc.returncode, err)
     assert err.decode().strip() == f"hexabot-sim: stopped by {sig.name}; nothing written", err
+
+
+def test_run_progress_in_logs_speaks_at_least_once_a_minute(monkeypatch):
+    """Issue 17: a run may take up to an hour, and its log lines came only at every quarter (15 min of silence)."""
+    import io
+    import time
+
+    from hexabot_sim.cli.progress import ProgressBar
+
+    monkeypatch.setattr(ProgressBar, "PLAIN_SECONDS", 0.5)
+    stream = io.StringIO()
+    bar = ProgressBar("slow", stream)
+    bar(0, 1000)
+    time.sleep(0.6)
+    bar(3, 1000)
+    bar(4, 1000)  # not again at once
+    assert stream.getvalue().splitlines() == ["slow: 0% (0/1000)", "slow: 0% (3/1000)"], stream.getvalue()
