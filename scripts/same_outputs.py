@@ -21,7 +21,9 @@ Also compared: the output of `hexabot-sim list`, and of `hexabot-sim kin ROBOT -
 with --target; stdout and stderr) for every robot.
 
 Prints one line per scenario ("same", or "DIFFERENT" with the files and, for text files, the first differing
-line) and exits 1 on any difference, 2 on a usage error. About 1-2 minutes on 2 cores.
+line and column) and exits 1 on any difference, 2 on a usage error. About 130 s of CPU time: 1-2 minutes on 2
+idle cores, ~4 minutes on a busy shared machine (the baseline's first hexabot run also compiles its numba
+kernels). A command that runs longer than JOB_TIMEOUT is stopped and counts as a difference.
 """
 
 from __future__ import annotations
@@ -76,6 +78,7 @@ KIN: dict[str, tuple[str, str]] = {
 # Wall-clock entries of run.json: (path of keys). Anything else in run.json must be equal.
 VOLATILE_JSON = (("simulation", "wall_time"), ("metrics", "real_time_factor"))
 VOLATILE_HTML = re.compile(r"^<tr><td><code>real_time_factor</code>.*$", re.MULTILINE)
+JOB_TIMEOUT = 600.0  # [s] a run or kin command still running after this long is stopped (a hang)
 TEXT_SUFFIXES = {".csv", ".json", ".xml", ".html", ".txt", ".md", ".toml"}
 
 
@@ -158,6 +161,11 @@ def run_jobs(jobs: list[Job], n: int, logs: Path, on_done) -> None:
                     job.proc = subprocess.Popen(job.argv, cwd=job.cwd, env=job.env, stdout=out, stderr=err)
                 running.append(job)
             time.sleep(0.02)
+            for job in running:
+                if job.proc.poll() is None and time.perf_counter() - job.started > JOB_TIMEOUT:
+                    job.proc.kill()
+                    with open(job.err, "a") as err:
+                        err.write(f"\nstopped after {JOB_TIMEOUT:g} s\n")
             for job in [j for j in running if j.proc.poll() is not None]:
                 running.remove(job)
                 job.rc, job.seconds = job.proc.returncode, time.perf_counter() - job.started
