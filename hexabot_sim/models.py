@@ -123,8 +123,8 @@ def read_run_model(path: Path) -> str:
 
     Compile it with `mujoco.MjModel.from_xml_string`: it references no other file.
     """
-    from hexabot_sim.terrain.heightfield import MAX_POINTS as HFIELD_MAX_POINTS
     from hexabot_sim.params import read_bounded
+    from hexabot_sim.terrain.heightfield import MAX_POINTS as HFIELD_MAX_POINTS
 
     data = read_bounded(path, "model file", RUN_MODEL_LIMIT, "a run's model.xml is at most a few MB")
 

@@ -21,7 +21,7 @@ from hexabot_sim.errors import UsageError
 from hexabot_sim.pool import WALL_CLOCK_METRICS, CellJob, CellResult
 
 if TYPE_CHECKING:
-    from matplotlib.figure import Figure
+    pass
 
 CSV_NAME = "sweep.csv"
 JSON_NAME = "sweep.json"
@@ -35,10 +35,6 @@ MAX_SWEEP_SECONDS: float = 24 * params_mod.MAX_SECONDS  # estimated wall time of
 CHECK_QUIET_SECONDS: float = 2.0  # checking the cells longer than this reports its progress ...
 CHECK_REPORT_SECONDS: float = 1.0  # ... at most this often (the printer throttles its lines further)
 COUNT_SECONDS: float = 10.0  # after a cell that cannot run, counting the others stops after this long
-HEATMAP_LABELS_MAX: int = 12  # an axis with more values labels every k-th only
-ANNOTATE_MAX_CELLS: int = 100  # heatmaps up to this many cells print each value in its cell
-DECADES_FOR_LOG: float = 2.0  # positive values spanning this many decades get a log scale
-CONSTANT_RTOL: float = 1e-12  # a metric that varies less than this (round-off) is not plotted
 
 
 # Scenarios that are themselves grids of runs: a sweep sweeps their single-run scenario instead.
@@ -143,7 +139,7 @@ def parse_axis(spec: str) -> tuple[str, list[Any], bool]:
 
 
 def _label(names: Sequence[str], values: Sequence[Any]) -> str:
-    return ", ".join(f"{n} = {_text(v)}" for n, v in zip(names, values, strict=True))
+    return ", ".join(f"{n} = {cell_text(v)}" for n, v in zip(names, values, strict=True))
 
 
 def plan(
@@ -208,7 +204,7 @@ def plan(
             if value in seen:
                 a, b = (str(t)[: params_mod.MAX_SHOWN] for t in (seen[value], text))
                 same = "" if a == b else f" ({a} and {b} read as the same value)"
-                raise UsageError(f"--grid {shown!r}: the value {_text(value)} appears twice{same}")
+                raise UsageError(f"--grid {shown!r}: the value {cell_text(value)} appears twice{same}")
             seen[value] = text
         axes.append(Axis(name, grid[len(axes)], tuple(values), log))
 
@@ -283,8 +279,8 @@ def _check_cells(
         what, fix = "no grid cell can run", "change the fixed parameters or the grid"
     elif dead:
         a, value = dead[0]
-        what = f"{failed} of {total} grid cells cannot run, every one with {a.name} = {_text(value)} among them"
-        fix = f"leave {a.name} = {_text(value)} out of its --grid" + (
+        what = f"{failed} of {total} grid cells cannot run, every one with {a.name} = {cell_text(value)} among them"
+        fix = f"leave {a.name} = {cell_text(value)} out of its --grid" + (
             f" ({len(dead)} values of the grid have no cell that can run)" if len(dead) > 1 else ""
         )
     else:
@@ -364,7 +360,7 @@ def cell_folder(index: int, count: int) -> str:
 # The table: sweep.csv and sweep.json
 
 
-def _text(value: Any) -> str:
+def cell_text(value: Any) -> str:
     """A value as written in sweep.csv: floats exactly (shortest round-trip form), booleans true/false, None empty."""
     if value is None:
         return ""
@@ -423,7 +419,7 @@ def write_csv(path: Path, t: Table) -> None:
         writer = csv.writer(stream, lineterminator="\n")
         writer.writerow(t.header)
         for row in t.rows:
-            writer.writerow([_text(v) for v in row])
+            writer.writerow([cell_text(v) for v in row])
 
 
 def record(p: Plan, t: Table, results: Sequence[CellResult], executor: Mapping[str, Any], wall: float) -> dict:
@@ -464,143 +460,49 @@ def record(p: Plan, t: Table, results: Sequence[CellResult], executor: Mapping[s
     }
 
 
-# ---------------------------------------------------------------------------------------------
-# Figures: one swept parameter -> each metric against it; two -> a heatmap per metric
+def keeper(folder: Path, count: int) -> tuple[Callable[[CellResult], None], list[int]]:
+    """(on_result for pool.run_cells that writes each --keep-runs cell's run folder under `folder`/cells/,
+    a one-item list counting the folders written)."""
+    kept = [0]
+
+    def keep(result: CellResult) -> None:
+        if result.files:
+            cell = folder / cell_folder(result.index, count)
+            cell.mkdir(parents=True)
+            for relative, content in result.files.items():
+                (cell / relative).parent.mkdir(parents=True, exist_ok=True)
+                (cell / relative).write_bytes(content)
+            kept[0] += 1
+
+    return keep, kept
 
 
-def _numeric(values: Sequence[Any]) -> np.ndarray | None:
-    """Floats of a metric column (None -> nan, bools -> 0/1), or None if it holds text."""
-    out = []
-    for v in values:
-        if isinstance(v, str):
-            return None
-        out.append(np.nan if v is None else float(v))
-    return np.array(out, dtype=float)
+def write_folder(
+    folder: Path,
+    p: Plan,
+    results: Sequence[CellResult],
+    executor: Mapping[str, Any],
+    wall: float,
+    *,
+    figures: Callable[[Plan, Table], Mapping[str, Any]] | None,
+    kept: int | None,
+) -> tuple[Table, list[str]]:
+    """Writes the sweep folder's files (sweep.csv, the figures, sweep.json, report.html) into `folder`, a staging
+    folder (`figures`: sweep_figures.figures, or None for no figures; `kept`: the --keep-runs folders written,
+    None without --keep-runs); returns the table and the files."""
+    from hexabot_sim import output, report
 
-
-def _spans_decades(values: np.ndarray) -> bool:
-    finite = values[np.isfinite(values)]
-    return bool(len(finite) and (finite > 0).all() and math.log10(finite.max() / finite.min()) >= DECADES_FOR_LOG)
-
-
-def plotted_metrics(t: Table) -> dict[str, np.ndarray]:
-    """Metric column -> values, for the metrics that are numbers and not the same in every cell that ran.
-
-    A metric that is null in some cells that ran (e.g. a settling time never reached) is drawn too.
-    """
-    ran = np.array([not e for e in t.column(ERROR_COLUMN)], dtype=bool)
-    out = {}
-    for name in t.metrics:
-        values = _numeric(t.column(name))
-        if values is None:
-            continue
-        finite = values[ran & np.isfinite(values)]
-        if not len(finite):
-            continue
-        spread = np.ptp(finite) > CONSTANT_RTOL * np.abs(finite).max()
-        if spread or len(finite) < ran.sum():
-            out[name] = values
-    return out
-
-
-def _axis_label(name: str, unit: str) -> str:
-    return f"{name} [{unit}]" if unit and unit != "1" else name
-
-
-def figures(p: Plan, t: Table) -> dict[str, Figure]:
-    """One figure per plotted metric (file stem = metric): a curve over one axis, a heatmap over two.
-
-    Three or more swept parameters give no figures (plot sweep.csv as you need).
-    """
-    if len(p.axes) not in (1, 2):
-        return {}
-    metrics = plotted_metrics(t)
-    failed = np.array([bool(e) for e in t.column(ERROR_COLUMN)])
-    draw = _curve if len(p.axes) == 1 else _heatmap
-    return {name: draw(p, t, name, values, failed) for name, values in metrics.items()}
-
-
-def _title(p: Plan, t: Table, name: str) -> str:
-    import textwrap
-
-    doc = textwrap.shorten(t.docs.get(name, ""), 200, placeholder=" ...")
-    return f"{p.scenario}: {name}" + (f"\n{textwrap.fill(doc, 100)}" if doc else "")
-
-
-def _curve(p: Plan, t: Table, name: str, values: np.ndarray, failed: np.ndarray) -> Figure:
-    from hexabot_sim import plots
-
-    axis = p.axes[0]
-    fig, ax = plots.figure(figsize=(8, 5))
-    xs = _numeric(list(axis.values))
-    categorical = xs is None
-    x = np.arange(len(axis.values), dtype=float) if categorical else xs
-    ax.plot(x, values, "o-", color="tab:blue", label=name)
-    if failed.any():
-        for xf in x[failed]:
-            ax.axvline(xf, color="tab:red", alpha=0.3, lw=6)
-        ax.plot([], [], color="tab:red", alpha=0.3, lw=6, label="cell failed (see the error column)")
-        plots.legend_above(ax, ncol=2)
-    if categorical:
-        ax.set_xticks(x, [_text(v) for v in axis.values])
-    elif axis.log or _spans_decades(x):
-        ax.set_xscale("log")
-    if _spans_decades(values):
-        ax.set_yscale("log")
-    else:
-        ax.ticklabel_format(axis="y", useOffset=False)
-    ax.set_xlabel(_axis_label(axis.name, t.units.get(axis.name, "")))
-    ax.set_ylabel(_axis_label(name, t.units.get(name, "")))
-    ax.grid(alpha=0.3, which="both")
-    ax.set_title(_title(p, t, name), fontsize=plots.TITLE_FONTSIZE)
-    return fig
-
-
-def _ticks(values: Sequence[Any]) -> tuple[list[int], list[str]]:
-    step = max(1, math.ceil(len(values) / HEATMAP_LABELS_MAX))
-    index = list(range(0, len(values), step))
-    return index, [f"{v:.4g}" if isinstance(v, float) else _text(v) for v in (values[i] for i in index)]
-
-
-def _heatmap(p: Plan, t: Table, name: str, values: np.ndarray, failed: np.ndarray) -> Figure:
-    """Rows: the first swept parameter; columns: the second; each cell drawn the same size (grid values labelled)."""
-    from matplotlib.colors import LogNorm, Normalize
-
-    from hexabot_sim import plots
-
-    rows, cols = p.axes
-    grid = values.reshape(p.shape)  # (len(rows), len(cols)), row-major like the cells
-    bad = failed.reshape(p.shape)
-    finite = grid[np.isfinite(grid)]
-    log = _spans_decades(finite)
-    low, high = (float(finite.min()), float(finite.max())) if len(finite) else (0.0, 1.0)
-    norm = LogNorm(low, high) if log else Normalize(low, high if high > low else low + 1)
-    fig, ax = plots.figure(figsize=(8.5, 6.5))
-    masked = np.ma.masked_invalid(grid)
-    mesh = ax.pcolormesh(np.arange(len(cols.values) + 1) - 0.5, np.arange(len(rows.values) + 1) - 0.5, masked,
-                         cmap="viridis", norm=norm)  # fmt: skip
-    ax.set_facecolor("0.85")  # cells without a value (failed or null) show grey
-    bar = fig.colorbar(mesh, ax=ax, label=_axis_label(name, t.units.get(name, "")) + (" (log scale)" if log else ""))
-    if not log:  # full values on the ticks: an offset ("1e-8 + ...") above the bar is easily missed
-        bar.ax.ticklabel_format(axis="y", useOffset=False)
-    if bad.any():
-        r, c = np.nonzero(bad)
-        ax.plot(c, r, "x", color="tab:red", ms=12, mew=2, label="cell failed (see the error column)")
-        plots.legend_above(ax, ncol=1)
-    if grid.size <= ANNOTATE_MAX_CELLS:
-        for (i, j), v in np.ndenumerate(grid):
-            if np.isfinite(v):
-                shade = norm(v)
-                ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=7,
-                        color="black" if shade > 0.6 else "white")  # fmt: skip
-            elif not bad[i, j]:
-                ax.text(j, i, "null", ha="center", va="center", fontsize=7, color="0.3")
-    for setter, axis in ((ax.set_xticks, cols), (ax.set_yticks, rows)):
-        index, labels = _ticks(axis.values)
-        setter(index, labels)
-    ax.set_xlabel(_axis_label(cols.name, t.units.get(cols.name, "")) + (" (log-spaced)" if cols.log else ""))
-    ax.set_ylabel(_axis_label(rows.name, t.units.get(rows.name, "")) + (" (log-spaced)" if rows.log else ""))
-    ax.set_title(_title(p, t, name), fontsize=plots.TITLE_FONTSIZE)
-    return fig
-
-
+    t = table(p, results)
+    write_csv(folder / CSV_NAME, t)
+    files = [CSV_NAME, JSON_NAME]
+    if figures is not None:
+        with output.package_style():
+            files += output.write_figures(figures(p, t), folder)
+    out = record(p, t, results, executor, wall)
+    out |= {"kept_runs": f"{CELLS_DIR}/ ({kept} folders)" if kept is not None else None}
+    out["versions"] = output.versions()
+    out["files"] = [*files, "report.html"]
+    output.write_json(folder / JSON_NAME, out)
+    docs = {name: info.doc for name, (info, _) in params_mod.infos(type(p.base)).items()}
+    (folder / "report.html").write_text(report.sweep_page(out, docs, folder))
+    return t, files

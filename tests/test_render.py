@@ -1,4 +1,3 @@
-import pytest
 
 """Headless video: real-time length, size, content; skipped with the reason where no GL works."""
 
@@ -6,6 +5,7 @@ import io
 import json
 
 import numpy as np
+import pytest
 
 from hexabot_sim.cli import main
 from hexabot_sim.cli.progress import ProgressBar

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from hexabot_sim import sweep
+from hexabot_sim import sweep, sweep_figures
 from hexabot_sim.cli import main
 from hexabot_sim.cli.progress import SweepProgress
 from hexabot_sim.errors import UsageError
@@ -226,7 +226,7 @@ def test_sweep_figures_print_full_values_not_an_offset(grid):
     swept = tuple(axis.name for axis in p.axes)
     rows = tuple((*[getattr(cell, a) for a in swept], 1.0 + 1e-8 * i, "") for i, cell in enumerate(p.cells))
     table = sweep.Table(swept, ("drift",), ("drift",), rows, {"drift": "1"}, {"drift": "a metric"})
-    fig = sweep.figures(p, table)["drift"]
+    fig = sweep_figures.figures(p, table)["drift"]
     FigureCanvasAgg(fig).draw()
     value_axis = fig.axes[-1].yaxis if len(grid) == 2 else fig.axes[0].yaxis  # the colour bar, or the curve's y
     assert value_axis.get_offset_text().get_text() == ""

@@ -42,42 +42,20 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         if where:  # the cluster's size is known once connected (the staging folder goes with the refusal)
             sweep.check_cost(plan, workers, where)
         where = where or f"{workers} local process{'es' if workers > 1 else ''}"
-        kept = 0
-
-        def keep(result: pool.CellResult) -> None:
-            nonlocal kept
-            if result.files:
-                folder = run.path / sweep.cell_folder(result.index, len(plan.cells))
-                folder.mkdir(parents=True)
-                for relative, content in result.files.items():
-                    (folder / relative).parent.mkdir(parents=True, exist_ok=True)
-                    (folder / relative).write_bytes(content)
-                kept += 1
-
+        keep, kept = sweep.keeper(run.path, len(plan.cells))
         jobs = sweep.jobs(plan, args.keep_runs, plots=not args.no_plots)
         results = pool.run_cells(executor, jobs, SweepProgress(name), keep)
         wall = time.perf_counter() - started
-        table = sweep.table(plan, results)
-        sweep.write_csv(run.path / sweep.CSV_NAME, table)
-        files = [sweep.CSV_NAME, sweep.JSON_NAME]
-        if not args.no_plots:
-            from hexabot_sim import plots
-
-            plots.use_agg()
-            with output.package_style():
-                files += output.write_figures(sweep.figures(plan, table), run.path)
         executor_record = {"kind": "dask" if args.scheduler else "local processes", "workers": workers}
         executor_record |= {"scheduler": args.scheduler} if args.scheduler else {}
-        record = sweep.record(plan, table, results, executor_record, wall)
-        record |= {"files": files, "kept_runs": f"{sweep.CELLS_DIR}/ ({kept} folders)" if args.keep_runs else None}
-        record["versions"] = output.versions()
-        record["files"] = [*files, "report.html"]
-        output.write_json(run.path / sweep.JSON_NAME, record)
-        from hexabot_sim import params as params_info
-        from hexabot_sim import report
+        figures = None
+        if not args.no_plots:
+            from hexabot_sim import plots, sweep_figures
 
-        docs = {name: info.doc for name, (info, _) in params_info.infos(type(plan.base)).items()}
-        (run.path / "report.html").write_text(report.sweep_page(record, docs, run.path))
+            plots.use_agg()
+            figures = sweep_figures.figures
+        table, files = sweep.write_folder(run.path, plan, results, executor_record, wall, figures=figures,
+                                          kept=kept[0] if args.keep_runs else None)  # fmt: skip
     assert run.final is not None
     total = time.perf_counter() - started
     failed = [r for r in results if r.error]
@@ -86,7 +64,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if failed:
         first = failed[0]
         values = plan.cell_values(first.index)
-        label = ", ".join(f"{n} = {sweep._text(v)}" for n, v in zip(table.swept, values, strict=True))
+        label = ", ".join(f"{n} = {sweep.cell_text(v)}" for n, v in zip(table.swept, values, strict=True))
         print(
             f"{PROG}: warning: {len(failed)} of {len(results)} cells failed (rows with an 'error' in "
             f"{sweep.CSV_NAME}); the first, {label}: {first.error}",
@@ -100,7 +78,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     print(f"  cells ok: {len(results) - len(failed)}, failed: {len(failed)}")
     figures = [f for f in files if f.endswith(".png")]
     print(f"  files: {sweep.CSV_NAME}, {sweep.JSON_NAME}, {len(figures)} figures" + (
-        f", {sweep.CELLS_DIR}/ ({kept} run folders)" if args.keep_runs else ""))  # fmt: skip
+        f", {sweep.CELLS_DIR}/ ({kept[0]} run folders)" if args.keep_runs else ""))  # fmt: skip
     return 0
 
 

@@ -1,4 +1,3 @@
-import pytest
 
 """The command line through main([...]): run folders, exit codes, one-line errors, determinism."""
 
@@ -8,6 +7,7 @@ import sys
 
 import mujoco
 import numpy as np
+import pytest
 
 from hexabot_sim import gl
 from hexabot_sim.__main__ import main
