@@ -11,8 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
-from hexabot_sim.kinematics import hexabot_mjcf, robots
+from hexabot_sim.kinematics import robots
 from hexabot_sim.kinematics.mjcf import home_pose, to_mjcf
+from hexabot_sim.robots.hexabot import mjcf as hexabot_mjcf
 
 ROBOTS = ("rrp", "elbow", "stanford", "scara")
 MODELS_DIR = Path(__file__).resolve().parent.parent / "models"  # the source tree's models/ (ships in the wheel)
