@@ -9,6 +9,7 @@ import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 from hexabot_sim import params, registry, render
+from hexabot_sim.robots.leg import figures as leg_figures
 from hexabot_sim.robots.leg import step as leg
 from hexabot_sim.robots.leg import step_sweep as leg_sweep
 from hexabot_sim.robots.pendulum import pendulum
@@ -54,7 +55,7 @@ def test_foot_orientation_is_continuous_and_is_the_foot_rotation(leg_outside):
     step = np.arctan2(sin, (np.trace(rel, axis1=1, axis2=2) - 1) / 2)  # accurate for small angles too
     # The CSV's principal angles jump by pi here while the foot turns by milliradians: the case to fix.
     assert np.max(np.abs(np.diff(c["yaw"]))) > 3 and np.max(step) < 0.05
-    fig = leg.foot_orientation_figure(result)
+    fig = leg_figures.foot_orientation_figure(result)
     series = [ax.get_lines()[0].get_ydata() for ax in fig.axes[:3]]  # roll, pitch, yaw as plotted
     for values in series:
         assert np.all(np.abs(np.diff(values)) <= step * (1 + 1e-6) + 1e-12)

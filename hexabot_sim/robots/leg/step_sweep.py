@@ -14,6 +14,7 @@ from hexabot_sim import pool
 from hexabot_sim.errors import SimulationError
 from hexabot_sim.params import CSV_BYTES_PER_VALUE, apart, check_budget, param
 from hexabot_sim.result import Metric, Progress, ScenarioResult
+from hexabot_sim.robots.leg import figures as leg_figures
 from hexabot_sim.robots.leg import step as leg
 from hexabot_sim.simulate import step_count
 
@@ -253,4 +254,4 @@ def figures(result: ScenarioResult) -> dict[str, Figure]:
         f"{result.scenario}: {p.mode} mode, {p.profile} profile, {p.periods:g} periods per cell, start "
         f"{plots.point_mm((p.start_x, p.start_y, p.start_z))} in the hip frame"
     )
-    return {"sweep": fig, "workspace": leg.workspace_figure(result)}
+    return {"sweep": fig, "workspace": leg_figures.workspace_figure(result)}
