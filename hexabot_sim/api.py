@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from hexabot_sim import gl, output, registry
+from hexabot_sim import folders, gl, output, registry
 from hexabot_sim import params as params_mod
 from hexabot_sim import video as video_options
 from hexabot_sim.errors import OutputError, UsageError
@@ -303,7 +303,7 @@ class Result:
         backend, reason = None, output.NOT_REQUESTED
         if video:
             backend, reason = gl.video_backend()
-        with output.run_folder(out, self.scenario, force=force) as folder:
+        with folders.run_folder(out, self.scenario, force=force) as folder:
             self.write_folder(folder.path, plots=plots, video=settings, backend=backend, no_video_reason=reason,
                               video_progress=progress)  # fmt: skip
         assert folder.final is not None

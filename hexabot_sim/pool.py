@@ -109,7 +109,7 @@ def run_cell(job: CellJob) -> CellResult:
 
 
 # Folders a worker is writing for a cell (a kept run folder): removed if the worker is stopped. `hexabot-sim
-# clean` removes those of workers killed with SIGKILL (see output.CELL_PREFIX).
+# clean` removes those of workers killed with SIGKILL (see folders.CELL_PREFIX).
 CELL_FOLDERS: list[str] = []  # the kept-run folder this worker is writing, if any
 
 

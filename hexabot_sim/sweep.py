@@ -331,10 +331,10 @@ def kept_run(job: CellJob, result: Any, sim_seconds: float) -> dict[str, bytes]:
     """A cell's run folder (--keep-runs), as relative path -> content: written in the worker by output.write_run,
     the writer of `hexabot-sim run` (figures, no video), in a private temporary folder named <CELL_PREFIX><pid>-...,
     since the worker may be on another machine than the sweep folder."""
-    from hexabot_sim import output
+    from hexabot_sim import folders, output
 
     try:
-        with tempfile.TemporaryDirectory(prefix=f"{output.CELL_PREFIX}{os.getpid()}-") as tmp:
+        with tempfile.TemporaryDirectory(prefix=f"{folders.CELL_PREFIX}{os.getpid()}-") as tmp:
             pool.CELL_FOLDERS.append(tmp)  # removed by the worker's signal handler if the sweep stops it
             try:
                 folder = Path(tmp)

@@ -257,12 +257,12 @@ def test_a_stopped_worker_removes_the_cell_folder_it_was_writing(tmp_path):
 def test_clean_removes_cell_folders_of_workers_that_are_gone(tmp_path, monkeypatch, capsys):
     import tempfile
 
-    from hexabot_sim import output
+    from hexabot_sim import folders
 
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
-    gone = tmp_path / f"{output.CELL_PREFIX}{int(dead.stdout)}-abc_1234"  # a killed worker left it (tempfile: 8 of [a-z0-9_])
-    alive = tmp_path / f"{output.CELL_PREFIX}{os.getpid()}-def_5678"  # a worker still writing it
+    gone = tmp_path / f"{folders.CELL_PREFIX}{int(dead.stdout)}-abc_1234"  # a killed worker left it (tempfile: 8 of [a-z0-9_])
+    alive = tmp_path / f"{folders.CELL_PREFIX}{os.getpid()}-def_5678"  # a worker still writing it
     for folder in (gone, alive):
         folder.mkdir()
         (folder / "run.json").write_text("{}")

@@ -12,8 +12,8 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from hexabot_sim import folders, registry, video
 from hexabot_sim import params as params_mod
-from hexabot_sim import registry, video
 from hexabot_sim.cli.common import COMPLETED, DONE_SO_FAR, PROG, eprint
 from hexabot_sim.cli.progress import ProgressBar
 from hexabot_sim.errors import OutputError, UsageError, printable
@@ -107,14 +107,14 @@ def cmd_run(args: argparse.Namespace) -> int:
     settings = video.VideoSettings(*args.size, fps=args.fps, quality=args.quality) if args.video else None
     if settings is not None:
         backend, no_video_reason = gl.video_backend(announce=lambda notice: eprint(f"{PROG}: {notice}"))
-    from hexabot_sim import api, output
+    from hexabot_sim import api
 
     prepared = api.prepare(args.scenario, *layers)
     if settings is not None:
         video.check_cost(settings, getattr(prepared.params, "duration", None))
     if args.out is not None:
-        output.check_not_input(args.out, [args.config] if args.config is not None else [])
-        output.check_out(args.out, force=args.force)  # before the simulation, not after it
+        folders.check_not_input(args.out, [args.config] if args.config is not None else [])
+        folders.check_out(args.out, force=args.force)  # before the simulation, not after it
     with _mujoco_warnings_to_stderr():
         return _execute(args, prepared, settings, backend, no_video_reason)
 
@@ -134,11 +134,11 @@ def _execute(
     no_video_reason: str,
 ) -> int:
     """Runs the scenario into its run folder (the staging folder is made first), then prints the summary."""
-    from hexabot_sim import output
+    from hexabot_sim import folders
 
     name = prepared.entry.name
     started = time.perf_counter()
-    with output.run_folder(args.out, name, force=args.force) as run:
+    with folders.run_folder(args.out, name, force=args.force) as run:
         r = prepared.run(progress=ProgressBar(name))
         result = r.raw
         sim_seconds = time.perf_counter() - started
@@ -161,8 +161,8 @@ def _execute(
     timing += f", {total_seconds:.2f} s in all"
     if args.video and not made["written"]:
         eprint(f"{PROG}: no video: {no_video_reason}")
-    COMPLETED[:] = [f"the run folder {output.display_path(run.final)} is complete"]
-    print(f"{name}: {timing} -> {output.display_path(run.final)}")
+    COMPLETED[:] = [f"the run folder {folders.display_path(run.final)} is complete"]
+    print(f"{name}: {timing} -> {folders.display_path(run.final)}")
     for key in result.summary:
         metric = result.metrics[key]
         print(f"  {key:<26} {_format(metric.value, metric.unit)}")
@@ -171,18 +171,18 @@ def _execute(
 
 
 def cmd_clean(args: argparse.Namespace) -> int:
-    from hexabot_sim import output
+    from hexabot_sim import folders
 
     if not args.folder:
         raise UsageError("clean needs a folder name (default: runs); got an empty one")
     root = Path(args.folder)
     if not root.is_dir():
-        raise UsageError(f"{output.display_path(root)!r} is not a folder")
-    stale = output.stale_staging(root) + output.stale_cells()
+        raise UsageError(f"{folders.display_path(root)!r} is not a folder")
+    stale = folders.stale_staging(root) + folders.stale_cells()
     removed = 0
     for path in stale:
         if args.dry_run:
-            print(f"would remove {output.display_path(path)}")
+            print(f"would remove {folders.display_path(path)}")
             continue
         if not os.path.lexists(path):
             continue  # another clean (or its owner) removed it meanwhile
@@ -192,12 +192,12 @@ def cmd_clean(args: argparse.Namespace) -> int:
             else:
                 shutil.rmtree(path, onerror=_gone_is_fine)
         except OSError as e:
-            raise OutputError(f"could not remove {output.display_path(path)!r}: {e.strerror or e}") from None
+            raise OutputError(f"could not remove {folders.display_path(path)!r}: {e.strerror or e}") from None
         removed += 1
         done = f"{removed} stale folder{'s' if removed > 1 else ''} removed before it"
         DONE_SO_FAR[:] = [f"{done}, listed above"]
-        COMPLETED[:] = [f"{done}, the last {output.display_path(path)}"]  # if stdout fails, stderr names it
-        print(f"removed {output.display_path(path)}")
+        COMPLETED[:] = [f"{done}, the last {folders.display_path(path)}"]  # if stdout fails, stderr names it
+        print(f"removed {folders.display_path(path)}")
     if not stale:
         cells = tempfile.gettempdir()
         print(f"no staging folders left by interrupted runs in {args.folder} (nor sweep cells in {cells})")

@@ -16,7 +16,7 @@ from hexabot_sim.errors import UsageError
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from hexabot_sim import dask_cluster, output, pool, sweep
+    from hexabot_sim import dask_cluster, folders, pool, sweep
 
     sets = params_mod.parse_assignments(args.sets)
     config = params_mod.read_config(args.config) if args.config is not None else {}
@@ -26,8 +26,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     checking = SweepProgress(f"{name}: checking")  # speaks only if checking the cells takes seconds
     plan = sweep.plan(args.scenario, args.grid, config, sets, checking)  # every cell validated: nothing runs before
     if args.out is not None:
-        output.check_not_input(args.out, [args.config] if args.config is not None else [])
-        output.check_out(args.out, force=args.force)
+        folders.check_not_input(args.out, [args.config] if args.config is not None else [])
+        folders.check_out(args.out, force=args.force)
     if args.scheduler is not None:
         # Connects now: an unreachable scheduler writes nothing.
         executors: Any = dask_cluster.dask_executor(args.scheduler)
@@ -36,7 +36,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         sweep.check_cost(plan, workers, f"{workers} local process{'es' if workers > 1 else ''}")
         executors = contextlib.nullcontext((pool.local_executor(workers), workers))
     started = time.perf_counter()
-    with executors as (executor, workers), output.run_folder(args.out, name, force=args.force) as run:
+    with executors as (executor, workers), folders.run_folder(args.out, name, force=args.force) as run:
         threads = f"{workers} worker thread{'s' if workers != 1 else ''}"
         where = f"Dask scheduler {args.scheduler} ({threads})" if args.scheduler else None
         if where:  # the cluster's size is known once connected (the staging folder goes with the refusal)
@@ -60,7 +60,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     total = time.perf_counter() - started
     failed = [r for r in results if r.error]
     shape = " x ".join(f"{len(a.values)} {a.name}" for a in plan.axes)
-    COMPLETED[:] = [f"the sweep folder {output.display_path(run.final)} is complete"]
+    COMPLETED[:] = [f"the sweep folder {folders.display_path(run.final)} is complete"]
     if failed:
         first = failed[0]
         values = plan.cell_values(first.index)
@@ -73,7 +73,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     cell_time = sum(r.seconds for r in results)
     print(
         f"{name}: {len(results)} cells ({shape}) on {where} in {total:.2f} s "
-        f"(cells {cell_time:.2f} s in all) -> {output.display_path(run.final)}"
+        f"(cells {cell_time:.2f} s in all) -> {folders.display_path(run.final)}"
     )
     print(f"  cells ok: {len(results) - len(failed)}, failed: {len(failed)}")
     figures = [f for f in files if f.endswith(".png")]
@@ -83,15 +83,15 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
-    from hexabot_sim import compare, output
+    from hexabot_sim import compare, folders, output
 
     runs = compare.load_all(args.runs)  # refuses anything that is not a run folder, before writing
     if args.out is not None:
-        output.check_not_input(args.out, args.runs)
-        output.check_out(args.out, force=args.force)
+        folders.check_not_input(args.out, args.runs)
+        folders.check_out(args.out, force=args.force)
     table = compare.rows(runs)
     shared = compare.shared_columns([compare.header(r) for r in runs])
-    with output.run_folder(args.out, "compare", force=args.force) as run:
+    with folders.run_folder(args.out, "compare", force=args.force) as run:
         compare.write_csv(run.path / compare.CSV_NAME, runs, table)
         files = [compare.CSV_NAME, compare.JSON_NAME]
         if not args.no_plots:
@@ -102,9 +102,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
                 files += output.write_figures(compare.figures(runs, eprint), run.path)
         output.write_json(run.path / compare.JSON_NAME, compare.record(runs, table, shared, files))
     assert run.final is not None
-    COMPLETED[:] = [f"the compare folder {output.display_path(run.final)} is complete"]
+    COMPLETED[:] = [f"the compare folder {folders.display_path(run.final)} is complete"]
     print(compare.text(runs, table), end="")
     overlaid = f"{len(shared) - 1} shared columns overlaid" if len(shared) > 1 else "no shared columns to overlay"
-    print(f"compare: {len(runs)} runs, {overlaid} -> {output.display_path(run.final)}")
+    print(f"compare: {len(runs)} runs, {overlaid} -> {folders.display_path(run.final)}")
     print(f"  files: {', '.join(files)}")
     return 0

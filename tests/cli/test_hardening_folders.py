@@ -8,7 +8,7 @@ import sys
 import pytest
 from helpers import cli
 
-from hexabot_sim import output
+from hexabot_sim import folders
 
 FAST = ["--set", "duration=0.05", "--no-plots"]
 
@@ -22,18 +22,18 @@ def _dead_pid() -> int:
 def test_clean_removes_only_folders_named_exactly_as_a_run_names_them(tmp_path, capsys):
     dead = _dead_pid()
     ours = [
-        tmp_path / f"{output.STAGING_PREFIX}{dead}-0a1b2c3d{output.STAGING_SUFFIX}",
-        tmp_path / "sub" / f"{output.STAGING_PREFIX}{dead}-deadbeef{output.STAGING_SUFFIX}",
-        tmp_path / f"{output._OLD_PREFIX}{dead}-00ff00ff",
+        tmp_path / f"{folders.STAGING_PREFIX}{dead}-0a1b2c3d{folders.STAGING_SUFFIX}",
+        tmp_path / "sub" / f"{folders.STAGING_PREFIX}{dead}-deadbeef{folders.STAGING_SUFFIX}",
+        tmp_path / f"{folders._OLD_PREFIX}{dead}-00ff00ff",
     ]
     users = [
-        tmp_path / f"{output.STAGING_PREFIX}backup",  # merely starts like ours: a user's folder
-        tmp_path / "sub" / f"{output.STAGING_PREFIX}old",
-        tmp_path / f"{output.STAGING_PREFIX}{dead}-0a1b2c3d",  # no suffix
-        tmp_path / f"{output.STAGING_PREFIX}{dead}-0a1b2c3d{output.STAGING_SUFFIX}.keep",
-        tmp_path / f"{output._OLD_PREFIX}{dead}-notes",
-        tmp_path / f"{output._OLD_PREFIX}99999999999-00ff00ff",  # no system gives out such a pid
-        tmp_path / f"{output.STAGING_PREFIX}{os.getpid()}-11223344{output.STAGING_SUFFIX}",  # alive
+        tmp_path / f"{folders.STAGING_PREFIX}backup",  # merely starts like ours: a user's folder
+        tmp_path / "sub" / f"{folders.STAGING_PREFIX}old",
+        tmp_path / f"{folders.STAGING_PREFIX}{dead}-0a1b2c3d",  # no suffix
+        tmp_path / f"{folders.STAGING_PREFIX}{dead}-0a1b2c3d{folders.STAGING_SUFFIX}.keep",
+        tmp_path / f"{folders._OLD_PREFIX}{dead}-notes",
+        tmp_path / f"{folders._OLD_PREFIX}99999999999-00ff00ff",  # no system gives out such a pid
+        tmp_path / f"{folders.STAGING_PREFIX}{os.getpid()}-11223344{folders.STAGING_SUFFIX}",  # alive
     ]
     for folder in ours + users:
         folder.mkdir(parents=True)
@@ -50,7 +50,7 @@ def test_clean_never_follows_a_link_named_like_ours(tmp_path, capsys):
     target = tmp_path / "precious"
     target.mkdir()
     (target / "data.csv").write_text("1,2")
-    link = tmp_path / f"{output.STAGING_PREFIX}{dead}-0a1b2c3d{output.STAGING_SUFFIX}"
+    link = tmp_path / f"{folders.STAGING_PREFIX}{dead}-0a1b2c3d{folders.STAGING_SUFFIX}"
     link.symlink_to(target)
     code, _, _ = cli(capsys, "clean", str(tmp_path))
     assert code == 0 and link.is_symlink() and (target / "data.csv").exists()
@@ -58,14 +58,14 @@ def test_clean_never_follows_a_link_named_like_ours(tmp_path, capsys):
 
 def test_clean_of_an_empty_name_is_refused(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
-    (tmp_path / f"{output.STAGING_PREFIX}{_dead_pid()}-0a1b2c3d{output.STAGING_SUFFIX}").mkdir()
+    (tmp_path / f"{folders.STAGING_PREFIX}{_dead_pid()}-0a1b2c3d{folders.STAGING_SUFFIX}").mkdir()
     code, _, err = cli(capsys, "clean", "")
     assert code == 2 and "empty" in err and len(err.strip().splitlines()) == 1
     assert len(list(tmp_path.iterdir())) == 1
 
 
 def test_clean_that_cannot_remove_says_which_folder(tmp_path, monkeypatch, capsys):
-    stale = tmp_path / f"{output.STAGING_PREFIX}{_dead_pid()}-0a1b2c3d{output.STAGING_SUFFIX}"
+    stale = tmp_path / f"{folders.STAGING_PREFIX}{_dead_pid()}-0a1b2c3d{folders.STAGING_SUFFIX}"
     stale.mkdir()
 
     def denied(path, *args, **kwargs):
@@ -158,7 +158,7 @@ def test_a_parent_folder_renamed_mid_run_is_named(tmp_path, monkeypatch, capsys)
 def test_clean_stopped_after_removing_says_what_it_removed(tmp_path, monkeypatch, capsys):
     dead = _dead_pid()
     for suffix in ("0a1b2c3d", "0a1b2c3e"):
-        (tmp_path / f"{output.STAGING_PREFIX}{dead}-{suffix}{output.STAGING_SUFFIX}").mkdir()
+        (tmp_path / f"{folders.STAGING_PREFIX}{dead}-{suffix}{folders.STAGING_SUFFIX}").mkdir()
     real_rmtree, calls = shutil.rmtree, []
 
     def rmtree_then_ctrl_c(path, *args, **kwargs):
@@ -195,7 +195,7 @@ def test_clean_names_a_folder_that_is_not_utf8_readably(tmp_path, capsys):
 def test_clean_with_stdout_closed_says_on_stderr_what_it_removed(tmp_path):
     dead = _dead_pid()
     for suffix in ("0a1b2c3d", "0a1b2c3e"):
-        (tmp_path / f"{output.STAGING_PREFIX}{dead}-{suffix}{output.STAGING_SUFFIX}").mkdir()
+        (tmp_path / f"{folders.STAGING_PREFIX}{dead}-{suffix}{folders.STAGING_SUFFIX}").mkdir()
     proc = subprocess.run(f"{sys.executable} -m hexabot_sim clean . >&-", shell=True, cwd=tmp_path,
                           capture_output=True, text=True, timeout=120)  # fmt: skip
     assert proc.returncode == 1 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
@@ -206,7 +206,7 @@ def test_two_cleans_at_once_are_no_error(tmp_path):
     # the second clean found the first's folders gone: "could not remove ...: No such file or directory", exit 1
     dead = _dead_pid()
     for k in range(30):
-        folder = tmp_path / f"{output.STAGING_PREFIX}{dead}-{k:08x}{output.STAGING_SUFFIX}"
+        folder = tmp_path / f"{folders.STAGING_PREFIX}{dead}-{k:08x}{folders.STAGING_SUFFIX}"
         for j in range(100):
             (folder / f"s{j}").mkdir(parents=True)
             (folder / f"s{j}" / "f").touch()

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 from helpers import cli
 
-from hexabot_sim import output, params, registry
+from hexabot_sim import folders, output, params, registry
 from hexabot_sim.__main__ import main
 from hexabot_sim.errors import OutputError, UsageError
 from hexabot_sim.robots.pendulum.pendulum import PendulumParams
@@ -111,9 +111,9 @@ def test_file_created_in_out_during_the_run_is_never_deleted(tmp_path, monkeypat
 def test_two_runs_publishing_to_the_same_out_never_replace_each_other(tmp_path):
     out = tmp_path / "same"
     with pytest.raises(OutputError, match="filled by someone else"):
-        with output.run_folder(out) as first:
+        with folders.run_folder(out) as first:
             (first.path / "run.json").write_text("first")
-            with output.run_folder(out) as second:
+            with folders.run_folder(out) as second:
                 (second.path / "run.json").write_text("second")
     assert (out / "run.json").read_text() == "second"  # the one that finished first keeps its folder
     assert staging_left(tmp_path) == []
@@ -121,7 +121,7 @@ def test_two_runs_publishing_to_the_same_out_never_replace_each_other(tmp_path):
 
 def test_runs_in_the_same_second_get_their_own_folders(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(output, "default_out", lambda scenario, root=Path("runs"): root / f"{scenario}-STAMP")
+    monkeypatch.setattr(folders, "default_out", lambda scenario, root=Path("runs"): root / f"{scenario}-STAMP")
     for _ in range(3):
         code, out, _ = cli(capsys, "run", "pendulum", *FAST)
         assert code == 0
@@ -199,9 +199,9 @@ def test_existing_parents_are_kept_on_failure(tmp_path, monkeypatch, capsys):
 def test_check_out_names_what_is_wrong(tmp_path):
     (tmp_path / "file").write_text("x")
     with pytest.raises(UsageError, match="not a folder"):
-        output.check_out(tmp_path / "file")
+        folders.check_out(tmp_path / "file")
     with pytest.raises(UsageError, match="not a folder"):
-        output.check_out(tmp_path / "file" / "run")
+        folders.check_out(tmp_path / "file" / "run")
 
 
 # --- signals ------------------------------------------------------------------------------------
@@ -475,7 +475,7 @@ def test_force_never_replaces_home_or_its_parents(tmp_path, monkeypatch, capsys)
 
 
 def test_out_inside_another_runs_staging_folder_is_refused(tmp_path, capsys):
-    staging = tmp_path / f"{output.STAGING_PREFIX}123-abcd{output.STAGING_SUFFIX}"
+    staging = tmp_path / f"{folders.STAGING_PREFIX}123-abcd{folders.STAGING_SUFFIX}"
     staging.mkdir()
     for target in (staging, staging / "b"):
         code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", str(target), "--force")
@@ -539,7 +539,7 @@ def test_signals_are_held_during_publish_even_with_other_threads():
     previous = signal.signal(signal.SIGHUP, _raise_interrupted)
     try:
         with pytest.raises(Interrupted):
-            with output.signals_held():
+            with folders.signals_held():
                 os.kill(os.getpid(), signal.SIGHUP)
                 time.sleep(0.05)
                 seen.append("block done")
@@ -558,8 +558,8 @@ def test_a_stop_request_during_the_publish_does_not_deny_the_published_run(tmp_p
     out = tmp_path / "out"
     code = (
         "import os, signal, sys\n"
-        "from hexabot_sim import output\n"
-        "real = output._publish\n"
+        "from hexabot_sim import folders, output\n"
+        "real = folders._publish\n"
         "def publish(*args, **kwargs):\n"
         f"    if {when == 'before'}:\n"
         "        os.kill(os.getpid(), signal.SIGTERM)\n"
@@ -567,7 +567,7 @@ def test_a_stop_request_during_the_publish_does_not_deny_the_published_run(tmp_p
         f"    if {when == 'after'}:\n"
         "        os.kill(os.getpid(), signal.SIGTERM)\n"
         "    return final\n"
-        "output._publish = publish\n"
+        "folders._publish = publish\n"
         "from hexabot_sim.__main__ import console\n"
         f"sys.argv = ['hexabot-sim', 'run', 'pendulum', '--set', 'duration=0.5', '--no-plots', '--out', {str(out)!r}]\n"
         "console()\n"
@@ -629,8 +629,8 @@ def test_a_mount_point_is_refused_before_the_run(tmp_path, monkeypatch):
     real = os.path.ismount
     monkeypatch.setattr(os.path, "ismount", lambda p: Path(p) == mounted or real(p))
     with pytest.raises(UsageError, match="is a mount point; give a new folder inside it"):
-        output.check_out(mounted)
-    output.check_out(mounted / "run")  # inside it: fine
+        folders.check_out(mounted)
+    folders.check_out(mounted / "run")  # inside it: fine
 
 
 def test_publishers_in_one_folder_take_turns(tmp_path):
@@ -642,7 +642,7 @@ def test_publishers_in_one_folder_take_turns(tmp_path):
     times = {}
 
     def publish(name, fd, hold):
-        with output._publishing(fd):
+        with folders._publishing(fd):
             times[name] = time.monotonic()
             time.sleep(hold)
 
@@ -671,7 +671,7 @@ def test_an_encoder_failure_on_a_full_disk_fails_the_run(tmp_path, monkeypatch, 
         raise OSError("[Errno 32] Broken pipe\n\nFFMPEG COMMAND:\nffmpeg -y ...\n\nFFMPEG STDERR OUTPUT:\n")
 
     monkeypatch.setattr(render, "render_video", broken)
-    monkeypatch.setattr(output, "_disk_full", lambda folder: full)
+    monkeypatch.setattr(output, "disk_full", lambda folder: full)  # what write_run calls
     result = registry.get("pendulum").runner("pendulum", params.resolve(PendulumParams, {}, {"duration": 0.2}))
     folder = tmp_path / "r"
     folder.mkdir()
