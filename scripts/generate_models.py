@@ -1,4 +1,4 @@
-"""Writes models/{rrp,elbow,stanford,scara,hexabot}.xml and their scenes from the DH tables (kinematics.robots, .leg).
+"""Writes models/{rrp,elbow,stanford,scara,hexabot,quadbot}.xml and their scenes from the DH tables and layouts.
 
 Usage: python scripts/generate_models.py [--check]   (--check: exit 1 if a file differs, write nothing)
 """
@@ -14,6 +14,7 @@ import numpy as np
 from hexabot_sim.kinematics import robots
 from hexabot_sim.kinematics.mjcf import home_pose, to_mjcf
 from hexabot_sim.robots.hexabot import mjcf as hexabot_mjcf
+from hexabot_sim.robots.quadbot import model as quadbot_model
 
 ROBOTS = ("rrp", "elbow", "stanford", "scara")
 MODELS_DIR = Path(__file__).resolve().parent.parent / "models"  # the source tree's models/ (ships in the wheel)
@@ -90,6 +91,8 @@ def generate() -> dict[str, str]:
         files[f"{name}_scene.xml"] = scene_xml(name)
     files["hexabot.xml"] = hexabot_mjcf.robot_xml()
     files["hexabot_scene.xml"] = hexabot_mjcf.scene_xml()
+    files["quadbot.xml"] = quadbot_model.robot_xml()
+    files["quadbot_scene.xml"] = quadbot_model.scene_xml()
     return files
 
 

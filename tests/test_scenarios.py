@@ -20,9 +20,11 @@ STEMS: dict[str, tuple[str, ...]] = {
     "velocity": ("velocity",),
     "walk": ("path", "gait_diagram", "velocity", "body", "slip"),
 }
-# Scenarios with more figures than their module's smoke run: the terrain presets draw the ground too.
+# Scenarios with more figures than their module's smoke run: the terrain presets (any robot's) draw the ground too.
 EXTRA_STEMS: dict[str, tuple[str, ...]] = {
-    name: ("terrain",) for name in ("hexabot-slope", "hexabot-rough", "hexabot-kerb")
+    name: ("terrain",)
+    for name, scenario in registry.SCENARIOS.items()
+    if any(scenario.defaults.get(key) for key in ("slope_deg", "roughness", "kerb_height"))
 }
 
 
