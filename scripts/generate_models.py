@@ -13,7 +13,7 @@ import numpy as np
 
 from hexabot_sim.kinematics import robots
 from hexabot_sim.kinematics.mjcf import home_pose, to_mjcf
-from hexabot_sim.robots.hexabot import mjcf as hexabot_mjcf
+from hexabot_sim.robots.hexabot import model as hexabot_mjcf
 from hexabot_sim.robots.quadbot import model as quadbot_model
 
 ROBOTS = ("rrp", "elbow", "stanford", "scara")

@@ -17,7 +17,7 @@ from hexabot_sim.control.gait import GAITS, Command, Gait, GaitPlanner, gaits_fo
 from hexabot_sim.control.resolved_rate import ResolvedRateGains
 from hexabot_sim.control.walker import GroundController, GroundSettings, WalkingController, WalkSettings
 from hexabot_sim.kinematics import legged, legged_mjcf
-from hexabot_sim.robots.hexabot import layout as hx
+from hexabot_sim.robots.hexabot import model as hx
 
 QUAD = legged.Layout(*legged.mirrored(("f", "r"), ((0.12, 0.06), (-0.12, 0.06)), (45.0, 135.0)))
 

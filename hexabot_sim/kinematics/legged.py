@@ -1,6 +1,6 @@
 """A legged robot built of N copies of the 3-DOF DH leg: where each leg sits on the body, body-frame FK/IK of all feet.
 
-Shared by every legged robot (the hexabot's layout is robots/hexabot/layout.py). Nothing here knows how many
+Shared by every legged robot (the hexabot's layout is robots/hexabot/model.py). Nothing here knows how many
 legs there are: it comes from the layout (`len(layout.legs)`), and every array is (n_legs, ...).
 """
 

@@ -3,7 +3,7 @@
 Any number of the 3-DOF legs (kinematics/legged.py): a plate body with a free joint, per leg the
 coxa/femur/tibia chain with its sphere foot, a position and a velocity servo per joint, an IMU and a
 touch sensor per foot. The hexabot's models/hexabot.xml is robot_xml with its layout and comment
-(robots/hexabot/mjcf.py).
+(robots/hexabot/model.py).
 """
 
 from __future__ import annotations

@@ -17,7 +17,7 @@ import pytest
 
 from hexabot_sim.control import kernels
 from hexabot_sim.control.resolved_rate import ResolvedRateGains, step_constants
-from hexabot_sim.robots.hexabot import layout as hx
+from hexabot_sim.robots.hexabot import model as hx
 
 
 @pytest.mark.parametrize("acceleration", [200.0, math.inf])

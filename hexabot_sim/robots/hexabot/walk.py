@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 from typing import ClassVar
 
-from hexabot_sim.robots.hexabot import layout as hx
+from hexabot_sim.robots.hexabot import model as hx
 from hexabot_sim.walking.figures import figures
 from hexabot_sim.walking.parameters import WalkingRobot, WalkParams
 from hexabot_sim.walking.walk import live, run

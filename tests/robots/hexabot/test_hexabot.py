@@ -13,8 +13,8 @@ from hexabot_sim.__main__ import main
 from hexabot_sim.control.gait import GAITS, Command, GaitPlanner
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import leg as leg_kin
-from hexabot_sim.robots.hexabot import layout as hx
-from hexabot_sim.robots.hexabot import mjcf as hexabot_mjcf
+from hexabot_sim.robots.hexabot import model as hexabot_mjcf
+from hexabot_sim.robots.hexabot import model as hx
 from hexabot_sim.robots.hexabot.walk import HexabotParams
 from hexabot_sim.walking import parameters as hexabot_parameters
 from hexabot_sim.walking import scene as hexabot_scene

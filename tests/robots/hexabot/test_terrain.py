@@ -10,7 +10,7 @@ import pytest
 from helpers import walk, walk_params
 
 from hexabot_sim.errors import UsageError
-from hexabot_sim.robots.hexabot import layout as hx
+from hexabot_sim.robots.hexabot import model as hx
 from hexabot_sim.robots.hexabot import walk as scenario
 from hexabot_sim.terrain import Ground, RoughPatch
 from hexabot_sim.terrain.ground import SQUARE as TERRAIN_SQUARE
