@@ -49,7 +49,8 @@ class Kerb:
                 f"{limits.clearance * 1000:g} mm below it (at most {highest_mm} mm); {limits.underside_hint}"
             )
         if self.height > limits.climbable:
-            kerb_mm, largest_mm = apart(self.height * 1000, limits.climbable * 1000, "down")
+            # Rough ground may take all the walk can climb: then none is (it said "the largest climbable, -28 mm").
+            kerb_mm, largest_mm = apart(self.height * 1000, max(limits.climbable, 0.0) * 1000, "down")
             return (
                 f"a {kerb_mm} mm kerb is above the largest climbable, {largest_mm} mm ({limits.climbable_why}); "
                 f"{limits.climbable_hint}"

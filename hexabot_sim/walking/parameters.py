@@ -355,7 +355,7 @@ def terrain_problem(p: WalkParams) -> str:
             f"the foot lifts step_height = {p.step_height:g} m, less a foot radius of clearance; the legs reach "
             f"{(p.stand_height - depth_range(p)[0]) * 1000:.0f} mm above the stance"
         ) if ground.obstacles else "",
-        climbable_hint="raise 'step_height'",
+        climbable_hint="raise 'step_height'" + (" or lower 'roughness'" if p.roughness else ""),
         underside=underside,
         underside_why=f"at stand_height {p.stand_height:g} m",
         underside_hint="raise 'stand_height'",

@@ -185,6 +185,16 @@ def test_largest_climbable_kerb_is_predicted_and_ten_percent_more_refused():
         resolve(kerb_height=1.1 * largest, step_height=0.04)
 
 
+def test_rough_ground_taking_all_the_climb_refuses_a_kerb_without_a_negative_limit():
+    """1 cm kerb on 5 cm bumps with the feet lifted 3 cm: nothing is climbable; it said "the largest climbable,
+    -28 mm ...; raise 'step_height'" (a negative limit, and lowering the roughness is the other way)."""
+    with pytest.raises(UsageError) as refused:
+        resolve(roughness=0.05, kerb_height=0.01)
+    text = str(refused.value)
+    assert "largest climbable, 0 mm" in text and "-" not in text.split("largest climbable")[1].split("(")[0]
+    assert text.endswith("raise 'step_height' or lower 'roughness'") and "\n" not in text
+
+
 # --- walking on it --------------------------------------------------------------------------------------
 
 
