@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from helpers import walk, walk_params
 
+from hexabot_sim import registry
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import hexabot as hx
 from hexabot_sim.robots.hexabot import walk as scenario
@@ -193,6 +194,40 @@ def test_rough_ground_taking_all_the_climb_refuses_a_kerb_without_a_negative_lim
     text = str(refused.value)
     assert "largest climbable, 0 mm" in text and "-" not in text.split("largest climbable")[1].split("(")[0]
     assert text.endswith("raise 'step_height' or lower 'roughness'") and "\n" not in text
+
+
+@pytest.mark.parametrize(
+    "overrides, fragment",
+    [
+        # 5 cm bumps and the lowest stance: the plate started 31 mm inside a bump and was thrown out (fell).
+        ({"stand_height": 0.02, "roughness": 0.05, "seed": 6, "touchdown": "sensed"}, "rough ground (roughness 50 mm"),
+        # A level body on 9 deg at a 3 cm stance: the plate's uphill edge started in the slope.
+        ({"stand_height": 0.03, "slope_deg": 9.0, "level_body": "on"}, "the slope rises under the level body"),
+    ],
+)
+def test_a_body_that_would_start_in_the_ground_is_refused(overrides, fragment):
+    with pytest.raises(UsageError) as refused:
+        resolve(**overrides)
+    text = str(refused.value)
+    assert text.startswith("the body would start in the ground: ") and fragment in text, text
+    assert "raise 'stand_height'" in text and "\n" not in text
+
+
+def test_a_level_start_the_legs_cannot_reach_names_what_to_change():
+    """It said only "foot target (...) m is out of reach: ..." (from the scene, after the check)."""
+    with pytest.raises(UsageError) as refused:
+        resolve(stand_height=0.09, roughness=0.05, seed=3, level_body="on", slope_deg=20.0, friction=2.0)
+    text = str(refused.value)
+    assert text.startswith("the legs cannot stand level on this ground at the start (foot target")
+    assert text.endswith("or set touchdown=planned and level_body=off") and "\n" not in text
+
+
+def test_the_start_pose_is_above_the_ground_for_the_scenarios_and_their_smoke_runs():
+    for name in ("hexabot-slope", "hexabot-rough", "hexabot-kerb"):
+        entry = registry.get(name)
+        for layer in ({}, entry.smoke):
+            p = resolve(**{**entry.defaults, **layer})
+            assert hexabot_parameters.start_problem(p, hexabot_parameters.terrain(p)) == ""
 
 
 # --- walking on it --------------------------------------------------------------------------------------
