@@ -21,18 +21,23 @@ class Kerb:
     height: float
     distance: float = 0.5
     along: tuple[float, float] = (1.0, 0.0)
+    length: float = KERB_LENGTH  # [m] of the pavement beyond the edge: the walk's reach past it, at least KERB_LENGTH
+    width: float = KERB_WIDTH  # [m] across the path, centred on the start
 
     def surface(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Height [m] of the kerb's top over ground-frame points, -inf where it does not lie."""
-        return np.where(u * self.along[0] + v * self.along[1] >= self.distance, self.height, -np.inf)
+        ahead = u * self.along[0] + v * self.along[1]
+        across = -u * self.along[1] + v * self.along[0]
+        on = (ahead >= self.distance) & (ahead <= self.distance + self.length) & (np.abs(across) <= self.width / 2)
+        return np.where(on, self.height, -np.inf)
 
     def mjcf(self) -> tuple[list[str], list[str]]:
         """(asset elements, ground elements) as MJCF text, in the ground frame."""
         ax, ay = self.along
-        centre = self.distance + KERB_LENGTH / 2
+        centre = self.distance + self.length / 2
         yaw = math.atan2(ay, ax)
         geom = (
-            f'<geom name="kerb" type="box" size="{KERB_LENGTH / 2!r} {KERB_WIDTH / 2!r} {self.height / 2!r}" '
+            f'<geom name="kerb" type="box" size="{self.length / 2!r} {self.width / 2!r} {self.height / 2!r}" '
             f'pos="{centre * ax!r} {centre * ay!r} {self.height / 2!r}" '
             f'quat="{math.cos(yaw / 2)!r} 0 0 {math.sin(yaw / 2)!r}" material="terrain" '
             'contype="0" conaffinity="2" group="0"/>'

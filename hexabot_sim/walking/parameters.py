@@ -17,6 +17,7 @@ from hexabot_sim.terrain import Ground, Kerb, Limits, RoughPatch, Slope
 from hexabot_sim.terrain.heightfield import CELL as HFIELD_CELL
 from hexabot_sim.terrain.heightfield import MARGIN as HFIELD_MARGIN
 from hexabot_sim.terrain.heightfield import MAX_POINTS as HFIELD_MAX_POINTS
+from hexabot_sim.terrain.kerb import KERB_LENGTH, KERB_WIDTH
 
 INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")
 
@@ -301,10 +302,14 @@ def terrain(p: WalkParams) -> Ground:
         extent = tuple(v / math.cos(math.radians(p.slope_deg)) for v in extent)
     extent = tuple(round(v / HFIELD_CELL) * HFIELD_CELL for v in extent)
     along_xy = (float(along[0]), float(along[1]))
+    # The kerb's pavement runs on beyond the walk: 20 m, or as far as this walk could go (a 0.2 m/s walk of 200 s
+    # stepped down off its end at 20.5 m, where the terrain's heights still had the kerb).
+    reach = speed * p.duration / math.cos(math.radians(p.slope_deg)) + HFIELD_MARGIN
+    kerb_length, kerb_width = max(KERB_LENGTH, reach - p.kerb_distance), max(KERB_WIDTH, 2 * reach)
     return Ground(
         slope=Slope(p.slope_deg, (float(uphill[0]), float(uphill[1])), p.slope_heading),
         rough=RoughPatch(p.roughness, p.seed, extent) if p.roughness else None,
-        obstacles=(Kerb(p.kerb_height, p.kerb_distance, along_xy),) if p.kerb_height else (),
+        obstacles=(Kerb(p.kerb_height, p.kerb_distance, along_xy, kerb_length, kerb_width),) if p.kerb_height else (),
     )
 
 

@@ -107,6 +107,22 @@ def test_ground_height_agrees_with_mujoco_ray_casting(overrides):
     assert worst < 1e-6  # the heightfield is stored in float32
 
 
+def test_the_kerb_runs_on_beyond_a_long_walk_in_mujoco_and_in_the_heights():
+    """A 0.2 m/s walk of 200 s goes 40 m: the kerb's 20 m pavement ended under it at 20.5 m (a step down), where
+    the heights the metrics use still had the kerb. Now the pavement covers the walk, and the heights end with it."""
+    terrain_only = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)
+    geom = np.zeros(1, dtype=np.int32)
+    for overrides, x, top in (({"vx": 0.2, "duration": 200.0}, 40.0, 0.02), ({}, 21.0, 0.0)):
+        p = resolve(kerb_height=0.02, **overrides)
+        model, data = compiled(p)
+        distance = mujoco.mj_ray(
+            model, data, np.array([x, 0.0, 1.0]), np.array([0.0, 0.0, -1.0]), terrain_only, 1, -1, geom
+        )
+        on_kerb = distance >= 0 and mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, int(geom[0])) == "kerb"
+        assert on_kerb == (top > 0) and (not on_kerb or 1.0 - distance == pytest.approx(top, abs=1e-9))
+        assert float(hexabot_parameters.terrain(p).height(x, 0.0)) == pytest.approx(top, abs=1e-9)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize(
     ("overrides", "top"), [({"roughness": 0.01}, 0.0), ({"kerb_height": 0.03, "step_height": 0.04}, 0.03)]
