@@ -31,6 +31,27 @@ class Kerb:
         on = (ahead >= self.distance) & (ahead <= self.distance + self.length) & (np.abs(across) <= self.width / 2)
         return np.where(on, self.height, -np.inf)
 
+    def highest_on_line(self, origin: np.ndarray, direction: np.ndarray) -> np.ndarray:
+        """The largest t [m] with origin + t * direction inside the kerb's box (ground frame), -inf where the line
+        misses it: `origin` (..., 3) points, `direction` (3,) the world's vertical in the ground frame."""
+        ax, ay = self.along
+        rows = (  # (ground-frame coordinate as a linear function of t, its lower and upper bound)
+            ((ax, ay, 0.0), self.distance, self.distance + self.length),
+            ((-ay, ax, 0.0), -self.width / 2, self.width / 2),
+            ((0.0, 0.0, 1.0), 0.0, self.height),
+        )
+        lo = np.full(origin.shape[:-1], -np.inf)
+        hi = np.full(origin.shape[:-1], np.inf)
+        for axis, low, high in rows:
+            start, rate = origin @ np.array(axis), float(np.dot(direction, axis))
+            if rate == 0:
+                outside = (start < low) | (start > high)
+                hi = np.where(outside, -np.inf, hi)
+                continue
+            a, b = (low - start) / rate, (high - start) / rate
+            lo, hi = np.maximum(lo, np.minimum(a, b)), np.minimum(hi, np.maximum(a, b))
+        return np.where(lo <= hi, hi, -np.inf)
+
     def mjcf(self) -> tuple[list[str], list[str]]:
         """(asset elements, ground elements) as MJCF text, in the ground frame."""
         ax, ay = self.along
