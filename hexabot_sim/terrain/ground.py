@@ -41,6 +41,13 @@ class Ground:
     rough: RoughPatch | None = None
     obstacles: tuple[Kerb, ...] = ()
 
+    def __post_init__(self) -> None:
+        # An obstacle on rough ground stands on its valleys: a kerb's box from z = 0 up left a gap under its
+        # edge wherever the bumps dipped below it (a foot could slip under the kerb's lip).
+        if self.rough is not None:
+            depth = self.rough.roughness + FLOOR_BELOW
+            object.__setattr__(self, "obstacles", tuple(dataclasses.replace(o, depth=depth) for o in self.obstacles))
+
     @property
     def flat(self) -> bool:
         return not self.slope.tilted and self.rough is None and not self.obstacles

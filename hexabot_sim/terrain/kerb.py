@@ -23,6 +23,7 @@ class Kerb:
     along: tuple[float, float] = (1.0, 0.0)
     length: float = KERB_LENGTH  # [m] of the pavement beyond the edge: the walk's reach past it, at least KERB_LENGTH
     width: float = KERB_WIDTH  # [m] across the path, centred on the start
+    depth: float = 0.0  # [m] the box reaches this far below the ground's level: down to a rough patch's valleys
 
     def surface(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Height [m] of the kerb's top over ground-frame points, -inf where it does not lie."""
@@ -38,7 +39,7 @@ class Kerb:
         rows = (  # (ground-frame coordinate as a linear function of t, its lower and upper bound)
             ((ax, ay, 0.0), self.distance, self.distance + self.length),
             ((-ay, ax, 0.0), -self.width / 2, self.width / 2),
-            ((0.0, 0.0, 1.0), 0.0, self.height),
+            ((0.0, 0.0, 1.0), -self.depth, self.height),
         )
         lo = np.full(origin.shape[:-1], -np.inf)
         hi = np.full(origin.shape[:-1], np.inf)
@@ -57,9 +58,10 @@ class Kerb:
         ax, ay = self.along
         centre = self.distance + self.length / 2
         yaw = math.atan2(ay, ax)
+        half = (self.height + self.depth) / 2
         geom = (
-            f'<geom name="kerb" type="box" size="{self.length / 2!r} {self.width / 2!r} {self.height / 2!r}" '
-            f'pos="{centre * ax!r} {centre * ay!r} {self.height / 2!r}" '
+            f'<geom name="kerb" type="box" size="{self.length / 2!r} {self.width / 2!r} {half!r}" '
+            f'pos="{centre * ax!r} {centre * ay!r} {(self.height - self.depth) / 2!r}" '
             f'quat="{math.cos(yaw / 2)!r} 0 0 {math.sin(yaw / 2)!r}" material="terrain" '
             'contype="0" conaffinity="2" group="0"/>'
         )

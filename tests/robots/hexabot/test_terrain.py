@@ -128,6 +128,16 @@ def test_ground_height_at_a_kerbs_edge_on_a_downhill_slope_is_the_one_mujoco_col
     assert worst < 1e-6
 
 
+def test_a_kerb_on_rough_ground_reaches_down_to_its_valleys():
+    """The kerb's box started at the ground's level: where the bumps dipped below it, a gap (up to the
+    roughness) opened under the kerb's edge for a foot to slip into."""
+    p = resolve(roughness=0.01, kerb_height=0.01, step_height=0.05)
+    model, _ = compiled(p)
+    kerb, field = model.geom("kerb"), model.geom("terrain")
+    assert kerb.pos[2] - kerb.size[2] < field.pos[2]  # the box's bottom below the heightfield's lowest valley
+    assert kerb.pos[2] + kerb.size[2] == pytest.approx(0.01)  # its top where it was
+
+
 def test_the_kerb_runs_on_beyond_a_long_walk_in_mujoco_and_in_the_heights():
     """A 0.2 m/s walk of 200 s goes 40 m: the kerb's 20 m pavement ended under it at 20.5 m (a step down), where
     the heights the metrics use still had the kerb. Now the pavement covers the walk, and the heights end with it."""
