@@ -348,6 +348,13 @@ def largest_climbable_kerb(p: WalkParams) -> float:
     return min(p.step_height - p.ROBOT.layout.foot_radius, p.stand_height - depth_range(p)[0])
 
 
+def _climb_hint(p: WalkParams) -> str:
+    """What raises the largest climbable kerb: the lift while the swing limits it, else the legs' reach above the
+    stance (a deeper stance: it said "raise 'step_height'" where that could not help)."""
+    swing = p.step_height - p.ROBOT.layout.foot_radius
+    return "raise 'step_height'" if swing <= p.stand_height - depth_range(p)[0] else "raise 'stand_height'"
+
+
 def terrain_problem(p: WalkParams) -> str:
     """'' if the ground can be walked as asked, else a one-line reason (the terrain types' own refusals, with
     what this robot can take, and a level body's reach on a slope)."""
@@ -361,7 +368,7 @@ def terrain_problem(p: WalkParams) -> str:
             f"the foot lifts step_height = {p.step_height:g} m, less a foot radius of clearance; the legs reach "
             f"{(p.stand_height - depth_range(p)[0]) * 1000:.0f} mm above the stance"
         ) if ground.obstacles else "",
-        climbable_hint="raise 'step_height'" + (" or lower 'roughness'" if p.roughness else ""),
+        climbable_hint=_climb_hint(p) + (" or lower 'roughness'" if p.roughness else "") if ground.obstacles else "",
         underside=underside,
         underside_why=f"at stand_height {p.stand_height:g} m",
         underside_hint="raise 'stand_height'",

@@ -243,6 +243,16 @@ def test_rough_ground_taking_all_the_climb_refuses_a_kerb_without_a_negative_lim
     assert text.endswith("raise 'step_height' or lower 'roughness'") and "\n" not in text
 
 
+def test_a_kerb_beyond_the_legs_reach_names_the_stance_not_the_lift():
+    """Feet lifted 8 cm on a sideways walk: the legs reach 46 mm above the stance, less than the lift, so a 5 cm kerb
+    is limited by the reach; it said "raise 'step_height'", which cannot help (a deeper stance does)."""
+    with pytest.raises(UsageError) as refused:
+        resolve(kerb_height=0.05, step_height=0.08, vx=0.0, vy=0.1)
+    text = str(refused.value)
+    assert "the legs reach 46 mm above the stance" in text and text.endswith("raise 'stand_height'")
+    resolve(kerb_height=0.05, step_height=0.08, vx=0.0, vy=0.1, stand_height=0.11)  # and so it does
+
+
 @pytest.mark.parametrize(
     "overrides, fragment",
     [
