@@ -17,7 +17,7 @@ import numpy as np
 from hexabot_sim import folders, gl, output, registry
 from hexabot_sim import params as params_mod
 from hexabot_sim import video as video_options
-from hexabot_sim.errors import OutputError, UsageError
+from hexabot_sim.errors import HexabotError, OutputError, UsageError
 from hexabot_sim.result import Metric
 from hexabot_sim.scenario import Scenario
 
@@ -303,9 +303,13 @@ class Result:
         backend, reason = None, output.NOT_REQUESTED
         if video:
             backend, reason = gl.video_backend()
-        with folders.run_folder(out, self.scenario, force=force) as folder:
-            self.write_folder(folder.path, plots=plots, video=settings, backend=backend, no_video_reason=reason,
-                              video_progress=progress)  # fmt: skip
+        try:
+            with folders.run_folder(out, self.scenario, force=force) as folder:
+                self.write_folder(folder.path, plots=plots, video=settings, backend=backend, no_video_reason=reason,
+                                  video_progress=progress)  # fmt: skip
+        except HexabotError as e:  # the folder's refusals speak the command line's words: say them as arguments
+            e.args = (_argument_words(str(e)),)
+            raise
         assert folder.final is not None
         return folder.final
 
@@ -393,6 +397,14 @@ class Result:
         finally:
             staging.unlink(missing_ok=True)
         return path
+
+
+def _argument_words(text: str) -> str:
+    """An output refusal of the command line's ("choose another --out or add --force to replace it") in the
+    words of `Result.save`'s arguments ("choose another out or pass force=True to replace it")."""
+    for flag, argument in (("add --force", "pass force=True"), ("--force", "force=True"), ("--out", "out")):
+        text = text.replace(flag, argument)
+    return text
 
 
 def _check_replace(path: Path, force: bool) -> None:

@@ -225,3 +225,13 @@ def test_wrong_save_and_video_arguments_are_usage_errors(tmp_path, leg):
     with pytest.raises(UsageError, match="'path' must be a path"):
         leg.video(b"video.mp4")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_save_refusals_name_its_arguments_not_the_command_lines_options(tmp_path, leg):
+    """Result.save into a non-empty folder said "choose another --out or add --force to replace it"."""
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "mine.txt").write_text("keep")
+    with pytest.raises(UsageError) as refused:
+        leg.save(tmp_path / "run")
+    assert str(refused.value).endswith("is not empty; choose another out or pass force=True to replace it")
+    assert (tmp_path / "run" / "mine.txt").read_text() == "keep"

@@ -146,6 +146,6 @@ def test_two_texts_of_one_value_are_named():
 
 def test_one_dask_worker_thread_is_singular(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(sweep, "MAX_SWEEP_SECONDS", 1e-6, raising=False)
-    monkeypatch.setattr(sweep, "dask_executor", lambda address: contextlib.nullcontext((None, 1)))
+    monkeypatch.setattr(dask_cluster, "dask_executor", lambda address: contextlib.nullcontext((None, 1)))
     line = refused(tmp_path, capsys, "pendulum", "--grid", "damping=0,1", "--scheduler", "tcp://x:1", *FIXED)
     assert "(1 worker thread))" in line, line  # it said "1 worker threads"

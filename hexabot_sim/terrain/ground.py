@@ -41,6 +41,13 @@ class Ground:
     rough: RoughPatch | None = None
     obstacles: tuple[Kerb, ...] = ()
 
+    def __post_init__(self) -> None:
+        # An obstacle on rough ground stands on its valleys: a kerb's box from z = 0 up left a gap under its
+        # edge wherever the bumps dipped below it (a foot could slip under the kerb's lip).
+        if self.rough is not None:
+            depth = self.rough.roughness + FLOOR_BELOW
+            object.__setattr__(self, "obstacles", tuple(dataclasses.replace(o, depth=depth) for o in self.obstacles))
+
     @property
     def flat(self) -> bool:
         return not self.slope.tilted and self.rough is None and not self.obstacles
@@ -62,20 +69,26 @@ class Ground:
         x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
         if not self.slope.tilted:
             return self.surface(x, y)
-        # The highest z with R^T (x, y, z) on the surface: from above, step down along the vertical by the
-        # distance to the surface over cos(slope) (a contraction: the surface's own slopes are gentle).
+        # The highest z with R^T (x, y, z) on the surface (the rough patch or the plane): from above, step down
+        # along the vertical by the distance to the surface over cos(slope) (a contraction: the surface's own
+        # slopes are gentle). An obstacle is a step, where that iteration does not converge (a kerb's edge on a
+        # 20 deg downhill slope was 42 mm off): the vertical meets its box along an interval, solved exactly.
         r = self.slope.rotation()
         top = 0.0 if self.rough is None else self.rough.roughness
-        top = max([top, *(o.height for o in self.obstacles)])
         z = self.slope.height(x, y) + (top + 0.01) / r[2, 2]
+        rough = self.rough.surface if self.rough is not None else (lambda u, v: np.zeros(np.shape(u)))
         for _ in range(200):
             u = r[0, 0] * x + r[1, 0] * y + r[2, 0] * z
             v = r[0, 1] * x + r[1, 1] * y + r[2, 1] * z
             w = r[0, 2] * x + r[1, 2] * y + r[2, 2] * z
-            gap = w - self.surface(u, v)
+            gap = w - rough(u, v)
             z = z - gap / r[2, 2]
             if np.all(np.abs(gap) < HEIGHT_TOLERANCE):
                 break
+        if self.obstacles:
+            origin = np.stack([x, y, np.zeros(x.shape)], axis=-1) @ r  # R^T (x, y, 0), the line's point at z = 0
+            for obstacle in self.obstacles:
+                z = np.maximum(z, obstacle.highest_on_line(origin, r[2]))
         return z
 
     def floor(self) -> dict[str, np.ndarray | str]:

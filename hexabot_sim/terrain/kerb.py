@@ -21,19 +21,47 @@ class Kerb:
     height: float
     distance: float = 0.5
     along: tuple[float, float] = (1.0, 0.0)
+    length: float = KERB_LENGTH  # [m] of the pavement beyond the edge: the walk's reach past it, at least KERB_LENGTH
+    width: float = KERB_WIDTH  # [m] across the path, centred on the start
+    depth: float = 0.0  # [m] the box reaches this far below the ground's level: down to a rough patch's valleys
 
     def surface(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Height [m] of the kerb's top over ground-frame points, -inf where it does not lie."""
-        return np.where(u * self.along[0] + v * self.along[1] >= self.distance, self.height, -np.inf)
+        ahead = u * self.along[0] + v * self.along[1]
+        across = -u * self.along[1] + v * self.along[0]
+        on = (ahead >= self.distance) & (ahead <= self.distance + self.length) & (np.abs(across) <= self.width / 2)
+        return np.where(on, self.height, -np.inf)
+
+    def highest_on_line(self, origin: np.ndarray, direction: np.ndarray) -> np.ndarray:
+        """The largest t [m] with origin + t * direction inside the kerb's box (ground frame), -inf where the line
+        misses it: `origin` (..., 3) points, `direction` (3,) the world's vertical in the ground frame."""
+        ax, ay = self.along
+        rows = (  # (ground-frame coordinate as a linear function of t, its lower and upper bound)
+            ((ax, ay, 0.0), self.distance, self.distance + self.length),
+            ((-ay, ax, 0.0), -self.width / 2, self.width / 2),
+            ((0.0, 0.0, 1.0), -self.depth, self.height),
+        )
+        lo = np.full(origin.shape[:-1], -np.inf)
+        hi = np.full(origin.shape[:-1], np.inf)
+        for axis, low, high in rows:
+            start, rate = origin @ np.array(axis), float(np.dot(direction, axis))
+            if rate == 0:
+                outside = (start < low) | (start > high)
+                hi = np.where(outside, -np.inf, hi)
+                continue
+            a, b = (low - start) / rate, (high - start) / rate
+            lo, hi = np.maximum(lo, np.minimum(a, b)), np.minimum(hi, np.maximum(a, b))
+        return np.where(lo <= hi, hi, -np.inf)
 
     def mjcf(self) -> tuple[list[str], list[str]]:
         """(asset elements, ground elements) as MJCF text, in the ground frame."""
         ax, ay = self.along
-        centre = self.distance + KERB_LENGTH / 2
+        centre = self.distance + self.length / 2
         yaw = math.atan2(ay, ax)
+        half = (self.height + self.depth) / 2
         geom = (
-            f'<geom name="kerb" type="box" size="{KERB_LENGTH / 2!r} {KERB_WIDTH / 2!r} {self.height / 2!r}" '
-            f'pos="{centre * ax!r} {centre * ay!r} {self.height / 2!r}" '
+            f'<geom name="kerb" type="box" size="{self.length / 2!r} {self.width / 2!r} {half!r}" '
+            f'pos="{centre * ax!r} {centre * ay!r} {(self.height - self.depth) / 2!r}" '
             f'quat="{math.cos(yaw / 2)!r} 0 0 {math.sin(yaw / 2)!r}" material="terrain" '
             'contype="0" conaffinity="2" group="0"/>'
         )
@@ -49,7 +77,8 @@ class Kerb:
                 f"{limits.clearance * 1000:g} mm below it (at most {highest_mm} mm); {limits.underside_hint}"
             )
         if self.height > limits.climbable:
-            kerb_mm, largest_mm = apart(self.height * 1000, limits.climbable * 1000, "down")
+            # Rough ground may take all the walk can climb: then none is (it said "the largest climbable, -28 mm").
+            kerb_mm, largest_mm = apart(self.height * 1000, max(limits.climbable, 0.0) * 1000, "down")
             return (
                 f"a {kerb_mm} mm kerb is above the largest climbable, {largest_mm} mm ({limits.climbable_why}); "
                 f"{limits.climbable_hint}"

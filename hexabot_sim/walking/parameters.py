@@ -9,6 +9,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from hexabot_sim.control.gait import GAITS, Command, Gait, GaitPlanner, gaits_for
+from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.kinematics import legged
 from hexabot_sim.params import allowed, apart, check_run_cost, param
 from hexabot_sim.simulate import step_count
@@ -16,6 +17,7 @@ from hexabot_sim.terrain import Ground, Kerb, Limits, RoughPatch, Slope
 from hexabot_sim.terrain.heightfield import CELL as HFIELD_CELL
 from hexabot_sim.terrain.heightfield import MARGIN as HFIELD_MARGIN
 from hexabot_sim.terrain.heightfield import MAX_POINTS as HFIELD_MAX_POINTS
+from hexabot_sim.terrain.kerb import KERB_LENGTH, KERB_WIDTH
 
 INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")
 
@@ -300,10 +302,14 @@ def terrain(p: WalkParams) -> Ground:
         extent = tuple(v / math.cos(math.radians(p.slope_deg)) for v in extent)
     extent = tuple(round(v / HFIELD_CELL) * HFIELD_CELL for v in extent)
     along_xy = (float(along[0]), float(along[1]))
+    # The kerb's pavement runs on beyond the walk: 20 m, or as far as this walk could go (a 0.2 m/s walk of 200 s
+    # stepped down off its end at 20.5 m, where the terrain's heights still had the kerb).
+    reach = speed * p.duration / math.cos(math.radians(p.slope_deg)) + HFIELD_MARGIN
+    kerb_length, kerb_width = max(KERB_LENGTH, reach - p.kerb_distance), max(KERB_WIDTH, 2 * reach)
     return Ground(
         slope=Slope(p.slope_deg, (float(uphill[0]), float(uphill[1])), p.slope_heading),
         rough=RoughPatch(p.roughness, p.seed, extent) if p.roughness else None,
-        obstacles=(Kerb(p.kerb_height, p.kerb_distance, along_xy),) if p.kerb_height else (),
+        obstacles=(Kerb(p.kerb_height, p.kerb_distance, along_xy, kerb_length, kerb_width),) if p.kerb_height else (),
     )
 
 
@@ -342,6 +348,13 @@ def largest_climbable_kerb(p: WalkParams) -> float:
     return min(p.step_height - p.ROBOT.layout.foot_radius, p.stand_height - depth_range(p)[0])
 
 
+def _climb_hint(p: WalkParams) -> str:
+    """What raises the largest climbable kerb: the lift while the swing limits it, else the legs' reach above the
+    stance (a deeper stance: it said "raise 'step_height'" where that could not help)."""
+    swing = p.step_height - p.ROBOT.layout.foot_radius
+    return "raise 'step_height'" if swing <= p.stand_height - depth_range(p)[0] else "raise 'stand_height'"
+
+
 def terrain_problem(p: WalkParams) -> str:
     """'' if the ground can be walked as asked, else a one-line reason (the terrain types' own refusals, with
     what this robot can take, and a level body's reach on a slope)."""
@@ -355,7 +368,7 @@ def terrain_problem(p: WalkParams) -> str:
             f"the foot lifts step_height = {p.step_height:g} m, less a foot radius of clearance; the legs reach "
             f"{(p.stand_height - depth_range(p)[0]) * 1000:.0f} mm above the stance"
         ) if ground.obstacles else "",
-        climbable_hint="raise 'step_height'",
+        climbable_hint=_climb_hint(p) + (" or lower 'roughness'" if p.roughness else "") if ground.obstacles else "",
         underside=underside,
         underside_why=f"at stand_height {p.stand_height:g} m",
         underside_hint="raise 'stand_height'",
@@ -363,8 +376,10 @@ def terrain_problem(p: WalkParams) -> str:
         max_points=HFIELD_MAX_POINTS,
     )  # fmt: skip
     problem = ground.problem(limits)
-    if problem or not (p.slope_deg and p.level_body == "on"):
+    if problem:
         return problem
+    if not (p.slope_deg and p.level_body == "on"):
+        return start_problem(p, ground)
     # A level body on a slope: the stance feet reach down or up by x tan(slope) (x along the uphill).
     tan = math.tan(math.radians(p.slope_deg))
     reach = float(np.abs(neutral(p)[:, :2] @ ground.slope.uphill).max()) * tan
@@ -378,7 +393,74 @@ def terrain_problem(p: WalkParams) -> str:
             f"{hi:.3f} m with this gait); the steepest levelled slope is {steepest_text} deg "
             "(or set level_body=off)"
         )
-    return ""
+    return start_problem(p, ground)
+
+
+def start_pose(p: WalkParams, ground: Ground) -> tuple[list[float], np.ndarray]:
+    """The body's start pose (7,: position, quaternion w x y z) and joint angles (n_legs, 3) on a ground not flat.
+
+    With the ground-finding controller the body starts level, its feet on the ground under their
+    neutral points (IK). With the planned controller it starts parallel to a slope, or level on its
+    neutral stance above the highest ground under a foot (it settles onto the feet that touch).
+    """
+    layout = p.ROBOT.layout
+    feet = neutral(p)
+    q0, _ = legged.ik_hip_batch(layout, legged.body_to_hip(layout, feet))
+    r = layout.foot_radius
+    normal = ground.normal()
+    if p.on_ground() and not (ground.slope.tilted and p.level_body == "off"):
+        # Level body; every foot centre r (along the normal) above the ground under its neutral point.
+        g = ground.height(feet[:, 0], feet[:, 1]) + r / normal[2]  # (n_legs,)
+        z0 = p.stand_height + float(g.mean())
+        target = feet.copy()
+        target[:, 2] = g - z0
+        q = legged.ik_body(layout, target)
+        return [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0], q
+    if ground.slope.tilted:  # parallel to the slope, above whatever stands on it under the feet
+        lift = max(0.0, float(ground.surface(feet[:, 0], feet[:, 1]).max()))
+        pos = normal * (p.stand_height + r + lift)
+        return [*pos, *ground.slope.floor_quat()], q0
+    z0 = p.stand_height + r + float(ground.height(feet[:, 0], feet[:, 1]).max())
+    return [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0], q0
+
+
+PLATE_SAMPLES: int = 41  # points along each side of the plate's underside checked against the ground at the start
+
+
+def start_problem(p: WalkParams, ground: Ground) -> str:
+    """'' if the plate starts above the ground, else why not (one line): a bump of rough ground, or the uphill
+    side of a slope under a levelled body, may rise above the plate's underside where the body starts."""
+    if ground.flat:
+        return ""
+    layout = p.ROBOT.layout
+    try:
+        pose, _ = start_pose(p, ground)
+    except leg_kin.IKError as e:  # a level start: a foot cannot reach the ground under its neutral point
+        hints = ["lower 'roughness'", "try another 'seed'"] if ground.rough is not None else []
+        hints += ["lower 'slope_deg'"] if ground.slope.tilted else []
+        hints = ["change 'stand_height'", *hints, "set touchdown=planned and level_body=off"]
+        return f"the legs cannot stand level on this ground at the start ({e}); {', '.join(hints[:-1])} or {hints[-1]}"
+    w, x, y, z = pose[3:]
+    rotation = np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ])  # fmt: skip
+    px, py, pz = layout.plate
+    u, v = np.meshgrid(np.linspace(-px, px, PLATE_SAMPLES), np.linspace(-py, py, PLATE_SAMPLES))
+    corners = np.stack([u.ravel(), v.ravel(), np.full(u.size, -pz)], axis=1) @ rotation.T + np.array(pose[:3])
+    gap = float((corners[:, 2] - ground.height(corners[:, 0], corners[:, 1])).min())
+    if gap >= 0:
+        return ""
+    causes = [f"the rough ground ({ground.rough.label()}) rises"] if ground.rough is not None else []
+    causes += ["the slope rises under the level body"] if ground.slope.tilted and p.level_body == "on" else []
+    hints = ["raise 'stand_height'"] + (["lower 'roughness'", "try another 'seed'"] if ground.rough else [])
+    hints += ["set level_body=off"] if ground.slope.tilted and p.level_body == "on" else []
+    hints = [", ".join(hints[:-1]), hints[-1]] if len(hints) > 1 else hints
+    return (
+        f"the body would start in the ground: {' and '.join(causes) or 'the ground rises'} {-gap * 1000:.3g} mm "
+        f"above the plate's underside (stand_height {p.stand_height:g} m); {' or '.join(hints)}"
+    )
 
 
 def csv_columns(robot: WalkingRobot) -> int:

@@ -25,6 +25,7 @@ from hexabot_sim.walking.parameters import (
     _plan_cycle,
     depth_range,
     neutral,
+    start_pose,
     terrain,
 )
 
@@ -54,7 +55,7 @@ def build_xml(p: WalkParams) -> str:
     pose = [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0]
     ground = terrain(p)
     if not ground.flat:
-        pose, q0 = _add_terrain(root, p, ground, feet, q0)
+        pose, q0 = _add_terrain(root, p, ground)
     torso.set("pos", models.fmt(pose[:3]))
     for leg, factor in zip(layout.legs, friction, strict=True):
         foot = models.find(root, "geom", f"{leg}_foot")
@@ -65,7 +66,7 @@ def build_xml(p: WalkParams) -> str:
     return models.to_xml(root)
 
 
-def _add_terrain(root, p: WalkParams, ground: Ground, feet: np.ndarray, q0: np.ndarray):
+def _add_terrain(root, p: WalkParams, ground: Ground):
     """Writes the ground into the scene tree; the start pose (7,) and joint angles (n_legs, 3) standing on it.
 
     With the ground-finding controller the body starts level, its feet on the ground under their
@@ -100,23 +101,7 @@ def _add_terrain(root, p: WalkParams, ground: Ground, feet: np.ndarray, q0: np.n
         models.find(root, "body", "torso").append(
             ET.Element("camera", name="slope", mode="trackcom", pos=models.fmt(eye), xyaxes=models.fmt(xyaxes))
         )
-    layout = p.ROBOT.layout
-    r = layout.foot_radius
-    normal = ground.normal()
-    if p.on_ground() and not (ground.slope.tilted and p.level_body == "off"):
-        # Level body; every foot centre r (along the normal) above the ground under its neutral point.
-        g = ground.height(feet[:, 0], feet[:, 1]) + r / normal[2]  # (n_legs,)
-        z0 = p.stand_height + float(g.mean())
-        target = feet.copy()
-        target[:, 2] = g - z0
-        q = legged.ik_body(layout, target)
-        return [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0], q
-    if ground.slope.tilted:  # parallel to the slope, above whatever stands on it under the feet
-        lift = max(0.0, float(ground.surface(feet[:, 0], feet[:, 1]).max()))
-        pos = normal * (p.stand_height + r + lift)
-        return [*pos, *ground.slope.floor_quat()], q0
-    z0 = p.stand_height + r + float(ground.height(feet[:, 0], feet[:, 1]).max())
-    return [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0], q0
+    return start_pose(p, ground)
 
 
 def acceleration_limit(p: WalkParams) -> float:

@@ -600,6 +600,23 @@ def test_ctrl_c_while_loading_ends_in_one_line(tmp_path):
     assert staging_left(tmp_path) == []
 
 
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_python_m_stopped_while_loading_ends_in_one_line(tmp_path, sig, code):
+    """`python -m hexabot_sim` stopped while numpy and MuJoCo are still being imported: one line, exit 130 / 143
+    (its __main__ imported the command line before any handler: a traceback, or a silent death by SIGTERM)."""
+    for n, delay in enumerate((0.12, 0.2, 0.28)):
+        out = tmp_path / f"r{n}"
+        argv = [sys.executable, "-m", "hexabot_sim", "run", "pendulum", "--set", "duration=30", "--no-plots"]
+        proc = subprocess.Popen(
+            [*argv, "--out", str(out)], cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+        )
+        time.sleep(delay)
+        proc.send_signal(sig)
+        _, err = proc.communicate(timeout=60)
+        assert proc.returncode == code and len(err.splitlines()) == 1, (delay, proc.returncode, err)
+        assert not out.exists()
+
+
 @pytest.mark.slow
 def test_closed_stderr_keeps_the_exit_code(tmp_path):
     read, write = os.pipe()
