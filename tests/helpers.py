@@ -4,6 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
+import mujoco
+import numpy as np
+
 from hexabot_sim import params
 from hexabot_sim.cli import main
 
@@ -27,3 +30,10 @@ def walk(**overrides: Any) -> Any:
     from hexabot_sim.robots.hexabot import walk as scenario
 
     return scenario.run("hexabot-walk", walk_params(**overrides))
+
+
+def quat_to_matrix(q: Any) -> np.ndarray:
+    """MuJoCo's rotation matrix (3, 3) of a quaternion (w, x, y, z)."""
+    m = np.zeros(9)
+    mujoco.mju_quat2Mat(m, np.asarray(q, float))
+    return m.reshape(3, 3)

@@ -44,13 +44,13 @@ HEXAPOD_GAITS: tuple[Gait, ...] = (  # lf, lm, lr, rf, rm, rr
         "ripple",
         (2 / 3, 1 / 3, 0.0, 1 / 6, 5 / 6, 0.5),
         2 / 3,
-        "a wave back to front on each side, the sides half a cycle apart: four feet down",
+        "a wave front to rear on each side, the sides half a cycle apart: four feet down",
     ),
     Gait(
         "wave",
         (2 / 6, 1 / 6, 0.0, 5 / 6, 4 / 6, 3 / 6),
         5 / 6,
-        "one leg at a time, rear to front, left then right: five feet down",
+        "one leg at a time, front to rear, right then left: five feet down",
     ),
 )
 QUADRUPED_GAITS: tuple[Gait, ...] = (  # lf, lr, rf, rr

@@ -6,7 +6,7 @@ import math
 import mujoco
 import numpy as np
 import pytest
-from helpers import walk
+from helpers import quat_to_matrix, walk
 
 from hexabot_sim import models, params
 from hexabot_sim.__main__ import main
@@ -20,12 +20,6 @@ from hexabot_sim.walking import parameters as hexabot_parameters
 from hexabot_sim.walking import scene as hexabot_scene
 
 LEGS = hx.LEGS
-
-
-def quat_to_matrix(q):
-    m = np.zeros(9)
-    mujoco.mju_quat2Mat(m, np.asarray(q, float))
-    return m.reshape(3, 3)
 
 
 # --- the model -------------------------------------------------------------------------------------

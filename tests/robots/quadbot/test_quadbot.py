@@ -8,6 +8,7 @@ and quadbot-trot-rough (sensed touchdown, level body). Measured numbers: docs/qu
 import mujoco
 import numpy as np
 import pytest
+from helpers import quat_to_matrix
 
 from hexabot_sim import models, params, registry
 from hexabot_sim.errors import UsageError
@@ -17,12 +18,6 @@ from hexabot_sim.robots.quadbot import model as quadbot_model
 from hexabot_sim.robots.quadbot import walk as quadbot
 
 LAYOUT = quadbot_model.LAYOUT
-
-
-def quat_to_matrix(q):
-    m = np.zeros(9)
-    mujoco.mju_quat2Mat(m, np.asarray(q, float))
-    return m.reshape(3, 3)
 
 
 def test_committed_models_are_the_generator_output():
