@@ -37,3 +37,39 @@ def quat_to_matrix(q: Any) -> np.ndarray:
     m = np.zeros(9)
     mujoco.mju_quat2Mat(m, np.asarray(q, float))
     return m.reshape(3, 3)
+
+
+def foot_and_jacobian_errors(scene: str, layout: Any, samples: int) -> tuple[float, float]:
+    """Worst |foot site - analytic FK| and |mj_jacSite - analytic Jacobian| of a legged model at random joint
+    angles and body poses: the layout's body-frame maths (kinematics/legged.py), rotated by the body, and each
+    leg's own DH FK in its hip site (the leg's frame 0)."""
+    from hexabot_sim import models
+    from hexabot_sim.kinematics import leg as leg_kin
+    from hexabot_sim.kinematics import legged
+
+    model = mujoco.MjModel.from_xml_path(str(models.model_path(scene)))
+    data = mujoco.MjData(model)
+    rng = np.random.default_rng(7)
+    lower, upper = np.array(legged.JOINT_LOWER), np.array(legged.JOINT_UPPER)
+    worst_p = worst_j = 0.0
+    jacp = np.zeros((3, model.nv))  # (3, nv)
+    for _ in range(samples):
+        q = rng.uniform(lower, upper, size=(layout.n_legs, 3))
+        quat = rng.normal(size=4)
+        quat /= np.linalg.norm(quat)
+        pos = rng.uniform(-1, 1, 3)
+        data.qpos[:] = np.r_[pos, quat, q.ravel()]
+        mujoco.mj_kinematics(model, data)
+        mujoco.mj_comPos(model, data)
+        rot = quat_to_matrix(quat)
+        feet = pos + legged.feet_body(layout, q) @ rot.T
+        jac_body = legged.jacobians_body(layout, q)
+        for i, leg in enumerate(layout.legs):
+            worst_p = max(worst_p, np.abs(data.site(f"{leg}_foot").xpos - feet[i]).max())
+            mujoco.mj_jacSite(model, data, jacp, None, model.site(f"{leg}_foot").id)
+            dofs = [model.joint(f"{leg}_{j}").dofadr[0] for j in legged.JOINTS]
+            worst_j = max(worst_j, np.abs(jacp[:, dofs] - rot @ jac_body[i]).max())
+            hip = data.site(f"{leg}_hip")
+            local = hip.xmat.reshape(3, 3).T @ (data.site(f"{leg}_foot").xpos - hip.xpos)
+            worst_p = max(worst_p, np.abs(local - leg_kin.fk(q[i])).max())
+    return worst_p, worst_j

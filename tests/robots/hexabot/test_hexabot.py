@@ -6,7 +6,7 @@ import math
 import mujoco
 import numpy as np
 import pytest
-from helpers import quat_to_matrix, walk
+from helpers import foot_and_jacobian_errors, walk
 
 from hexabot_sim import models, params
 from hexabot_sim.__main__ import main
@@ -61,32 +61,7 @@ def test_names_masses_limits_and_collisions():
 
 def test_every_foot_and_jacobian_equal_the_legs_dh_maths():
     """Foot sites and mj_jacSite against the leg's analytic FK and Jacobian, rotated onto each hip."""
-    model = mujoco.MjModel.from_xml_path(str(models.model_path("hexabot_scene")))
-    data = mujoco.MjData(model)
-    rng = np.random.default_rng(7)
-    lower, upper = np.array(hx.JOINT_LOWER), np.array(hx.JOINT_UPPER)
-    worst_p = worst_j = 0.0
-    jacp = np.zeros((3, model.nv))
-    for _ in range(100):
-        q = rng.uniform(lower, upper, size=(6, 3))
-        quat = rng.normal(size=4)
-        quat /= np.linalg.norm(quat)
-        pos = rng.uniform(-1, 1, 3)
-        data.qpos[:] = np.r_[pos, quat, q.ravel()]
-        mujoco.mj_kinematics(model, data)
-        mujoco.mj_comPos(model, data)
-        rot = quat_to_matrix(quat)
-        feet = pos + hx.feet_body(hx.DEFAULT_LAYOUT, q) @ rot.T
-        jac_body = hx.jacobians_body(hx.DEFAULT_LAYOUT, q)
-        for i, leg in enumerate(LEGS):
-            worst_p = max(worst_p, np.abs(data.site(f"{leg}_foot").xpos - feet[i]).max())
-            mujoco.mj_jacSite(model, data, jacp, None, model.site(f"{leg}_foot").id)
-            dofs = [model.joint(f"{leg}_{j}").dofadr[0] for j in hx.JOINTS]
-            worst_j = max(worst_j, np.abs(jacp[:, dofs] - rot @ jac_body[i]).max())
-            # The hip site is the leg's DH frame 0: the foot in it is the leg's own FK.
-            hip = data.site(f"{leg}_hip")
-            local = hip.xmat.reshape(3, 3).T @ (data.site(f"{leg}_foot").xpos - hip.xpos)
-            worst_p = max(worst_p, np.abs(local - leg_kin.fk(q[i])).max())
+    worst_p, worst_j = foot_and_jacobian_errors("hexabot_scene", hx.DEFAULT_LAYOUT, 100)
     assert worst_p < 1e-12 and worst_j < 1e-12
 
 

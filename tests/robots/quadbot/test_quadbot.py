@@ -8,12 +8,10 @@ and quadbot-trot-rough (sensed touchdown, level body). Measured numbers: docs/qu
 import mujoco
 import numpy as np
 import pytest
-from helpers import quat_to_matrix
+from helpers import foot_and_jacobian_errors
 
 from hexabot_sim import models, params, registry
 from hexabot_sim.errors import UsageError
-from hexabot_sim.kinematics import leg as leg_kin
-from hexabot_sim.kinematics import legged
 from hexabot_sim.robots.quadbot import model as quadbot_model
 from hexabot_sim.robots.quadbot import walk as quadbot
 
@@ -39,31 +37,7 @@ def test_four_legs_in_the_gaits_order_and_the_model_stands_on_them():
 
 def test_every_foot_and_jacobian_equal_the_legs_dh_maths():
     """Foot sites and mj_jacSite against the layout's FK and Jacobians (legged.py), rotated by the body."""
-    model = mujoco.MjModel.from_xml_path(str(models.model_path("quadbot_scene")))
-    data = mujoco.MjData(model)
-    rng = np.random.default_rng(7)
-    lower, upper = np.array(legged.JOINT_LOWER), np.array(legged.JOINT_UPPER)
-    worst_p = worst_j = 0.0
-    jacp = np.zeros((3, model.nv))
-    for _ in range(50):
-        q = rng.uniform(lower, upper, size=(4, 3))
-        quat = rng.normal(size=4)
-        quat /= np.linalg.norm(quat)
-        pos = rng.uniform(-1, 1, 3)
-        data.qpos[:] = np.r_[pos, quat, q.ravel()]
-        mujoco.mj_kinematics(model, data)
-        mujoco.mj_comPos(model, data)
-        rot = quat_to_matrix(quat)
-        feet = pos + legged.feet_body(LAYOUT, q) @ rot.T
-        jac_body = legged.jacobians_body(LAYOUT, q)
-        for i, leg in enumerate(LAYOUT.legs):
-            worst_p = max(worst_p, np.abs(data.site(f"{leg}_foot").xpos - feet[i]).max())
-            mujoco.mj_jacSite(model, data, jacp, None, model.site(f"{leg}_foot").id)
-            dofs = [model.joint(f"{leg}_{j}").dofadr[0] for j in legged.JOINTS]
-            worst_j = max(worst_j, np.abs(jacp[:, dofs] - rot @ jac_body[i]).max())
-            hip = data.site(f"{leg}_hip")
-            local = hip.xmat.reshape(3, 3).T @ (data.site(f"{leg}_foot").xpos - hip.xpos)
-            worst_p = max(worst_p, np.abs(local - leg_kin.fk(q[i])).max())
+    worst_p, worst_j = foot_and_jacobian_errors("quadbot_scene", LAYOUT, 50)
     assert worst_p < 1e-12 and worst_j < 1e-12
 
 
