@@ -66,7 +66,7 @@ def _info(scenario: Scenario) -> ScenarioInfo:
     for name, (info, default) in params_mod.infos(scenario.params_type).items():
         value = scenario.defaults.get(name, default)
         bounds = None
-        if info.choices is None:
+        if info.choices is None and info.table is None:
             low = info.ge if info.ge is not None else info.gt
             high = info.le if info.le is not None else info.lt
             bounds = (float(low), float(high))  # type: ignore[arg-type]

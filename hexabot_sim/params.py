@@ -12,7 +12,7 @@ import os
 import stat
 import sys
 import tomllib
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -46,6 +46,8 @@ class ParamInfo:
         choices: Allowed strings of a text parameter (matched case-insensitively).
         typo: (unit, size in this unit) of a unit users often type by mistake, e.g. ("mm/s", 1e-3):
             a value out of range, at least 10 in size and in range in that unit gets a "did you mean" hint.
+        table: (what it takes in words, reader) of a table parameter: a CSV file name (--set, TOML) or rows
+            (the Python API), which reader(name, raw) turns into a tuple of rows or refuses (UsageError).
     """
 
     unit: str
@@ -56,6 +58,7 @@ class ParamInfo:
     lt: float | None = None
     choices: tuple[str, ...] | None = None
     typo: tuple[str, float] | None = None
+    table: tuple[str, Callable[[str, Any], tuple]] | None = None
 
     def contains(self, value: float) -> bool:
         """True if the number is inside the allowed range."""
@@ -78,15 +81,17 @@ def param(
     lt: float | None = None,
     choices: tuple[str, ...] | None = None,
     typo: tuple[str, float] | None = None,
+    table: tuple[str, Callable[[str, Any], tuple]] | None = None,
 ) -> Any:
     """Declares a field of a scenario's parameter dataclass.
 
     A number needs a range with both ends (ge or gt, le or lt): every value that passes is one the
-    scenario can run. A text parameter needs its choices.
+    scenario can run. A text parameter needs its choices; a table parameter its reader (ParamInfo.table).
     """
-    if choices is None and ((ge is None) == (gt is None) or (le is None) == (lt is None)):
+    bounded = choices is not None or table is not None
+    if not bounded and ((ge is None) == (gt is None) or (le is None) == (lt is None)):
         raise ValueError(f"parameter {doc!r}: give exactly one lower (ge, gt) and one upper (le, lt) bound")
-    info = ParamInfo(unit, doc, ge, gt, le, lt, choices, typo)
+    info = ParamInfo(unit, doc, ge, gt, le, lt, choices, typo, table)
     return dataclasses.field(default=default, metadata={"param": info})
 
 
@@ -127,6 +132,8 @@ def describe_range(info: ParamInfo, name: str = "value") -> str:
     """The allowed values in words, e.g. "0 < mass <= 1000 kg" or "one of RK4, Euler, implicit"."""
     if info.choices is not None:
         return f"one of {', '.join(info.choices)}"
+    if info.table is not None:
+        return info.table[0]
     low = f"{_number(info.ge)} <= " if info.ge is not None else f"{_number(info.gt)} < "  # type: ignore[arg-type]
     high = f" <= {_number(info.le)}" if info.le is not None else f" < {_number(info.lt)}"  # type: ignore[arg-type]
     unit = f" {info.unit}" if info.unit and info.unit != "1" else ""
@@ -186,6 +193,8 @@ def _to_float(raw: Any) -> float | None:
 
 def _convert(name: str, raw: Any, info: ParamInfo, kind: type) -> Any:
     """Converts one raw value (a string from --set or a TOML value) and checks its range."""
+    if info.table is not None:  # a file name or rows: the parameter's own reader
+        return info.table[1](name, raw)
     if kind is tuple:  # a list of numbers: "0.01,0.05" on the command line, [0.01, 0.05] in TOML
         items = raw.split(",", MAX_LIST_ITEMS) if isinstance(raw, str) else raw
         if not isinstance(items, (list, tuple)) or not items or any(str(v).strip() == "" for v in items[:3]):

@@ -27,6 +27,7 @@ import math
 import mujoco
 import numpy as np
 
+from hexabot_sim.control.commands import CommandSource
 from hexabot_sim.control.gait import Command, GaitPlanner
 from hexabot_sim.control.resolved_rate import ResolvedRateGains, step_constants
 from hexabot_sim.kinematics import legged
@@ -91,8 +92,12 @@ class WalkingController:
         gains: ResolvedRateGains,
         settings: WalkSettings,
         q_start: np.ndarray,
+        source: CommandSource | None = None,
     ) -> None:
         self.layout = layout
+        self.source = source  # a command that changes (control/commands.py); None: settings.command throughout
+        # The heights the planner was built with (the source's at time 0): the source's changes are added to them.
+        self._heights0 = None if source is None else [float(v[0]) for v in source.heights(np.zeros(1))]
         self.planner = planner
         self.settings = settings
         self.dt = planner.dt
@@ -153,7 +158,11 @@ class WalkingController:
         """
         s = self.settings
         n = self.planner.max_chunk
-        cmd = s.command
+        cmd = base = s.command
+        if self.source is not None:  # the source's twist, held over as many steps as it holds (a chunk at most)
+            segment = self.source.segment(t, self._pose())
+            cmd = base = segment.command
+            n = min(n, max(1, round((segment.until - t) / self.dt))) if math.isfinite(segment.until) else n
         times = t + self.dt * np.arange(n + 1)
         ramp = self.scale(times)
         if s.heading_hold:
@@ -165,19 +174,38 @@ class WalkingController:
             correction = max(-MAX_HEADING_CORRECTION, min(MAX_HEADING_CORRECTION, s.heading_gain * error))
             cmd = Command(cmd.vx, cmd.vy, cmd.yaw_rate + correction)
             # The commanded heading advances by the yaw rate times the integral of the ramp over the chunk.
-            self._yaw_des += s.command.yaw_rate * float(np.sum(0.5 * (ramp[1:] + ramp[:-1]))) * self.dt
+            self._yaw_des += base.yaw_rate * float(np.sum(0.5 * (ramp[1:] + ramp[:-1]))) * self.dt
         self.commands.append((t, cmd.vx, cmd.vy, cmd.yaw_rate))
         targets = self.planner.plan(cmd, n, None if ramp[0] >= 1.0 else self.scale)  # (n + 1, legs, 3) body frame
         times = self.planner.time - self.dt * np.arange(n, -1, -1)  # (n + 1,)
         stance = self.planner.in_stance(times)  # (n + 1, legs)
         duty = self.planner.gait.duty
         swing_s = np.where(stance, 0.0, (self.planner.phase(times) - duty) / (1.0 - duty))
+        if self.source is not None:
+            self._heights(targets, times, stance, swing_s)
         # Body -> hip frame of each leg: R^T (p - hip).
         hip = np.einsum("lji,klj->kli", self.rot, targets - self.hips)  # (n + 1, legs, 3)
         hip += self._rolling_offsets(hip, stance, swing_s)
         self._publish(hip.reshape(n + 1, -1), stance)
         self._chunk = n
         self._k = 0
+
+    def _pose(self) -> tuple[float, float, float]:
+        """The body's planar pose (x, y [m], yaw [rad]) for a command source (a path follower's localisation)."""
+        quat = self._sensordata[self.quat_adr : self.quat_adr + 4]
+        return float(self._qpos[0]), float(self._qpos[1]), yaw_of(quat)
+
+    def _heights(self, targets: np.ndarray, times: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> None:
+        """Adds the source's step and stand heights (rows of `times`) to the planned targets (n + 1, legs, 3)."""
+        stand = self._add_lift(targets, times, stance, swing_s)
+        targets[..., 2] -= (stand - self._heights0[1])[:, None]  # type: ignore[index]  (higher: feet deeper)
+
+    def _add_lift(self, targets: np.ndarray, times: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
+        """Adds the change of the source's step height to the swings' lift; returns its stand heights (n + 1,)."""
+        step, stand = self.source.heights(times)  # type: ignore[union-attr]
+        lift = np.where(stance, 0.0, np.sin(np.pi * swing_s) ** 2)  # (n + 1, legs)
+        targets[..., 2] += (step - self._heights0[0])[:, None] * lift  # type: ignore[index]
+        return stand
 
     def _publish(self, rows: np.ndarray, stance: np.ndarray) -> None:
         """Keeps what the steps of the chunk need from its target rows (n + 1, 3 legs) (hip frames) and stance flags."""
@@ -304,8 +332,10 @@ class GroundController(WalkingController):
     legs' state lives in the arrays `legs` and `flags` (layout in the kernels module).
     """
 
-    def __init__(self, model, data, layout, planner, gains, settings, q_start, ground: GroundSettings) -> None:
-        super().__init__(model, data, layout, planner, gains, settings, q_start)
+    def __init__(
+        self, model, data, layout, planner, gains, settings, q_start, ground: GroundSettings, source=None
+    ) -> None:
+        super().__init__(model, data, layout, planner, gains, settings, q_start, source)
         K = self.kernels
         self.ground = ground
         n = layout.n_legs
@@ -362,6 +392,11 @@ class GroundController(WalkingController):
         for i, landing in enumerate(self.planner.swing_targets):
             if landing is not None:
                 self.legs[i, K.NEXT_LANDING : K.NEXT_LANDING + 2] = landing[:2]
+
+    def _heights(self, targets: np.ndarray, times: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> None:
+        """The source's step height on the swings' lift; its stand height drives the stance plane (which ramps it)."""
+        stand = self._add_lift(targets, times, stance, swing_s)
+        self.par[self.kernels.STAND_HEIGHT] = float(stand[-1])
 
     def _rolling_offsets(self, hip: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
         """The rolling offsets of the feet at the heights they stand at now (not the planned flat-ground height)."""

@@ -18,6 +18,7 @@ from hexabot_sim.terrain.heightfield import CELL as HFIELD_CELL
 from hexabot_sim.terrain.heightfield import MARGIN as HFIELD_MARGIN
 from hexabot_sim.terrain.heightfield import MAX_POINTS as HFIELD_MAX_POINTS
 from hexabot_sim.terrain.kerb import KERB_LENGTH, KERB_WIDTH
+from hexabot_sim.walking import commands
 
 INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")
 
@@ -142,6 +143,16 @@ class WalkParams:
     )  # fmt: skip
     level_body: str = param("off", "", "keep the body level from the IMU (on) or follow the ground (off)",
                             choices=("off", "on"))  # fmt: skip
+    schedule: tuple = param(
+        (), "", "commands in time: from each row's t [s] on, its twist (ramped in over a period), gait and heights "
+        "(vx, vy, yaw_rate are then ignored)", table=(commands.SCHEDULE_ALLOWED, commands.read_schedule),
+    )  # fmt: skip
+    waypoints: tuple = param(
+        (), "", "walk through these points (path follower: control/follower.py; vx, vy, yaw_rate are then ignored)",
+        table=(commands.WAYPOINTS_ALLOWED, commands.read_waypoints),
+    )  # fmt: skip
+    path_speed: float = param(0.1, "m/s", "the path follower's walking speed (waypoints)", gt=0.0, le=1.0)
+    path_yaw_rate: float = param(0.5, "rad/s", "the path follower's largest yaw rate (waypoints)", gt=0.0, le=3.0)
 
     def __post_init__(self) -> None:
         if self.duty and not self.gait_duty_range()[0] <= self.duty < 1.0:
@@ -163,6 +174,11 @@ class WalkParams:
             n, n + 1, csv_columns(self.ROBOT), step_s, row_s, row_bytes, "lower 'duration' or raise 'timestep'"
         )
         problem = feasibility(self)
+        if problem:
+            raise ValueError(problem)
+        problem = commands.schedule_problem(self, feasibility) or commands.waypoints_problem(
+            self, feasibility, SETTLE_TIME
+        )
         if problem:
             raise ValueError(problem)
         problem = terrain_problem(self)
@@ -289,7 +305,9 @@ def terrain(p: WalkParams) -> Ground:
     along = walking_direction(p)
     uphill = {"uphill": along, "downhill": -along, "across": np.array([-along[1], along[0]])}[p.slope_heading]
     speed = math.hypot(p.vx, p.vy)
-    if p.yaw_rate:  # an arc (or turning on the spot): a box about the start holding the circle
+    if p.schedule or p.waypoints:  # a box holding the course (the schedule's planned path)
+        extent = commands.extent(p, SETTLE_TIME, HFIELD_MARGIN)
+    elif p.yaw_rate:  # an arc (or turning on the spot): a box about the start holding the circle
         half = min(speed * p.duration, 2 * speed / abs(p.yaw_rate)) + HFIELD_MARGIN
         extent = (-half, half, -half, half)
     else:

@@ -2,17 +2,20 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import mujoco
 import numpy as np
 
 from hexabot_sim import models
+from hexabot_sim.control.commands import CommandSource
 from hexabot_sim.control.gait import GaitPlanner
 from hexabot_sim.control.resolved_rate import ResolvedRateGains
 from hexabot_sim.control.walker import GroundController, GroundSettings, WalkingController, WalkSettings
 from hexabot_sim.kinematics import legged
 from hexabot_sim.terrain import Ground
+from hexabot_sim.walking import commands
 from hexabot_sim.walking.parameters import (
     ACCELERATION_HEADROOM,
     ACCELERATION_LIMIT,
@@ -105,27 +108,38 @@ def _add_terrain(root, p: WalkParams, ground: Ground):
 
 
 def acceleration_limit(p: WalkParams) -> float:
-    """Commanded joint-acceleration limit [rad/s^2]: ACCELERATION_LIMIT, or more where the steady cycle needs it."""
-    hip, dt = _plan_cycle(p, p.command())
-    q, _ = legged.ik_hip_batch(p.ROBOT.layout, hip)  # (n, n_legs, 3)
-    peak = float(np.abs(np.diff(q, 2, axis=0)).max()) / dt**2
+    """Commanded joint-acceleration limit [rad/s^2]: ACCELERATION_LIMIT, or more where the steady cycle needs it
+    (the most any of a schedule's rows needs)."""
+    cases = [(p, p.command())]
+    for row in commands.setpoints(p):
+        cases.append((dataclasses.replace(p, step_height=row.step_height, stand_height=row.stand_height,
+                                          schedule=()), row.command))  # fmt: skip
+    peak = 0.0
+    for q_params, cmd in cases:
+        hip, dt = _plan_cycle(q_params, cmd)
+        q, _ = legged.ik_hip_batch(p.ROBOT.layout, hip)  # (n, n_legs, 3)
+        peak = max(peak, float(np.abs(np.diff(q, 2, axis=0)).max()) / dt**2)
     return max(ACCELERATION_LIMIT, ACCELERATION_HEADROOM * peak)
 
 
-def make_controller(p: WalkParams, model: mujoco.MjModel, data: mujoco.MjData) -> WalkingController:
-    """The walking controller of a run (the ground-finding one for sensed touchdown or a levelled body)."""
+def make_controller(
+    p: WalkParams, model: mujoco.MjModel, data: mujoco.MjData, source: CommandSource | None = None
+) -> WalkingController:
+    """The walking controller of a run (the ground-finding one for sensed touchdown or a levelled body); its
+    command from `source` (the viewer's steering), else the walk's schedule or waypoints, else vx, vy, yaw_rate."""
     trims, _, _ = _perturbations(p)
     planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), p.timestep, start_time=SETTLE_TIME)
+    source = commands.source(p, SETTLE_TIME) if source is None else source
     settings = WalkSettings(
-        p.command(), settle_time=SETTLE_TIME, ramp_time=p.period, heading_hold=p.heading_hold == "on",
-        trims=tuple(trims.tolist()),
+        p.command(), settle_time=SETTLE_TIME, ramp_time=p.period if source is None else 0.0,
+        heading_hold=p.heading_hold == "on", trims=tuple(trims.tolist()),
     )  # fmt: skip
     gains = ResolvedRateGains(p.task_gain, 0.01, 0.01, p.max_joint_speed, acceleration_limit(p))
     q0 = model.key("home").qpos[7:].reshape(-1, 3)
     if not p.on_ground():
-        return WalkingController(model, data, p.ROBOT.layout, planner, gains, settings, q0)
+        return WalkingController(model, data, p.ROBOT.layout, planner, gains, settings, q0, source)
     ground = GroundSettings(
         sensed=p.touchdown == "sensed", level=p.level_body == "on", stand_height=p.stand_height,
         depth_range=depth_range(p),
     )  # fmt: skip
-    return GroundController(model, data, p.ROBOT.layout, planner, gains, settings, q0, ground)
+    return GroundController(model, data, p.ROBOT.layout, planner, gains, settings, q0, ground, source)

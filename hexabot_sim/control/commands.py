@@ -1,0 +1,185 @@
+"""Commands that change during a walk: a schedule of setpoints with smooth ramps, and live steering.
+
+A command source tells the walking controller, each time it plans, which body twist holds from now and until
+when (a `Segment`), and the step and stand heights at any time. The controller plans its targets with a
+constant twist up to `until` (at most a chunk), so a stance foot stays exactly ground-fixed: the planner
+moves it along the twist in force, chunk after chunk. A ramp between two twists is therefore a staircase of
+`STAIR_TIME` stairs (the twist of each stair is the ramp's value at the stair's middle): the twist moves in
+steps of a twentieth of the change over a one-second ramp, while the heights, which the controller adds to
+the targets row by row, ramp linearly.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from typing import Protocol
+
+import numpy as np
+
+from hexabot_sim.control.gait import Command
+
+STAIR_TIME: float = 0.05  # [s] a ramp's twist is held constant over stairs of this length
+
+
+@dataclasses.dataclass(frozen=True)
+class Setpoint:
+    """One row of a schedule: from time t on, this twist, gait and these heights (ramped in).
+
+    Attributes:
+        t: Run time [s] at which the row's ramp starts (the robot settles first: a row before the gait clock
+            starts ramps in from it).
+        command: Body twist (vx, vy [m/s], yaw rate [rad/s]).
+        gait: The gait's name.
+        step_height: Foot lift at mid-swing [m].
+        stand_height: Foot depth below the hips [m].
+    """
+
+    t: float
+    command: Command
+    gait: str
+    step_height: float
+    stand_height: float
+
+
+@dataclasses.dataclass(frozen=True)
+class Segment:
+    """What a command source asks for from the time it was queried.
+
+    Attributes:
+        command: Body twist to hold.
+        until: Run time [s] up to which it holds (inf: until further notice, the controller plans whole chunks).
+        gait: The gait in force.
+    """
+
+    command: Command
+    until: float
+    gait: str
+
+
+class CommandSource(Protocol):
+    """What the walking controller asks of a changing command (Schedule, Steering, control.follower.PathFollower)."""
+
+    def segment(self, t: float, pose: tuple[float, float, float]) -> Segment:
+        """The twist from run time t [s] on; pose: the body's (x [m], y [m], yaw [rad]) at t."""
+        ...
+
+    def heights(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Step height and stand height [m] (each like `times` [s])."""
+        ...
+
+
+class Schedule:
+    """Setpoints in time order, each ramped in linearly over `ramp_time` from the value in force when it starts.
+
+    The twist and heights are a piecewise-linear function of time through knots: before the first row's
+    ramp, standing (zero twist) at the start heights; a row at t starts its ramp at max(t, start) from the
+    value there, and a row that comes before the previous ramp has ended starts from where that ramp got.
+    """
+
+    def __init__(
+        self, rows: Sequence[Setpoint], start: float, ramp_time: float, step_height: float, stand_height: float
+    ) -> None:
+        if not rows:
+            raise ValueError("a schedule needs at least one row")
+        times = [t.t for t in rows]
+        if any(b <= a for a, b in zip(times, times[1:], strict=False)):
+            raise ValueError("schedule times must increase")
+        self.rows = tuple(rows)
+        self.ramp_time = float(ramp_time)
+        knots_t: list[float] = [0.0]
+        knots_v: list[np.ndarray] = [np.array([0.0, 0.0, 0.0, step_height, stand_height])]
+        self.starts: list[float] = []  # [s] when each row's ramp starts
+        for row in rows:
+            begin = max(row.t, start)
+            value = self._interp(begin, knots_t, knots_v)
+            while knots_t and knots_t[-1] >= begin:  # a ramp cut short: it ends where it got to
+                knots_t.pop()
+                knots_v.pop()
+            c = row.command
+            target = np.array([c.vx, c.vy, c.yaw_rate, row.step_height, row.stand_height])
+            knots_t += [begin, begin + max(self.ramp_time, 1e-9)]
+            knots_v += [value, target]
+            self.starts.append(begin)
+        self.knots_t = np.array(knots_t)  # (k,)
+        self.knots_v = np.array(knots_v)  # (k, 5) vx, vy, yaw rate, step height, stand height
+
+    @staticmethod
+    def _interp(t: float, knots_t: list[float], knots_v: list[np.ndarray]) -> np.ndarray:
+        values = np.array(knots_v)
+        return np.array([np.interp(t, knots_t, values[:, j]) for j in range(values.shape[1])])
+
+    def value(self, t: np.ndarray | float) -> np.ndarray:
+        """(..., 5): vx, vy, yaw rate, step height, stand height at run time t."""
+        t = np.asarray(t, dtype=float)
+        return np.stack([np.interp(t, self.knots_t, self.knots_v[:, j]) for j in range(5)], axis=-1)
+
+    def row_at(self, t: float) -> int:
+        """Index of the row whose ramp has started last at t (-1: none yet)."""
+        return int(np.searchsorted(np.array(self.starts), t, side="right")) - 1
+
+    def segment(self, t: float, pose: tuple[float, float, float] | None = None) -> Segment:
+        """The twist from t: constant up to the next knot, or a stair of a ramp (its value at the stair's middle)."""
+        k = int(np.searchsorted(self.knots_t, t + 1e-12, side="right"))  # next knot after t
+        nxt = float(self.knots_t[k]) if k < len(self.knots_t) else math.inf
+        a, b = self.value(t)[:3], self.value(min(nxt, t + STAIR_TIME))[:3]
+        if np.array_equal(a, b):  # constant up to the next knot (or for ever)
+            until = nxt
+        else:
+            until = min(nxt, t + STAIR_TIME)
+            a = self.value(0.5 * (t + until))[:3]
+        i = self.row_at(t)
+        gait = self.rows[max(i, 0)].gait
+        return Segment(Command(*(float(v) for v in a)), until, gait)
+
+    def heights(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        v = self.value(times)
+        return v[..., 3], v[..., 4]
+
+
+@dataclasses.dataclass
+class Steering:
+    """A command set live (the viewer's keys): the twist and heights move toward what was asked at bounded rates.
+
+    Attributes:
+        target: The twist asked for.
+        gait: The gait asked for.
+        step_height, stand_height: The heights asked for [m].
+        acceleration: Largest change of the twist [m/s^2, rad/s^2] (the same rate for the three).
+        height_rate: Largest change of a height [m/s].
+    """
+
+    target: Command
+    gait: str
+    step_height: float
+    stand_height: float
+    start: float = 0.5
+    acceleration: float = 0.2
+    height_rate: float = 0.02
+
+    def __post_init__(self) -> None:
+        self.now = np.zeros(3)  # twist in force
+        self._h = np.array([self.step_height, self.stand_height])  # heights in force
+        self._t = 0.0
+
+    def segment(self, t: float, pose: tuple[float, float, float] | None = None) -> Segment:
+        """One stair toward the target (the viewer's keys change it between stairs)."""
+        dt = max(0.0, t - self._t)
+        self._t = t
+        want = np.array([self.target.vx, self.target.vy, self.target.yaw_rate]) if t >= self.start else np.zeros(3)
+        self.now += np.clip(want - self.now, -self.acceleration * dt, self.acceleration * dt)
+        h_want = np.array([self.step_height, self.stand_height])
+        self._h0 = self._h.copy()
+        self._h += np.clip(h_want - self._h, -self.height_rate * STAIR_TIME, self.height_rate * STAIR_TIME)
+        self._ht = t
+        return Segment(Command(*(float(v) for v in self.now)), t + STAIR_TIME, self.gait)
+
+    def heights(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        t0 = getattr(self, "_ht", 0.0)
+        h0 = getattr(self, "_h0", self._h)
+        f = np.clip((np.asarray(times, dtype=float) - t0) / STAIR_TIME, 0.0, 1.0)
+        return h0[0] + f * (self._h[0] - h0[0]), h0[1] + f * (self._h[1] - h0[1])
+
+
+__all__ = ["STAIR_TIME", "CommandSource", "Schedule", "Segment", "Setpoint", "Steering"]

@@ -1,0 +1,234 @@
+"""A walk's changing command: the schedule and waypoint tables (CSV files or rows), their refusals, their sources.
+
+Both are parameters of a walk (`schedule`, `waypoints`): `--set schedule=FILE` names a CSV file with a header
+row; the Python API (and a run folder's run.json) gives the rows themselves. The readers here check each
+value on its own; the checks that need the robot (its gaits, what its legs can deliver) run in the walk's
+parameter checks (`schedule_problem`, `waypoints_problem`), before the walk, naming the row.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from hexabot_sim.control.commands import Schedule, Setpoint
+from hexabot_sim.control.follower import PathFollower
+from hexabot_sim.control.gait import Command
+from hexabot_sim.errors import UsageError
+from hexabot_sim.params import read_bounded
+
+MAX_ROWS: int = 10_000  # rows of a schedule or waypoint table
+MAX_TABLE_BYTES: int = 1 << 20  # a table file of more than 1 MiB is not a schedule
+MAX_TIME: float = 3600.0  # [s] latest schedule time (the longest walk)
+MAX_DISTANCE: float = 1000.0  # [m] farthest waypoint from the start
+
+SCHEDULE_COLUMNS = ("t", "vx", "vy", "yaw_rate", "gait", "step_height", "stand_height")
+SCHEDULE_REQUIRED = 4
+WAYPOINT_COLUMNS = ("x", "y", "heading")
+WAYPOINT_REQUIRED = 2
+
+SCHEDULE_ALLOWED = (
+    "a CSV file with the header t, vx, vy, yaw_rate[, gait, step_height, stand_height] (or, from the Python API, "
+    "a list of such rows); empty: one command throughout"
+)
+WAYPOINTS_ALLOWED = (
+    "a CSV file with the header x, y[, heading] [m, m, rad] from the start pose (or, from the Python API, a list "
+    "of such rows); empty: no waypoints"
+)
+
+
+def _rows(name: str, raw: Any, columns: tuple[str, ...], required: int) -> list[tuple[str, list[Any]]]:
+    """(where, values in column order, None where not given) of each row of a table file or of API rows."""
+    allowed = f"columns {', '.join(columns[:required])}" + (
+        f" and optionally {', '.join(columns[required:])}" if len(columns) > required else ""
+    )
+    if isinstance(raw, str):
+        if raw.strip() == "":
+            return []
+        shown = repr(raw)
+        data = read_bounded(Path(raw), f"{name} file", MAX_TABLE_BYTES, f"a {name} table is at most {MAX_ROWS} rows")
+        try:
+            text = data.decode("utf-8").removeprefix("\ufeff")
+        except UnicodeDecodeError:
+            raise UsageError(f"{name} file {shown} is not UTF-8 text") from None
+        lines = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip()]
+        if not lines:
+            raise UsageError(f"{name} file {shown} is empty; it needs a header row ({allowed}) and rows")
+        header = [h.strip().lower() for h in next(csv.reader([lines[0][1]]))]
+        unknown = [h for h in header if h not in columns]
+        if unknown or len(set(header)) != len(header) or not set(columns[:required]) <= set(header):
+            problem = f"unknown column {unknown[0]!r}" if unknown else "a column missing or repeated"
+            raise UsageError(f"{name} file {shown}: the header {lines[0][1][:60]!r} has {problem}; it needs {allowed}")
+        if len(lines) - 1 > MAX_ROWS:
+            raise UsageError(f"{name} file {shown} has {len(lines) - 1} rows; the limit is {MAX_ROWS}")
+        out = []
+        for number, line in lines[1:]:
+            cells = [c.strip() for c in next(csv.reader([line]))]
+            if len(cells) != len(header):
+                raise UsageError(
+                    f"{name} file {shown}, line {number}: {len(cells)} values for the {len(header)} columns"
+                )
+            by_name = dict(zip(header, cells, strict=True))
+            out.append((f"{name} file {shown}, line {number}", [by_name.get(c) or None for c in columns]))
+        if not out:
+            raise UsageError(f"{name} file {shown} has a header but no rows")
+        return out
+    if isinstance(raw, np.ndarray):
+        raw = raw.tolist()
+    if not isinstance(raw, (list, tuple)):
+        raise UsageError(f"parameter '{name}' must be {SCHEDULE_ALLOWED if name == 'schedule' else WAYPOINTS_ALLOWED}")
+    if len(raw) > MAX_ROWS:
+        raise UsageError(f"parameter '{name}' has {len(raw)} rows; the limit is {MAX_ROWS}")
+    out = []
+    for i, row in enumerate(raw):
+        where = f"{name} row {i + 1}"
+        if isinstance(row, np.ndarray):
+            row = row.tolist()
+        if not isinstance(row, (list, tuple)) or not required <= len(row) <= len(columns):
+            raise UsageError(f"{where} must be a list of {required} to {len(columns)} values ({allowed}); got {row!r:.60}")
+        out.append((where, [*row, *[None] * (len(columns) - len(row))]))
+    return out
+
+
+def _number(where: str, column: str, value: Any, low: float, high: float, unit: str) -> float:
+    """A finite number in [low, high] (a CSV cell or an API value), or a UsageError naming the row."""
+    try:
+        number = float(value.strip() if isinstance(value, str) else value)
+    except (TypeError, ValueError):
+        number = math.nan
+    if isinstance(value, bool) or not math.isfinite(number) or not low <= number <= high:
+        raise UsageError(f"{where}: {column} must be a number from {low:g} to {high:g} {unit}; got {value!r:.40}")
+    return number + 0.0
+
+
+def read_schedule(name: str, raw: Any) -> tuple:
+    """The schedule's rows (t, vx, vy, yaw_rate, gait or None, step_height or None, stand_height or None)."""
+    out = []
+    previous = -math.inf
+    for where, (t, vx, vy, w, gait, step, stand) in _rows(name, raw, SCHEDULE_COLUMNS, SCHEDULE_REQUIRED):
+        if t is None or vx is None or vy is None or w is None:
+            raise UsageError(f"{where}: t, vx, vy and yaw_rate must all be given")
+        time = _number(where, "t", t, 0.0, MAX_TIME, "s")
+        if time <= previous:
+            raise UsageError(f"{where}: t = {time:g} s is not after the previous row's {previous:g} s; times must increase")
+        previous = time
+        row = [time, _number(where, "vx", vx, -1.0, 1.0, "m/s"), _number(where, "vy", vy, -1.0, 1.0, "m/s")]
+        row.append(_number(where, "yaw_rate", w, -3.0, 3.0, "rad/s"))
+        row.append(None if gait is None else str(gait).strip().lower())
+        row.append(None if step is None else _number(where, "step_height", step, 0.002, 0.1, "m"))
+        row.append(None if stand is None else _number(where, "stand_height", stand, 0.02, 0.19, "m"))
+        out.append(tuple(row))
+    return tuple(out)
+
+
+def read_waypoints(name: str, raw: Any) -> tuple:
+    """The waypoints (x, y, heading or None) [m, m, rad] from the start pose."""
+    out = []
+    previous = (0.0, 0.0)
+    for where, (x, y, heading) in _rows(name, raw, WAYPOINT_COLUMNS, WAYPOINT_REQUIRED):
+        if x is None or y is None:
+            raise UsageError(f"{where}: x and y must both be given")
+        px = _number(where, "x", x, -MAX_DISTANCE, MAX_DISTANCE, "m")
+        py = _number(where, "y", y, -MAX_DISTANCE, MAX_DISTANCE, "m")
+        h = None if heading is None else _number(where, "heading", heading, -2 * math.pi, 2 * math.pi, "rad")
+        if math.hypot(px - previous[0], py - previous[1]) < 1e-3:
+            raise UsageError(f"{where}: ({px:g}, {py:g}) is within 1 mm of the point before it (or the start)")
+        previous = (px, py)
+        out.append((px, py, h))
+    return tuple(out)
+
+
+def setpoints(p: Any) -> list[Setpoint]:
+    """The schedule's rows with what they leave out taken from the row before (the first: from the walk's values)."""
+    out = []
+    gait, step, stand = p.gait, p.step_height, p.stand_height
+    for t, vx, vy, w, g, h, s in p.schedule:
+        gait, step, stand = g or gait, step if h is None else h, stand if s is None else s
+        out.append(Setpoint(t, Command(vx, vy, w), gait, step, stand))
+    return out
+
+
+def schedule_problem(p: Any, check: Callable[[Any], str]) -> str:
+    """'' if every row can be walked, else one line naming the row: its gait, its values as a walk's parameters,
+    what its legs can deliver (`check(params)`: walking.parameters.feasibility)."""
+    if p.schedule and p.waypoints:
+        return "give a schedule or waypoints, not both"
+    gaits = p.gaits()
+    for i, row in enumerate(setpoints(p)):
+        where = f"schedule row {i + 1} (t = {row.t:g} s)"
+        if row.gait not in gaits:
+            return f"{where}: unknown gait {row.gait!r}; known: {', '.join(gaits)}"
+        if row.gait != p.gait:
+            return f"{where}: gait {row.gait!r} differs from the walk's {p.gait!r}; a schedule cannot change gait yet"
+        c = row.command
+        try:
+            q = dataclasses.replace(p, vx=c.vx, vy=c.vy, yaw_rate=c.yaw_rate, gait=row.gait, step_height=row.step_height,
+                                    stand_height=row.stand_height, schedule=(), waypoints=())  # fmt: skip
+        except ValueError as e:
+            return f"{where}: {e}"
+        problem = check(q)
+        if problem:
+            return f"{where}: {problem}"
+    return ""
+
+
+def waypoints_problem(p: Any, check: Callable[[Any], str], settle: float) -> str:
+    """'' if the course can be walked: the follower's fastest twists are feasible and the walk is long enough."""
+    if not p.waypoints:
+        return ""
+    for angle in range(0, 360, 45):
+        for w in (-p.path_yaw_rate, p.path_yaw_rate):
+            a = math.radians(angle)
+            q = dataclasses.replace(p, vx=p.path_speed * math.cos(a), vy=p.path_speed * math.sin(a), yaw_rate=w,
+                                    schedule=(), waypoints=())  # fmt: skip
+            problem = check(q)
+            if problem:
+                return (
+                    f"waypoints: the follower may ask for path_speed {p.path_speed:g} m/s in any direction while "
+                    f"turning at path_yaw_rate {p.path_yaw_rate:g} rad/s, and {problem}; lower path_speed or "
+                    "path_yaw_rate"
+                )
+    follower = course(p, settle)
+    needed = settle + p.period + follower.total / p.path_speed * 1.2 + 1.0
+    if p.duration < needed:
+        return (
+            f"waypoints: the course is {follower.total:.3g} m long; at path_speed {p.path_speed:g} m/s the walk needs "
+            f"about {needed:.3g} s; raise 'duration' to at least that"
+        )
+    return ""
+
+
+def course(p: Any, settle: float) -> PathFollower:
+    """The path follower of a walk's waypoints."""
+    return PathFollower(p.waypoints, p.path_speed, p.path_yaw_rate, settle, p.gait, p.step_height, p.stand_height)
+
+
+def source(p: Any, settle: float) -> Schedule | PathFollower | None:
+    """The walk's changing command (None: its constant vx, vy, yaw_rate)."""
+    if p.schedule:
+        return Schedule(setpoints(p), settle, p.period, p.step_height, p.stand_height)
+    if p.waypoints:
+        return course(p, settle)
+    return None
+
+
+def extent(p: Any, settle: float, margin: float) -> tuple[float, float, float, float]:
+    """(x min, x max, y min, y max) [m] of the ground a schedule or course may cross, with a margin."""
+    if p.waypoints:
+        xy = np.array([[0.0, 0.0], *[(x, y) for x, y, _ in p.waypoints]])
+    else:  # integrate the schedule's twist (the body's planned path)
+        schedule = Schedule(setpoints(p), settle, p.period, p.step_height, p.stand_height)
+        t = np.arange(0.0, p.duration + 0.01, 0.01)
+        v = schedule.value(t)
+        yaw = np.concatenate([[0.0], np.cumsum(v[:-1, 2] * 0.01)])
+        c, s = np.cos(yaw), np.sin(yaw)
+        xy = np.cumsum(np.stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]], -1) * 0.01, axis=0)
+    lo, hi = xy.min(axis=0) - margin, xy.max(axis=0) + margin
+    return float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])
+
