@@ -13,8 +13,8 @@ The path is the polyline from the start pose (0, 0) through the waypoints (world
   waypoint's heading where one is given for the segment's end point, else the segment's direction;
 - the twist changes by at most `ACCELERATION` per second (the legs' stances stay ground-fixed: the controller
   plans each update's constant twist).
-It has arrived when it is within `ARRIVE_RADIUS` of the last waypoint with all of the path behind it; from then
-on it stands.
+It has arrived when it is within `ARRIVE_RADIUS` of the last waypoint with its progress within twice that of the
+path's end; from then on it stands.
 """
 
 from __future__ import annotations
@@ -106,7 +106,7 @@ class PathFollower:
             self.s, near, i = self.closest(xy, self.s, SEARCH_AHEAD)
             end = self.points[-1]
             left = self.total - self.s + float(np.hypot(*(xy - near)))
-            if self.total - self.s < 1e-9 and float(np.hypot(*(xy - end))) < ARRIVE_RADIUS:
+            if self.total - self.s < 2 * ARRIVE_RADIUS and float(np.hypot(*(xy - end))) < ARRIVE_RADIUS:
                 self.arrived_at = t
             else:
                 speed = self.speed * min(1.0, left / SLOW_RADIUS)

@@ -10,6 +10,7 @@ import numpy as np
 
 from hexabot_sim.result import ScenarioResult
 from hexabot_sim.terrain import Ground
+from hexabot_sim.walking import course
 from hexabot_sim.walking.metrics import Contacts
 from hexabot_sim.walking.parameters import SETTLE_TIME, walking_direction
 
@@ -153,6 +154,9 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
         fontsize=plots.TITLE_FONTSIZE,
     )
     out["slip"] = fig
+    follower = result.extras.get("follower")
+    if follower is not None:
+        out["course"] = course.course_figure(result, follower, LEG_COLOURS)
     ground: Ground = result.extras["terrain"]
     if not ground.flat:
         out["terrain"] = _terrain_figure(result, ground)

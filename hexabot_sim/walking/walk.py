@@ -3,6 +3,7 @@ parameter class to these, e.g. robots/hexabot/walk.py)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 
@@ -12,6 +13,7 @@ import numpy as np
 from hexabot_sim.kinematics import legged
 from hexabot_sim.result import Live, Metric, Progress, ScenarioResult, at_home
 from hexabot_sim.simulate import simulate, step_count
+from hexabot_sim.walking import course
 from hexabot_sim.walking.figures import _moving_mean, figures
 from hexabot_sim.walking.metrics import (
     replay_contacts,
@@ -20,7 +22,7 @@ from hexabot_sim.walking.metrics import (
     terrain_metrics,
     walking_metrics,
 )
-from hexabot_sim.walking.parameters import WalkParams, terrain
+from hexabot_sim.walking.parameters import SETTLE_TIME, WalkParams, terrain
 from hexabot_sim.walking.scene import build_xml, make_controller
 
 __all__ = ["analyse", "figures", "live", "run"]
@@ -56,6 +58,7 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     planned = controller.planner.in_stance(t)  # (n, n_legs)
     if not ground.flat or p.on_ground():  # flat runs with the planned controller keep their metrics as they were
         metrics |= terrain_metrics(p, ground, t, qpos, controller, loaded & planned, planned)
+    extras = course_results(p, t, qpos, qvel, contacts, controller, total_mass, metrics)
     rpy = rpy_from_quat(qpos[:, 3:7])
     # Command in force at every row: the chunk's command (re-planned every chunk) times the ramp's factor.
     plan_t = np.array([c[0] for c in controller.commands])
@@ -77,6 +80,10 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     units |= {"vx_body": "m/s", "vy_body": "m/s", "yaw_rate": "rad/s", "cmd_vx": "m/s", "cmd_vy": "m/s"}
     units |= {"cmd_yaw_rate": "rad/s"}
     units |= {k: ("1" if k.startswith("contact_") else "rad") for k in columns if k not in units}
+    if p.schedule:  # each row's steady twist (needs the columns)
+        more, table = course.schedule_metrics(p, t, columns, SETTLE_TIME)
+        metrics |= more
+        extras["schedule_table"] = table
     trail = qpos[:, :3].copy()
     trail[:, 2] = ground.height(trail[:, 0], trail[:, 1]) + 0.002  # the body's path drawn on the ground
     period_rows = max(1, round(p.period / p.timestep))
@@ -104,8 +111,25 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
             "window": steady_window(p, t),
             "terrain": ground,
             "touchdowns": getattr(controller, "events", []),
-        },
+        }
+        | extras,
     )
+
+
+def course_results(p, t, qpos, qvel, contacts, controller, total_mass, metrics) -> dict:
+    """With a schedule or waypoints: the whole-walk errors against vx, vy, yaw_rate made null (the command
+    changes), a course's metrics added; the extras the figures need."""
+    if not (p.schedule or p.waypoints):
+        return {}
+    why = "the command changes during the walk (schedule or waypoints): see the schedule_ or course_ metrics"
+    for key in ("vx_error", "vy_error", "yaw_rate_error", "speed_abs_error", "lateral_drift", "heading_drift"):
+        m = metrics[key]
+        metrics[key] = dataclasses.replace(m, value=None, doc=f"{m.doc}; null here: {why}")
+    if not p.waypoints:
+        return {}
+    power = np.abs(contacts.torque * qvel[:, 6 : 6 + contacts.torque.shape[1]]).sum(axis=1)
+    metrics |= course.course_metrics(p, t, qpos, controller.source, power, total_mass, SETTLE_TIME)
+    return {"follower": controller.source}
 
 
 def live(p: WalkParams) -> Live:
