@@ -12,6 +12,7 @@ the targets row by row, ramp linearly.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from collections.abc import Sequence
 from typing import Protocol
@@ -84,7 +85,7 @@ class Schedule:
         if not rows:
             raise ValueError("a schedule needs at least one row")
         times = [t.t for t in rows]
-        if any(b <= a for a, b in zip(times, times[1:], strict=False)):
+        if any(b <= a for a, b in itertools.pairwise(times)):
             raise ValueError("schedule times must increase")
         self.rows = tuple(rows)
         self.ramp_time = float(ramp_time)

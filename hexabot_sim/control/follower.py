@@ -9,7 +9,8 @@ The path is the polyline from the start pose (0, 0) through the waypoints (world
   point (the cross-track error), the sum no faster than `speed` (a pursuit of the path point, on the
   holonomic body twist: the legs walk in any direction, so the velocity, not the heading, closes the error);
   within `SLOW_RADIUS` of the last waypoint the speed tapers to stop on it;
-- yaw rate: `YAW_GAIN` times the heading error, no more than `max_yaw_rate`; the heading wanted is the
+- yaw rate: `YAW_GAIN` times the heading error, no more than `max_yaw_rate` nor than it can stop from in time
+  (sqrt(2 ACCELERATION |error|)); the heading wanted is the
   waypoint's heading where one is given for the segment's end point, else the segment's direction;
 - the twist changes by at most `ACCELERATION` per second (the legs' stances stay ground-fixed: the controller
   plans each update's constant twist).
@@ -119,7 +120,9 @@ class PathFollower:
                 v_world = along * self.tangents[i] + toward
                 c, s_ = math.cos(yaw), math.sin(yaw)
                 error = math.remainder(float(self.headings[i]) - yaw, 2 * math.pi)
-                yaw_rate = max(-self.max_yaw_rate, min(self.max_yaw_rate, YAW_GAIN * error))
+                # No faster than it can stop on the heading at ACCELERATION (else the rate limit makes it overshoot).
+                rate = min(self.max_yaw_rate, YAW_GAIN * abs(error), math.sqrt(2 * ACCELERATION * abs(error)))
+                yaw_rate = math.copysign(rate, error)
                 want = np.array([c * v_world[0] + s_ * v_world[1], -s_ * v_world[0] + c * v_world[1], yaw_rate])
         step = ACCELERATION * max(t - self._t, UPDATE_TIME)
         self._t = t

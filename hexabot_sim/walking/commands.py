@@ -91,7 +91,9 @@ def _rows(name: str, raw: Any, columns: tuple[str, ...], required: int) -> list[
         if isinstance(row, np.ndarray):
             row = row.tolist()
         if not isinstance(row, (list, tuple)) or not required <= len(row) <= len(columns):
-            raise UsageError(f"{where} must be a list of {required} to {len(columns)} values ({allowed}); got {row!r:.60}")
+            raise UsageError(
+                f"{where} must be a list of {required} to {len(columns)} values ({allowed}); got {row!r:.60}"
+            )
         out.append((where, [*row, *[None] * (len(columns) - len(row))]))
     return out
 
@@ -116,7 +118,9 @@ def read_schedule(name: str, raw: Any) -> tuple:
             raise UsageError(f"{where}: t, vx, vy and yaw_rate must all be given")
         time = _number(where, "t", t, 0.0, MAX_TIME, "s")
         if time <= previous:
-            raise UsageError(f"{where}: t = {time:g} s is not after the previous row's {previous:g} s; times must increase")
+            raise UsageError(
+                f"{where}: t = {time:g} s is not after the previous row's {previous:g} s; times must increase"
+            )
         previous = time
         row = [time, _number(where, "vx", vx, -1.0, 1.0, "m/s"), _number(where, "vy", vy, -1.0, 1.0, "m/s")]
         row.append(_number(where, "yaw_rate", w, -3.0, 3.0, "rad/s"))
@@ -168,8 +172,10 @@ def schedule_problem(p: Any, check: Callable[[Any], str]) -> str:
             return f"{where}: gait {row.gait!r} differs from the walk's {p.gait!r}; a schedule cannot change gait yet"
         c = row.command
         try:
-            q = dataclasses.replace(p, vx=c.vx, vy=c.vy, yaw_rate=c.yaw_rate, gait=row.gait, step_height=row.step_height,
-                                    stand_height=row.stand_height, schedule=(), waypoints=())  # fmt: skip
+            q = dataclasses.replace(
+                p, vx=c.vx, vy=c.vy, yaw_rate=c.yaw_rate, gait=row.gait, step_height=row.step_height,
+                stand_height=row.stand_height, schedule=(), waypoints=(),
+            )  # fmt: skip
         except ValueError as e:
             return f"{where}: {e}"
         problem = check(q)
@@ -231,4 +237,3 @@ def extent(p: Any, settle: float, margin: float) -> tuple[float, float, float, f
         xy = np.cumsum(np.stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]], -1) * 0.01, axis=0)
     lo, hi = xy.min(axis=0) - margin, xy.max(axis=0) + margin
     return float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])
-

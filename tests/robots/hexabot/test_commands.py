@@ -1,0 +1,114 @@
+"""The hexabot walking a schedule of commands and a waypoint course (issue 22): refusals before the walk, the
+rows' steady speeds against the schedule, the course's cross-track error against the circle it samples."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from helpers import cli, walk, walk_params
+
+from hexabot_sim.errors import UsageError
+from hexabot_sim.walking.commands import MAX_TABLE_BYTES
+
+
+def _write(path: Path, text: str) -> str:
+    path.write_text(text)
+    return str(path)
+
+
+BAD_SCHEDULES = {
+    "t,vx,vy,yaw_rate\n0,0.1,0,0\n2,0.1,0,0\n2,0,0,0.3\n": "line 4: t = 2 s is not after the previous row's 2 s",
+    "t,vx,vy,yaw_rate\n0,0.1,0,0\n2,nan,0,0\n": "line 3: vx must be a number from -1 to 1 m/s; got 'nan'",
+    "t,vx,vy,yaw_rate,gait\n0,0.1,0,0,trot\n": "schedule row 1 (t = 0 s): unknown gait 'trot'; known: tripod",
+    "t,vx,vy,yaw_rate\n0,0.1,0,0\n3,0.6,0,0\n": "schedule row 2 (t = 3 s): the legs cannot deliver this command",
+    "t,vx,vy,yaw_rate,stand_height\n0,0.1,0,0,0.19\n": "schedule row 1 (t = 0 s): ",
+    "t,speed\n0,1\n": "unknown column 'speed'; it needs columns t, vx, vy, yaw_rate",
+    "t,vx,vy,yaw_rate\n": "has a header but no rows",
+    "t,vx,vy,yaw_rate\n0,0.1,0\n": "line 2: 3 values for the 4 columns",
+}
+
+
+@pytest.mark.parametrize("text", list(BAD_SCHEDULES))
+def test_bad_schedules_are_refused_before_the_walk_with_one_line_naming_the_row(tmp_path, capsys, text):
+    out = tmp_path / "out"
+    code, _, err = cli(capsys, "run", "hexabot-walk", "--set", f"schedule={_write(tmp_path / 's.csv', text)}",
+                       "--out", str(out))  # fmt: skip
+    assert code == 2 and BAD_SCHEDULES[text] in err and len(err.strip().splitlines()) == 1
+    assert "Traceback" not in err and not out.exists()
+
+
+def test_unreadable_and_huge_tables_are_refused(tmp_path, capsys):
+    huge = tmp_path / "huge.csv"
+    huge.write_text("t,vx,vy,yaw_rate\n" + "0,0,0,0\n" * (MAX_TABLE_BYTES // 8 + 1))
+    for value, words in ((huge, "is larger than 1024 KiB"), (tmp_path, "is a directory"),
+                         (tmp_path / "none.csv", "not found")):  # fmt: skip
+        code, _, err = cli(capsys, "run", "hexabot-walk", "--set", f"schedule={value}", "--out", str(tmp_path / "o"))
+        assert code == 2 and words in err and len(err.strip().splitlines()) == 1
+
+
+def test_bad_waypoints_are_refused(tmp_path, capsys):
+    cases = {
+        "x,y\n0.3,0\n0.3,nan\n": "line 3: y must be a number",
+        "x,y\n0.3,0\n0.3,0.0001\n": "within 1 mm of the point before it",
+        "x,y\n5,0\n": "the course is 5 m long; at path_speed 0.1 m/s the walk needs about",
+    }
+    for text, words in cases.items():
+        path = _write(tmp_path / "w.csv", text)
+        code, _, err = cli(capsys, "run", "hexabot-walk", "--set", f"waypoints={path}", "--out", str(tmp_path / "o"))
+        assert code == 2 and words in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_the_api_takes_rows_as_lists_or_arrays_and_fills_what_they_leave_out(tmp_path):
+    rows = [[0, 0.1, 0, 0], [3, 0, 0, 0.3, None, 0.04]]
+    p = walk_params(schedule=rows, duration=6)
+    assert p.schedule == ((0.0, 0.1, 0.0, 0.0, None, None, None), (3.0, 0.0, 0.0, 0.3, None, 0.04, None))
+    assert walk_params(schedule=np.array([[0, 0.1, 0, 0], [3, 0, 0, 0.3]]), duration=6).schedule[1][3] == 0.3
+    csv = _write(tmp_path / "s.csv", "t, vx, vy, yaw_rate, step_height\n0, 0.1, 0, 0,\n3, 0, 0, 0.3, 0.04\n")
+    assert walk_params(schedule=csv, duration=6).schedule == p.schedule
+    with pytest.raises(UsageError, match="schedule row 2 must be a list of 4 to 7 values"):
+        walk_params(schedule=[[0, 0.1, 0, 0], [3, 0.1]])
+    with pytest.raises(UsageError, match="a schedule or waypoints, not both"):
+        walk_params(schedule=rows, waypoints=[[0.2, 0]], duration=20)
+
+
+@pytest.mark.slow
+def test_a_schedule_is_walked_at_each_rows_speed():
+    """Forward 0.1 m/s, then turning on the spot at 0.3 rad/s: each row's steady walk (whole cycles after its ramp)
+    within 3 % of its command (the issue's target; measured over 5 s rows: 0.2 %, docs/hexabot.md)."""
+    r = walk(schedule=[[0, 0.1, 0, 0], [3.5, 0, 0, 0.3]], duration=7.0)
+    table = r.extras["schedule_table"]
+    assert [row["row"] for row in table] == [1, 2]
+    assert abs(table[0]["vx"] - 0.1) < 0.003 and abs(table[1]["yaw_rate"] - 0.3) < 0.009
+    assert r.metrics["schedule_speed_error_max"].value < 0.03
+    assert r.metrics["schedule_yaw_rate_error_max"].value < 0.03
+    assert r.metrics["vx_error"].value is None and not r.metrics["fell"].value
+    # The commanded columns follow the schedule: the first row's twist before the second row's ramp (to a step),
+    # then the turn.
+    t = r.columns["t"]
+    assert r.columns["cmd_vx"][(t > 2.0) & (t < 3.49)] == pytest.approx(0.1)
+    assert r.columns["cmd_yaw_rate"][t > 4.6] == pytest.approx(0.3)
+
+
+@pytest.mark.slow
+def test_a_waypoint_course_is_walked_close_to_the_circle_it_samples():
+    """A quarter of a 0.5 m circle in 12 waypoints: the body's distance from the circle itself (not the follower's
+    polyline) stays under the chords' sagitta (0.5 m (1 - cos(pi / 24)) = 4.3 mm) plus 5 mm."""
+    radius = 0.5
+    angles = np.linspace(0, math.pi / 2, 13)[1:]
+    points = [[radius * math.sin(a), radius * (1 - math.cos(a))] for a in angles]
+    r = walk(waypoints=points, duration=13.0)
+    m = r.metrics
+    assert m["course_arrived"].value and 7.0 < m["course_time"].value < 11.0
+    assert m["cross_track_rms"].value < 0.02 and not m["fell"].value
+    t, x, y = r.columns["t"], r.columns["x"], r.columns["y"]
+    walking = t >= 0.5
+    off_circle = np.abs(np.hypot(x[walking], y[walking] - radius) - radius)
+    assert off_circle.max() < radius * (1 - math.cos(math.pi / 24)) + 0.005
+    assert abs(x[-1] - points[-1][0]) < 0.01 and abs(y[-1] - points[-1][1]) < 0.01
+    assert 0.0 < m["course_cost_of_transport"].value < 5.0
+    from hexabot_sim.robots.hexabot.walk import figures
+
+    assert "course" in figures(r)
