@@ -133,7 +133,7 @@ def describe_range(info: ParamInfo, name: str = "value") -> str:
     if info.choices is not None:
         return f"one of {', '.join(info.choices)}"
     if info.table is not None:
-        return info.table[0]
+        return f"{name} = {info.table[0]}"
     low = f"{_number(info.ge)} <= " if info.ge is not None else f"{_number(info.gt)} < "  # type: ignore[arg-type]
     high = f" <= {_number(info.le)}" if info.le is not None else f" < {_number(info.lt)}"  # type: ignore[arg-type]
     unit = f" {info.unit}" if info.unit and info.unit != "1" else ""
