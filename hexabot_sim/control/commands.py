@@ -23,6 +23,8 @@ from hexabot_sim.control.gait import Command
 
 STAIR_TIME: float = 0.05  # [s] a ramp's twist is held constant over stairs of this length
 
+TIME_TOLERANCE: float = 1e-6  # [s] a query this close before a knot or row counts as at it
+
 
 @dataclasses.dataclass(frozen=True)
 class Setpoint:
@@ -122,7 +124,8 @@ class Schedule:
 
     def segment(self, t: float, pose: tuple[float, float, float] | None = None) -> Segment:
         """The twist from t: constant up to the next knot, or a stair of a ramp (its value at the stair's middle)."""
-        k = int(np.searchsorted(self.knots_t, t + 1e-12, side="right"))  # next knot after t
+        t += TIME_TOLERANCE  # the simulation's clock (a sum of steps) may come a hair before a row's time
+        k = int(np.searchsorted(self.knots_t, t, side="right"))  # next knot after t
         nxt = float(self.knots_t[k]) if k < len(self.knots_t) else math.inf
         a, b = self.value(t)[:3], self.value(min(nxt, t + STAIR_TIME))[:3]
         if np.array_equal(a, b):  # constant up to the next knot (or for ever)

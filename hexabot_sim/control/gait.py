@@ -224,6 +224,13 @@ class GaitPlanner:
         # a step cheaper than with 0.5 s, and heading hold keeps an imperfect robot as straight (measured).
         self.max_chunk = max(1, round(CHUNK_TIME / self.dt))
         self._warp = _Warp(np.zeros(1), None)
+        # After a gait switch (switch()): the previous gait's swings under way, [lift-off, touchdown) [s], and the
+        # time before which a leg does not lift under the new gait's clock; -inf: none.
+        self._finish_lift = np.full(n, -np.inf)
+        self._finish = np.full(n, -np.inf)
+        self._no_lift_before = np.full(n, -np.inf)
+        self._touchdown = np.full(n, self.start_time)  # [s] each leg's latest touchdown
+        self.switches: list[tuple[float, str]] = []  # (time, gait) of each switch
 
     def phase(self, t: np.ndarray | float) -> np.ndarray:
         """Gait phase in [0, 1) of each leg (..., n_legs); stance while phase < duty. Before start_time: stance."""
@@ -240,7 +247,67 @@ class GaitPlanner:
         frac = self.phase(t)
         lift_time = t[..., None] - (frac - self.gait.duty) * self.period
         swing = (frac >= self.gait.duty) & (lift_time >= self.start_time - 1e-9)
+        if self.switches:  # the previous gait's swings finish; the new gait's that would lift before are skipped
+            swing &= lift_time >= self._no_lift_before - 1e-9
+            swing |= (t[..., None] >= self._finish_lift) & (t[..., None] < self._finish)
         return ~swing
+
+    def swing_fraction(self, t: np.ndarray, stance: np.ndarray) -> np.ndarray:
+        """How far each swing has come (..., n_legs) in [0, 1) at times t (...,); 0 in stance."""
+        duty = self.gait.duty
+        s = np.where(stance, 0.0, (self.phase(t) - duty) / (1.0 - duty))
+        if self.switches:
+            t = np.asarray(t, dtype=float)[..., None]
+            old = (t >= self._finish_lift) & (t < self._finish)
+            with np.errstate(invalid="ignore"):  # legs without such a swing: -inf - -inf (not used)
+                s = np.where(old, (t - self._finish_lift) / np.where(old, self._finish - self._finish_lift, 1.0), s)
+        return s
+
+    def switch(self, gait: Gait, min_down: int = 3, candidates: int = 48) -> None:
+        """Walks with another gait (same period) from the planner's time on (the next chunk).
+
+        Every leg's swing and stance stay continuous: a swing under way finishes at its planned touchdown; no leg
+        lifts under the new gait's clock before t and before every such swing has landed (a swing the new clock
+        would have begun earlier is skipped: the foot stays down until its next lift-off; otherwise a tripod's
+        swing under way and the new gait's first swings would leave too few feet down). The new clock's phase is chosen
+        among `candidates` shifts of a period: the one whose longest stance across the switch (from a foot's
+        last touchdown to its first lift-off under the new gait) is shortest, with at least `min_down` feet down
+        at every time of the next two periods.
+        """
+        if len(gait.offsets) != self.n_legs:
+            raise ValueError(f"the {gait.name} gait is for {len(gait.offsets)} legs; the robot has {self.n_legs}")
+        n, t = self.n_legs, self.time  # the planner's own clock: its phases and events agree on it
+        stance = self.in_stance(np.array(t))
+        finish, lift = self._finish.copy(), self._finish_lift.copy()
+        for leg in np.flatnonzero(~stance):
+            if not lift[leg] <= t < finish[leg]:  # a swing of the current gait
+                finish[leg] = self._next_touchdown(leg, t)
+                lift[leg] = finish[leg] - self.swing_time
+        landed = np.where(stance, self._touchdown, finish)  # (n,) each foot's latest (or coming) touchdown
+        no_lift = np.full(n, max(float(finish.max()), t))  # the new gait lifts no foot before the last has landed
+        offsets = np.array(gait.offsets)
+        samples = t + self.period * np.arange(0, 2 * 96) / 96  # the next two periods
+        best = None
+        for j in range(candidates):
+            start = t + self.period * (j / candidates - 1.0)  # at or before t
+            # First lift-off at or after no_lift: phase == duty, i.e. start + (k + duty - offset) period.
+            k = np.ceil((no_lift - start) / self.period - (gait.duty - offsets) - 1e-9)
+            first = start + (k + gait.duty - offsets) * self.period  # (n,)
+            longest = float((first - landed).max())
+            frac = np.mod((samples[:, None] - start) / self.period + offsets, 1.0)
+            lift_t = samples[:, None] - (frac - gait.duty) * self.period
+            swing = ((frac >= gait.duty) & (lift_t >= no_lift - 1e-9)) | (
+                (samples[:, None] >= lift) & (samples[:, None] < finish)
+            )
+            down = n - swing.sum(axis=1).max()
+            key = (down < min(min_down, n), longest)
+            if best is None or key < best[0]:
+                best = (key, start)
+        self.gait, self.offsets = gait, offsets
+        self.stance_time, self.swing_time = gait.duty * self.period, (1 - gait.duty) * self.period
+        self.start_time = best[1]  # type: ignore[index]
+        self._finish, self._finish_lift, self._no_lift_before = finish, lift, no_lift
+        self.switches.append((t, gait.name))
 
     def plan(self, cmd: Command, n_steps: int, scale: Scale | None = None) -> np.ndarray:
         """Targets (n_steps + 1, n_legs, 3) at time, time + dt, ..., time + n_steps dt; advances the planner n_steps dt.
@@ -290,12 +357,17 @@ class GaitPlanner:
                     duration = touchdown_t - t_state
                     s = (times[rows] - t_state) / duration
                     xy[rows] = hermite(p_state, v_state, target, target_v, duration, s)
-                    swing_s = (times[rows] - (touchdown_t - self.swing_time)) / self.swing_time
+                    swing_time = self.swing_time
+                    if touchdown_t == self._finish[leg]:  # a swing of the gait before a switch
+                        swing_time = self._finish[leg] - self._finish_lift[leg]
+                    swing_s = (times[rows] - (touchdown_t - swing_time)) / swing_time
                     z[rows] += self.step_height * np.sin(np.pi * np.clip(swing_s, 0.0, 1.0)) ** 2
                 if end <= n_steps:  # a phase event between end-1 and end: state at the event time
                     t_event = self._event_time(leg, times[end - 1], times[end])
                     p_state, v_state = self._state_at(cmd, leg, mode, t_state, p_state, v_state, t_event)
                     t_state, mode = t_event, not mode
+                    if mode:
+                        self._touchdown[leg] = t_event
                 k = end
             # State at the chunk's last time, for the next chunk.
             p_last, v_last = self._state_at(cmd, leg, mode, t_state, p_state, v_state, times[-1])
@@ -324,12 +396,17 @@ class GaitPlanner:
         return target, stance_velocity(cmd.scaled(factor(touchdown_t)), target)
 
     def _next_touchdown(self, leg: int, t: float) -> float:
-        """First time > t at which the leg's phase wraps to 0 (touchdown)."""
+        """First time > t at which the leg's phase wraps to 0 (touchdown), or the touchdown of a swing of the
+        gait before a switch."""
+        if self._finish_lift[leg] <= t < self._finish[leg]:
+            return float(self._finish[leg])
         cycles = (t - self.start_time) / self.period + self.offsets[leg]
         return self.start_time + (math.floor(cycles + 1e-12) + 1 - self.offsets[leg]) * self.period
 
     def _event_time(self, leg: int, t0: float, t1: float) -> float:
         """Time of the lift-off (phase = duty) or touchdown (phase = 0) between t0 and t1."""
+        if t0 < self._finish[leg] <= t1 + 1e-12:  # a swing of the gait before a switch lands
+            return float(self._finish[leg])
         base = (t0 - self.start_time) / self.period + self.offsets[leg]
         for boundary in (self.gait.duty, 1.0):
             k = math.floor(base - boundary) + 1  # next crossing of phase == boundary (mod 1)

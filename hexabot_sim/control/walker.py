@@ -28,7 +28,7 @@ import mujoco
 import numpy as np
 
 from hexabot_sim.control.commands import CommandSource
-from hexabot_sim.control.gait import Command, GaitPlanner
+from hexabot_sim.control.gait import Command, GaitPlanner, gaits_for
 from hexabot_sim.control.resolved_rate import ResolvedRateGains, step_constants
 from hexabot_sim.kinematics import legged
 
@@ -97,6 +97,7 @@ class WalkingController:
         self.layout = layout
         self.source = source  # a command that changes (control/commands.py); None: settings.command throughout
         # The heights the planner was built with (the source's at time 0): the source's changes are added to them.
+        self.stance_log: list[tuple[np.ndarray, np.ndarray]] = []  # with a source: (times, stance flags) per chunk
         self._heights0 = None if source is None else [float(v[0]) for v in source.heights(np.zeros(1))]
         self.planner = planner
         self.settings = settings
@@ -163,6 +164,8 @@ class WalkingController:
             segment = self.source.segment(t, self._pose())
             cmd = base = segment.command
             n = min(n, max(1, round((segment.until - t) / self.dt))) if math.isfinite(segment.until) else n
+            if segment.gait != self.planner.gait.name:  # swings under way finish; the new clock takes over
+                self.planner.switch(gaits_for(self.layout.n_legs)[segment.gait])
         times = t + self.dt * np.arange(n + 1)
         ramp = self.scale(times)
         if s.heading_hold:
@@ -179,16 +182,26 @@ class WalkingController:
         targets = self.planner.plan(cmd, n, None if ramp[0] >= 1.0 else self.scale)  # (n + 1, legs, 3) body frame
         times = self.planner.time - self.dt * np.arange(n, -1, -1)  # (n + 1,)
         stance = self.planner.in_stance(times)  # (n + 1, legs)
-        duty = self.planner.gait.duty
-        swing_s = np.where(stance, 0.0, (self.planner.phase(times) - duty) / (1.0 - duty))
+        swing_s = self.planner.swing_fraction(times, stance)
         if self.source is not None:
             self._heights(targets, times, stance, swing_s)
+            self.stance_log.append((times, stance))
         # Body -> hip frame of each leg: R^T (p - hip).
         hip = np.einsum("lji,klj->kli", self.rot, targets - self.hips)  # (n + 1, legs, 3)
         hip += self._rolling_offsets(hip, stance, swing_s)
         self._publish(hip.reshape(n + 1, -1), stance)
         self._chunk = n
         self._k = 0
+
+    def planned_stance(self, t: np.ndarray) -> np.ndarray:
+        """The plan's stance flags (n, legs) at the times t (n,): as planned chunk by chunk with a command source
+        (its gait may have changed), else the planner's clock."""
+        if not self.stance_log:
+            return self.planner.in_stance(t)
+        times = np.concatenate([rows for rows, _ in self.stance_log])
+        flags = np.concatenate([stance for _, stance in self.stance_log])
+        idx = np.searchsorted(times, np.asarray(t) + 1e-9, side="right") - 1
+        return flags[np.clip(idx, 0, len(times) - 1)]
 
     def _pose(self) -> tuple[float, float, float]:
         """The body's planar pose (x, y [m], yaw [rad]) for a command source (a path follower's localisation)."""

@@ -20,7 +20,7 @@ def segment_windows(p: Any, t: np.ndarray, settle: float) -> list[tuple[int, flo
     starts = [max(r.t, settle) for r in rows]
     out = []
     for i, begin in enumerate(starts):
-        end = starts[i + 1] if i + 1 < len(starts) else float(t[-1])
+        end = min(starts[i + 1], float(t[-1])) if i + 1 < len(starts) else float(t[-1])
         first = begin + 2 * p.period  # the ramp, then one period for the gait to settle into the new twist
         cycles = math.floor((end - first) / p.period + 1e-9)
         if cycles >= LEAST_STEADY_CYCLES:
@@ -124,3 +124,31 @@ def course_figure(result: Any, follower: Any, colours: dict[str, str]) -> Any:
         fontsize=plots.TITLE_FONTSIZE,
     )
     return fig
+
+
+BOUNCE_GAP: float = 0.06  # [s] a loaded foot unloaded for less than this, then loaded again, bounced
+
+
+def count_bounces(loaded: np.ndarray, t: np.ndarray, start: float, end: float) -> int:
+    """Bounces of the feet between start and end [s]: a loaded foot that unloads for under BOUNCE_GAP and lands
+    again (loaded: (n, legs) from mj_contactForce, Contacts.loaded). A stand-in until the load-sharing issue's
+    `foot_bounces` metric (issue 19) measures it for every walk."""
+    w = (t >= start) & (t <= end)
+    count = 0
+    for leg in range(loaded.shape[1]):
+        on = loaded[w, leg].astype(int)
+        lifts, lands = np.flatnonzero(np.diff(on) == -1), np.flatnonzero(np.diff(on) == 1)
+        for k in lifts:
+            later = lands[lands > k]
+            if later.size and t[w][later[0] + 1] - t[w][k + 1] < BOUNCE_GAP:
+                count += 1
+    return count
+
+
+def speed_dip(t: np.ndarray, v: np.ndarray, command: float, period: float, start: float, end: float) -> float:
+    """1 - the lowest mean of v over one period (moving) between start and end, over the command."""
+    dt = float(t[1] - t[0])
+    n = max(1, round(period / dt))
+    mean = np.convolve(v, np.ones(n) / n, "valid")  # mean over [t_k, t_k + period]
+    w = (t[: len(mean)] >= start) & (t[: len(mean)] + period <= end)
+    return float(1.0 - mean[w].min() / command)

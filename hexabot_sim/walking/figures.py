@@ -26,6 +26,9 @@ LEG_COLOURS = {
 
 def _title(result: ScenarioResult, text: str) -> str:
     p = result.params
+    if p.schedule or p.waypoints:
+        what = f"a schedule of {len(p.schedule)} rows" if p.schedule else f"{len(p.waypoints)} waypoints"
+        return f"{result.scenario}: {text}\n{p.gait} gait at the start, period {p.period:g} s, command: {what}"
     return (
         f"{result.scenario}: {text}\n{p.gait} gait, period {p.period:g} s, command vx {p.vx:g} m/s, "
         f"vy {p.vy:g} m/s, yaw rate {p.yaw_rate:g} rad/s"
@@ -79,25 +82,13 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     out["path"] = fig
 
     # Gait diagram: measured stance (loaded foot) as bars, the plan as thin lines, over four cycles.
-    planned = result.extras["planned_stance"]
     start = SETTLE_TIME + 2 * p.period
-    show = (t >= start) & (t <= start + 4 * p.period)
-    if not show.any():
-        show = t >= 0
-    fig, ax = plots.figure(figsize=(9, 4.5))
-    for i, leg in enumerate(legs):
-        y = len(legs) - 1 - i
-        ts = t[show]
-        ax.fill_between(ts, y - 0.35, y + 0.35, where=loaded[show, i], step="post", color=LEG_COLOURS[leg], alpha=0.8,
-                        label="stance (foot loaded)" if i == 0 else None)  # fmt: skip
-        ax.fill_between(ts, y + 0.38, y + 0.45, where=planned[show, i], step="post", color="k",
-                        label="planned stance" if i == 0 else None)  # fmt: skip
-    ax.set_yticks(range(len(legs)), list(reversed(legs)))
-    ax.set_xlabel("t [s]")
-    ax.set_xlim(t[show][0], t[show][-1])
-    plots.legend_above(ax, ncol=2)
-    fig.suptitle(_title(result, "gait diagram (bars: measured stance; black: plan)"), fontsize=plots.TITLE_FONTSIZE)
-    out["gait_diagram"] = fig
+    out["gait_diagram"] = _gait_diagram(result, loaded, start, start + 4 * p.period, "gait diagram")
+    for k, (when, gait) in enumerate(result.extras.get("gait_switches", ())[:3]):  # a schedule's gait changes
+        text = f"gait diagram across the switch to the {gait} gait at {when:.3g} s (dashed)"
+        fig = _gait_diagram(result, loaded, when - 2 * p.period, when + 3 * p.period, text)
+        fig.axes[0].axvline(when, color="k", ls="--", lw=1.0)
+        out[f"gait_switch_{k + 1}"] = fig
 
     # Commanded vs achieved body velocity (body frame), raw and averaged over one gait period.
     fig, axes = plots.figure(3, 1, figsize=(9, 8), sharex=True)
@@ -161,6 +152,31 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     if not ground.flat:
         out["terrain"] = _terrain_figure(result, ground)
     return out
+
+
+def _gait_diagram(result: ScenarioResult, loaded: np.ndarray, start: float, end: float, text: str) -> Any:
+    """Measured stance (loaded foot) as bars and the planned stance as thin black lines, from start to end [s]."""
+    from hexabot_sim import plots
+
+    t, legs = result.columns["t"], result.params.ROBOT.layout.legs
+    planned = result.extras["planned_stance"]
+    show = (t >= start) & (t <= end)
+    if not show.any():
+        show = t >= 0
+    fig, ax = plots.figure(figsize=(9, 4.5))
+    for i, leg in enumerate(legs):
+        y = len(legs) - 1 - i
+        ts = t[show]
+        ax.fill_between(ts, y - 0.35, y + 0.35, where=loaded[show, i], step="post", color=LEG_COLOURS[leg], alpha=0.8,
+                        label="stance (foot loaded)" if i == 0 else None)  # fmt: skip
+        ax.fill_between(ts, y + 0.38, y + 0.45, where=planned[show, i], step="post", color="k",
+                        label="planned stance" if i == 0 else None)  # fmt: skip
+    ax.set_yticks(range(len(legs)), list(reversed(legs)))
+    ax.set_xlabel("t [s]")
+    ax.set_xlim(t[show][0], t[show][-1])
+    plots.legend_above(ax, ncol=2)
+    fig.suptitle(_title(result, f"{text} (bars: measured stance; black: plan)"), fontsize=plots.TITLE_FONTSIZE)
+    return fig
 
 
 def _foot_centres(result: ScenarioResult, every: int) -> tuple[np.ndarray, np.ndarray]:

@@ -55,7 +55,7 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     }
     ground = terrain(p)
     loaded = contacts.loaded(total_mass)
-    planned = controller.planner.in_stance(t)  # (n, n_legs)
+    planned = controller.planned_stance(t)  # (n, n_legs)
     if not ground.flat or p.on_ground():  # flat runs with the planned controller keep their metrics as they were
         metrics |= terrain_metrics(p, ground, t, qpos, controller, loaded & planned, planned)
     extras = course_results(p, t, qpos, qvel, contacts, controller, total_mass, metrics)
@@ -121,15 +121,16 @@ def course_results(p, t, qpos, qvel, contacts, controller, total_mass, metrics) 
     changes), a course's metrics added; the extras the figures need."""
     if not (p.schedule or p.waypoints):
         return {}
+    extras: dict = {"gait_switches": list(controller.planner.switches)}
     why = "the command changes during the walk (schedule or waypoints): see the schedule_ or course_ metrics"
     for key in ("vx_error", "vy_error", "yaw_rate_error", "speed_abs_error", "lateral_drift", "heading_drift"):
         m = metrics[key]
         metrics[key] = dataclasses.replace(m, value=None, doc=f"{m.doc}; null here: {why}")
     if not p.waypoints:
-        return {}
+        return extras
     power = np.abs(contacts.torque * qvel[:, 6 : 6 + contacts.torque.shape[1]]).sum(axis=1)
     metrics |= course.course_metrics(p, t, qpos, controller.source, power, total_mass, SETTLE_TIME)
-    return {"follower": controller.source}
+    return extras | {"follower": controller.source}
 
 
 def live(p: WalkParams) -> Live:
