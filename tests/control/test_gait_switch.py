@@ -1,0 +1,80 @@
+"""Gait changes mid-walk (GaitPlanner.switch): every swing and stance continuous, feet down, the new gait's pattern."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from hexabot_sim.control.gait import GAITS, Command, GaitPlanner
+from hexabot_sim.robots.hexabot.model import DEFAULT_LAYOUT
+
+DT = 0.002
+PERIOD = 1.0
+
+
+def _walk(gaits: list[tuple[float, str]], cmd: Command, until: float):
+    """Plans chunk by chunk, switching gait at the given times: (times, targets (n, legs, 3), stance (n, legs))."""
+    planner = GaitPlanner(GAITS[gaits[0][1]], PERIOD, 0.03, DEFAULT_LAYOUT.neutral_feet_body(), DT, start_time=0.5)
+    pending = list(gaits[1:])
+    times, rows, flags = [], [], []
+    while planner.time < until - 1e-9:
+        if pending and planner.time >= pending[0][0] - 1e-9:
+            planner.switch(GAITS[pending.pop(0)[1]])
+        n = planner.max_chunk // 4
+        if pending:
+            n = min(n, max(1, round((pending[0][0] - planner.time) / DT)))
+        out = planner.plan(cmd, n)
+        t = planner.time - DT * np.arange(n, -1, -1)
+        times.append(t[1:])
+        rows.append(out[1:])
+        flags.append(planner.in_stance(t[1:]))
+    return np.concatenate(times), np.concatenate(rows), np.concatenate(flags), planner
+
+
+def _runs(flags: np.ndarray, times: np.ndarray, value: bool) -> list[tuple[float, float]]:
+    """(start, length) [s] of each complete run of `value` in a leg's flags."""
+    edges = np.flatnonzero(np.diff(flags.astype(int))) + 1
+    out = []
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        if flags[a] == value:
+            out.append((times[a], times[b] - times[a]))
+    return out
+
+
+@pytest.mark.parametrize("sequence", [("tripod", "wave", "tripod"), ("tripod", "ripple", "wave"), ("wave", "ripple")])
+def test_switches_keep_every_swing_whole_the_stances_ground_fixed_and_three_feet_down(sequence):
+    switches = [(0.0, sequence[0])] + [(3.3 + 2.7 * k, g) for k, g in enumerate(sequence[1:])]
+    cmd = Command(0.05, 0.0, 0.0)
+    t, rows, stance, planner = _walk(switches, cmd, switches[-1][0] + 3.0)
+    assert [g for _, g in planner.switches] == list(sequence[1:])
+    walking = t > 0.5
+    assert stance[walking].sum(axis=1).min() >= 3  # never fewer than three feet down
+    swing_times = {(1 - GAITS[g].duty) * PERIOD for g in sequence}
+    for leg in range(stance.shape[1]):
+        # Every swing lasts one of the gaits' swing times: none is cut short or stretched.
+        for _, length in _runs(stance[:, leg], t, False):
+            assert min(abs(length - s) for s in swing_times) < 1.5 * DT, (leg, length)
+        # A stance foot is ground-fixed: under a straight command it moves back at exactly the body speed.
+        x = rows[:, leg, 0]
+        moving = stance[1:, leg] & stance[:-1, leg] & (t[:-1] >= 0.5)
+        assert np.diff(x)[moving] == pytest.approx(-cmd.vx * DT, abs=1e-12)
+        # Continuous targets: no step moves a foot faster than 1 m/s.
+        assert np.abs(np.diff(rows[:, leg], axis=0)).max() < 1.0 * DT
+
+
+@pytest.mark.parametrize("new", ["wave", "ripple"])
+def test_after_a_switch_the_feet_lift_in_the_new_gaits_order(new):
+    t, _, stance, _ = _walk([(0.0, "tripod"), (3.0, new)], Command(0.05, 0.0, 0.0), 8.0)
+    late = t > 5.0  # two periods after the switch
+    lifts = []
+    for leg in range(stance.shape[1]):
+        s = stance[late, leg].astype(int)
+        k = np.flatnonzero(np.diff(s) == -1)[0] + 1
+        lifts.append(t[late][k])
+    # Lift-off times differ by the gait's phase offsets: leg i lifts when (t - start) / period + offset_i = duty.
+    offsets = np.array(GAITS[new].offsets)
+    implied = np.mod(np.array(lifts) / PERIOD + offsets, 1.0)
+    spread = np.abs(np.angle(np.exp(2j * math.pi * (implied - implied[0])))).max()
+    assert spread < 2 * math.pi * 2 * DT / PERIOD
