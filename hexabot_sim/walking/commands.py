@@ -19,8 +19,9 @@ import numpy as np
 
 from hexabot_sim.control.commands import Schedule, Setpoint
 from hexabot_sim.control.follower import PathFollower
-from hexabot_sim.control.gait import Command
+from hexabot_sim.control.gait import Command, GaitPlanner
 from hexabot_sim.errors import UsageError
+from hexabot_sim.kinematics import legged
 from hexabot_sim.params import read_bounded
 
 MAX_ROWS: int = 10_000  # rows of a schedule or waypoint table
@@ -184,6 +185,47 @@ def schedule_problem(p: Any, check: Callable[[Any], str]) -> str:
         problem = check(q)
         if problem:
             return f"{where}: {problem}"
+    return ""
+
+
+REPLAY_SAMPLES: int = 120  # targets per gait period in the kinematic replay of a schedule with gait changes
+
+
+def switch_problem(p: Any, neutral: np.ndarray, settle: float) -> str:
+    """'' if every foot target of a schedule's gait changes is reachable, else when and which foot is not.
+
+    The schedule is planned as the walking controller plans it (its segments, the planner's gait switches),
+    without the physics, at REPLAY_SAMPLES targets a period, and every target goes through the legs' IK: a
+    switch stretches some stances (a foot waits for the new gait's clock) beyond any row's own cycle.
+    """
+    rows = setpoints(p)
+    if all(r.gait == p.gait for r in rows):
+        return ""
+    dt = p.period / REPLAY_SAMPLES
+    schedule = Schedule(rows, settle, p.period, p.step_height, p.stand_height)
+    planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral, dt, start_time=settle)
+    gaits = p.gaits()
+    layout = p.ROBOT.layout
+    rot, hips = layout.hip_rotations(), layout.hip_positions()
+    while planner.time < p.duration - 1e-9:
+        t = planner.time
+        segment = schedule.segment(t)
+        n = planner.max_chunk
+        if math.isfinite(segment.until):
+            n = min(n, max(1, round((segment.until - t) / dt)))
+        if segment.gait != planner.gait.name:
+            planner.switch(gaits[segment.gait])
+        body = planner.plan(segment.command, n)
+        hip = np.einsum("lji,klj->kli", rot, body - hips)
+        _, ok = legged.ik_hip_batch(layout, hip)
+        if not ok.all():
+            k, leg = np.argwhere(~ok)[0]
+            last = [s for s in planner.switches if s[0] <= t + k * dt]
+            why = f" (after the switch to the {last[-1][1]} gait at {last[-1][0]:.3g} s)" if last else ""
+            return (
+                f"schedule: at t = {t + k * dt:.3g} s{why} foot {layout.legs[leg]} would leave its reachable "
+                "workspace or joint ranges; change gait at a lower speed or keep one gait"
+            )
     return ""
 
 

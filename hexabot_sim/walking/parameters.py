@@ -176,8 +176,10 @@ class WalkParams:
         problem = feasibility(self)
         if problem:
             raise ValueError(problem)
-        problem = commands.schedule_problem(self, feasibility) or commands.waypoints_problem(
-            self, feasibility, SETTLE_TIME
+        problem = (
+            commands.schedule_problem(self, feasibility)
+            or commands.switch_problem(self, neutral(self), SETTLE_TIME)
+            or commands.waypoints_problem(self, feasibility, SETTLE_TIME)
         )
         if problem:
             raise ValueError(problem)
