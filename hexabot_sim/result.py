@@ -64,6 +64,11 @@ class Live:
     markers: list[Marker] = dataclasses.field(default_factory=list)
     trail: Callable[[mujoco.MjData], np.ndarray] | None = None  # (3,) world point whose path is drawn
     overlay: list[Callable[[mujoco.MjData], str]] = dataclasses.field(default_factory=list)  # ASCII text lines
+    # Keys the scenario takes in the viewer (a walk's steering): (GLFW key code, shift held) -> taken; their help
+    # rows (key, what); and a line for the viewer's last words (the command steered to).
+    keys: Callable[[int, bool], bool] | None = None
+    key_help: tuple[tuple[str, str], ...] = ()
+    summary: Callable[[mujoco.MjData], str] | None = None
 
 
 def at_home(xml: str) -> tuple[mujoco.MjModel, mujoco.MjData]:

@@ -34,6 +34,8 @@ JOIN_TIMEOUT: float = 10.0  # [s] waiting for the viewer's thread to close its w
 KEY_SPACE, KEY_MINUS, KEY_EQUAL = 32, 45, 61
 KEY_RIGHT, KEY_LEFT, KEY_DOWN, KEY_UP, KEY_HOME, KEY_END = 262, 263, 264, 265, 268, 269
 KEY_KP_SUBTRACT, KEY_KP_ADD = 333, 334
+KEY_LEFT_SHIFT, KEY_RIGHT_SHIFT = 340, 344
+SHIFT = 1 << 16  # added to a key code in the queue when shift was held
 
 HELP_REPLAY = (
     ("space", "play / pause"),
@@ -224,6 +226,15 @@ def _set_camera(cam: Any, model: Any, data: Any, camera: str | None, track_body:
         cam.type = mujoco.mjtCamera.mjCAMERA_FREE
 
 
+def _with_shift(code: int) -> int:
+    """The key code, plus SHIFT if a shift key is held (read from the window's thread, where the callback runs)."""
+    import glfw
+
+    window = glfw.get_current_context()
+    held = bool(window) and any(glfw.get_key(window, k) == glfw.PRESS for k in (KEY_LEFT_SHIFT, KEY_RIGHT_SHIFT))
+    return code | SHIFT if held and code not in (KEY_LEFT_SHIFT, KEY_RIGHT_SHIFT) else code
+
+
 @contextmanager
 def _window(model: Any, data: Any, keys: deque[int], title: str) -> Iterator[Any]:
     """MuJoCo's passive viewer on (model, data), side panels hidden; closed and its thread joined on exit."""
@@ -231,7 +242,7 @@ def _window(model: Any, data: Any, keys: deque[int], title: str) -> Iterator[Any
 
     before = set(threading.enumerate())
     handle = mujoco.viewer.launch_passive(
-        model, data, key_callback=keys.append, show_left_ui=False, show_right_ui=False
+        model, data, key_callback=lambda code: keys.append(_with_shift(code)), show_left_ui=False, show_right_ui=False
     )
     threads = [t for t in threading.enumerate() if t not in before]
     try:
@@ -334,7 +345,7 @@ def replay(
         while handle.is_running() and time.monotonic() < deadline:
             now = time.monotonic()
             while keys:
-                clock.key(keys.popleft())
+                clock.key(keys.popleft() & ~SHIFT)
             clock.advance(now - last)
             last = now
             row = nearest_row(t, clock.position)
@@ -397,7 +408,9 @@ def live(
         while handle.is_running() and time.monotonic() < deadline:
             now = time.monotonic()
             while keys:
-                clock.key(keys.popleft())
+                code = keys.popleft()
+                if sim.keys is None or not sim.keys(code & ~SHIFT, bool(code & SHIFT)):  # the scenario's first
+                    clock.key(code & ~SHIFT)
             if clock.restart:
                 sim, diverged = make(), ""
                 clock = Clock(0.0, sim.duration, 0.0, speed=clock.speed, live=True)
@@ -430,9 +443,17 @@ def live(
                 *(line(sim.data) for line in sim.overlay),
                 *([diverged.upper()] if diverged else []),
             ]
-            _draw(handle, scene, HELP_LIVE)
+            _draw(handle, scene, help_rows(sim))
             handle.sync()
             time.sleep(max(0.0, FRAME_PERIOD - (time.monotonic() - now)))
     if diverged:
         raise SimulationError(f"{diverged} (try a smaller timestep: hexabot-sim run {name} names the cause)")
-    return f"last state shown: t = {sim.data.time:.6g} s of {sim.duration:.6g} s"
+    summary = f"; {sim.summary(sim.data)}" if sim.summary is not None else ""
+    return f"last state shown: t = {sim.data.time:.6g} s of {sim.duration:.6g} s{summary}"
+
+
+def help_rows(sim: Any) -> tuple[tuple[str, str], ...]:
+    """The live view's key help: the scenario's keys first; Right steps a frame only where the scenario leaves it."""
+    if not sim.key_help:
+        return HELP_LIVE
+    return (*sim.key_help, *(row for row in HELP_LIVE if row[0] != "Right"))

@@ -22,8 +22,6 @@ import math
 import sys
 import time
 
-import numpy as np
-
 import hexabot_sim as hs
 from hexabot_sim.walking import course
 

@@ -152,6 +152,7 @@ class Steering:
         step_height, stand_height: The heights asked for [m].
         acceleration: Largest change of the twist [m/s^2, rad/s^2] (the same rate for the three).
         height_rate: Largest change of a height [m/s].
+        start: When the gait clock starts [s]: standing still before.
     """
 
     target: Command
@@ -163,27 +164,27 @@ class Steering:
     height_rate: float = 0.02
 
     def __post_init__(self) -> None:
-        self.now = np.zeros(3)  # twist in force
-        self._h = np.array([self.step_height, self.stand_height])  # heights in force
-        self._t = 0.0
+        self.now = np.zeros(3)  # the twist in force (vx, vy, yaw rate)
+        self._h = np.array([self.step_height, self.stand_height])  # the heights reached at the last query
+        self._h_from = self._h.copy()  # ... and at the one before: heights() ramps between them
+        self._t = 0.0  # [s] the last query
 
     def segment(self, t: float, pose: tuple[float, float, float] | None = None) -> Segment:
-        """One stair toward the target (the viewer's keys change it between stairs)."""
+        """One stair toward what is asked (the keys change it between stairs)."""
         dt = max(0.0, t - self._t)
         self._t = t
         want = np.array([self.target.vx, self.target.vy, self.target.yaw_rate]) if t >= self.start else np.zeros(3)
         self.now += np.clip(want - self.now, -self.acceleration * dt, self.acceleration * dt)
-        h_want = np.array([self.step_height, self.stand_height])
-        self._h0 = self._h.copy()
-        self._h += np.clip(h_want - self._h, -self.height_rate * STAIR_TIME, self.height_rate * STAIR_TIME)
-        self._ht = t
+        step = self.height_rate * STAIR_TIME
+        self._h_from = self._h.copy()
+        self._h = self._h + np.clip(np.array([self.step_height, self.stand_height]) - self._h, -step, step)
         return Segment(Command(*(float(v) for v in self.now)), t + STAIR_TIME, self.gait)
 
     def heights(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        t0 = getattr(self, "_ht", 0.0)
-        h0 = getattr(self, "_h0", self._h)
-        f = np.clip((np.asarray(times, dtype=float) - t0) / STAIR_TIME, 0.0, 1.0)
-        return h0[0] + f * (self._h[0] - h0[0]), h0[1] + f * (self._h[1] - h0[1])
+        """Linear from the heights at the last query but one to those at the last, over the stair."""
+        f = np.clip((np.asarray(times, dtype=float) - self._t) / STAIR_TIME, 0.0, 1.0)
+        h = self._h_from[:, None] + (self._h - self._h_from)[:, None] * f.reshape(1, -1)
+        return h[0].reshape(f.shape), h[1].reshape(f.shape)
 
 
 __all__ = ["STAIR_TIME", "CommandSource", "Schedule", "Segment", "Setpoint", "Steering"]

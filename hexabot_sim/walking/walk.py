@@ -10,6 +10,7 @@ import time
 import mujoco
 import numpy as np
 
+from hexabot_sim.control.commands import Steering
 from hexabot_sim.kinematics import legged
 from hexabot_sim.result import Live, Metric, Progress, ScenarioResult, at_home
 from hexabot_sim.simulate import simulate, step_count
@@ -22,8 +23,9 @@ from hexabot_sim.walking.metrics import (
     terrain_metrics,
     walking_metrics,
 )
-from hexabot_sim.walking.parameters import SETTLE_TIME, WalkParams, terrain
+from hexabot_sim.walking.parameters import SETTLE_TIME, WalkParams, feasibility, terrain
 from hexabot_sim.walking.scene import build_xml, make_controller
+from hexabot_sim.walking.steering import KeySteering
 
 __all__ = ["analyse", "figures", "live", "run"]
 
@@ -134,16 +136,28 @@ def course_results(p, t, qpos, qvel, contacts, controller, total_mass, metrics) 
 
 
 def live(p: WalkParams) -> Live:
-    """The robot on its neutral stance with its walking controller, for the interactive viewer."""
+    """The robot on its neutral stance with its walking controller, for the interactive viewer; without a schedule
+    or waypoints, steered by keys (walking/steering.py)."""
     model, data = at_home(build_xml(p))
-    controller = make_controller(p, model, data)  # the same controller a run uses (terrain, levelling)
+    keys = None
+    if not (p.schedule or p.waypoints):
+        steering = Steering(p.command(), p.gait, p.step_height, p.stand_height, start=SETTLE_TIME)
+        keys = KeySteering(p, steering, feasibility, gait_changes=not p.on_ground())
+    # The same controller a run uses (terrain, levelling), its command from the keys.
+    controller = make_controller(p, model, data, source=None if keys is None else keys.steering)
 
     def step() -> None:
         controller(model, data)
         mujoco.mj_step(model, data)
 
     def speed_text(d: mujoco.MjData) -> str:
-        return f"{p.gait} gait, speed {math.hypot(d.qvel[0], d.qvel[1]) * 1000:4.0f} mm/s, x = {d.qpos[0]:6.3f} m"
+        gait = controller.planner.gait.name
+        return f"{gait} gait, speed {math.hypot(d.qvel[0], d.qvel[1]) * 1000:4.0f} mm/s, x = {d.qpos[0]:6.3f} m"
+
+    def summary(d: mujoco.MjData) -> str:
+        yaw = rpy_from_quat(np.asarray(d.qpos[3:7])[None])[0, 2]
+        state = f"body at x = {d.qpos[0]:.3f} m, y = {d.qpos[1]:.3f} m, yaw = {yaw:.3f} rad"
+        return f"{state}, {controller.planner.gait.name} gait; {keys.text().splitlines()[0]}" if keys else state
 
     ground = terrain(p)
 
@@ -152,5 +166,6 @@ def live(p: WalkParams) -> Live:
 
     return Live(
         model, data, step, p.timestep, p.duration, camera="slope" if p.slope_deg else "track", track_body="torso",
-        trail=trail, overlay=[speed_text],
+        trail=trail, overlay=[speed_text, *([lambda d: keys.text()] if keys else [])],
+        keys=None if keys is None else keys.key, key_help=keys.help if keys else (), summary=summary,
     )  # fmt: skip

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -37,7 +38,7 @@ def _runs(flags: np.ndarray, times: np.ndarray, value: bool) -> list[tuple[float
     """(start, length) [s] of each complete run of `value` in a leg's flags."""
     edges = np.flatnonzero(np.diff(flags.astype(int))) + 1
     out = []
-    for a, b in zip(edges[:-1], edges[1:], strict=True):
+    for a, b in itertools.pairwise(edges):
         if flags[a] == value:
             out.append((times[a], times[b] - times[a]))
     return out
