@@ -150,12 +150,13 @@ def read_waypoints(name: str, raw: Any) -> tuple:
 
 
 def setpoints(p: Any) -> list[Setpoint]:
-    """The schedule's rows with what they leave out taken from the row before (the first: from the walk's values)."""
+    """The schedule's rows with what they leave out taken from the row before (the first: from the walk's values),
+    their twists times schedule_scale."""
     out = []
     gait, step, stand = p.gait, p.step_height, p.stand_height
     for t, vx, vy, w, g, h, s in p.schedule:
         gait, step, stand = g or gait, step if h is None else h, stand if s is None else s
-        out.append(Setpoint(t, Command(vx, vy, w), gait, step, stand))
+        out.append(Setpoint(t, Command(vx, vy, w).scaled(p.schedule_scale), gait, step, stand))
     return out
 
 

@@ -38,14 +38,14 @@ def schedule_metrics(p: Any, t: np.ndarray, columns: dict[str, np.ndarray], sett
     table = []
     for i, a, b in segment_windows(p, t, settle):
         w = (t >= a - 1e-9) & (t <= b + 1e-9)
-        row = p.schedule[i]
+        row = commands.setpoints(p)[i]
         v = np.array([columns["vx_body"][w].mean(), columns["vy_body"][w].mean()])
         yaw = columns["yaw"][w]
         rate = float((yaw[-1] - yaw[0]) / (t[w][-1] - t[w][0]))
-        cmd_v, cmd_w = np.array(row[1:3]), row[3]
+        cmd_v, cmd_w = np.array([row.command.vx, row.command.vy]), row.command.yaw_rate
         speed = float(np.hypot(*cmd_v))
         table.append({
-            "row": i + 1, "t": row[0], "window": (a, b), "vx": float(v[0]), "vy": float(v[1]), "yaw_rate": rate,
+            "row": i + 1, "t": row.t, "window": (a, b), "vx": float(v[0]), "vy": float(v[1]), "yaw_rate": rate,
             "speed_error": float(np.hypot(*(v - cmd_v)) / speed) if speed >= 1e-3 else None,
             "yaw_rate_error": abs(rate - cmd_w) / abs(cmd_w) if abs(cmd_w) >= 1e-3 else None,
         })  # fmt: skip

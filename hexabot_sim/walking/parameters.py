@@ -151,6 +151,9 @@ class WalkParams:
         (), "", "walk through these points (path follower: control/follower.py; vx, vy, yaw_rate are then ignored)",
         table=(commands.WAYPOINTS_ALLOWED, commands.read_waypoints),
     )  # fmt: skip
+    schedule_scale: float = param(
+        1.0, "1", "the schedule's vx, vy and yaw_rate times this (a sweep's axis)", ge=0.0, le=10.0
+    )  # fmt: skip
     path_speed: float = param(0.1, "m/s", "the path follower's walking speed (waypoints)", gt=0.0, le=1.0)
     path_yaw_rate: float = param(0.5, "rad/s", "the path follower's largest yaw rate (waypoints)", gt=0.0, le=3.0)
 

@@ -134,3 +134,18 @@ def test_a_tripod_to_wave_switch_walks_on_without_a_dip_or_extra_bounces():
     steady = course.count_bounces(loaded, t, 6.5, 9.0)
     assert across <= steady
     assert "gait_switch_1" in figures(r)
+
+
+def test_schedule_scale_multiplies_the_rows_twists_and_is_checked_like_them(tmp_path):
+    from hexabot_sim import sweep
+    from hexabot_sim.walking import commands
+
+    rows = [[0, 0.05, 0.01, 0], [3, 0, 0, 0.2]]
+    p = walk_params(schedule=rows, schedule_scale=1.5, duration=6)
+    twists = [(s.command.vx, s.command.vy, s.command.yaw_rate) for s in commands.setpoints(p)]
+    assert np.array(twists) == pytest.approx(np.array([(0.075, 0.015, 0.0), (0.0, 0.0, 0.3)]))
+    with pytest.raises(UsageError, match=r"schedule row 1 \(t = 0 s\): the legs cannot deliver"):
+        walk_params(schedule=rows, schedule_scale=10, duration=6)
+    csv = _write(tmp_path / "s.csv", "t,vx,vy,yaw_rate\n0,0.05,0,0\n3,0,0,0.2\n")
+    plan = sweep.plan("hexabot-walk", ["schedule_scale=0.5,1,2"], {}, {"schedule": csv, "duration": "6"})
+    assert [c.schedule_scale for c in plan.cells] == [0.5, 1.0, 2.0]
