@@ -1,6 +1,7 @@
 """Regenerates the figures and the video frame shown in README.md and the pages in docs/ (docs/*.png).
 
-Usage: python scripts/make_docs_figures.py [--hexabot | --terrain]   (only the walking hexabot's / the terrain's)
+Usage: python scripts/make_docs_figures.py [--hexabot | --terrain | --commands]
+       (only the walking hexabot's / the terrain's / the changing commands')
 """
 
 from __future__ import annotations
@@ -56,6 +57,7 @@ def main_() -> int:
     sweep = run("leg-sweep")
     (DOCS / "leg_sweep.png").write_bytes((sweep / "sweep.png").read_bytes())
     hexabot_figures()
+    command_figures()
     terrain_figures()
     print(f"wrote figures to {DOCS}")
     return 0
@@ -73,6 +75,17 @@ def hexabot_figures() -> None:
     for hold in ("off", "on"):
         folder = run("hexabot-walk", *imperfect[:-1], "--set", f"heading_hold={hold}")
         (DOCS / f"hexabot_imperfect_hold_{hold}_path.png").write_bytes((folder / "path.png").read_bytes())
+
+
+def command_figures() -> None:
+    """Commands that change (issue 22): the figure-eight course, the schedule's velocities, a gait change."""
+    examples = DOCS.parent / "examples"
+    eight = run("hexabot-walk", "--set", f"waypoints={examples / 'figure_eight.csv'}", "--set", "duration=80")
+    (DOCS / "hexabot_course_eight.png").write_bytes((eight / "course.png").read_bytes())
+    schedule = run("hexabot-walk", "--set", f"schedule={examples / 'schedule.csv'}", "--set", "duration=20.5")
+    (DOCS / "hexabot_schedule_velocity.png").write_bytes((schedule / "velocity.png").read_bytes())
+    change = run("hexabot-walk", "--set", f"schedule={examples / 'gait_change.csv'}", "--set", "duration=17")
+    (DOCS / "hexabot_gait_switch.png").write_bytes((change / "gait_switch_1.png").read_bytes())
 
 
 def terrain_figures() -> None:
@@ -95,5 +108,8 @@ if __name__ == "__main__":
         sys.exit(0)
     if "--terrain" in sys.argv[1:]:
         terrain_figures()
+        sys.exit(0)
+    if "--commands" in sys.argv[1:]:
+        command_figures()
         sys.exit(0)
     sys.exit(main_())

@@ -271,8 +271,8 @@ class GaitPlanner:
         would have begun earlier is skipped: the foot stays down until its next lift-off; otherwise a tripod's
         swing under way and the new gait's first swings would leave too few feet down). The new clock's phase is chosen
         among `candidates` shifts of a period: the one whose longest stance across the switch (from a foot's
-        last touchdown to its first lift-off under the new gait) is shortest, with at least `min_down` feet down
-        at every time of the next two periods.
+        last touchdown to its first lift-off under the new gait) is shortest (the foot travels least far), then
+        whose shortest is longest, with at least `min_down` feet down at every time of the next two periods.
         """
         if len(gait.offsets) != self.n_legs:
             raise ValueError(f"the {gait.name} gait is for {len(gait.offsets)} legs; the robot has {self.n_legs}")
@@ -293,14 +293,15 @@ class GaitPlanner:
             # First lift-off at or after no_lift: phase == duty, i.e. start + (k + duty - offset) period.
             k = np.ceil((no_lift - start) / self.period - (gait.duty - offsets) - 1e-9)
             first = start + (k + gait.duty - offsets) * self.period  # (n,)
-            longest = float((first - landed).max())
+            stances = first - landed  # (n,) [s] each stance across the switch
+            longest, shortest = round(float(stances.max()), 9), float(stances.min())
             frac = np.mod((samples[:, None] - start) / self.period + offsets, 1.0)
             lift_t = samples[:, None] - (frac - gait.duty) * self.period
             swing = ((frac >= gait.duty) & (lift_t >= no_lift - 1e-9)) | (
                 (samples[:, None] >= lift) & (samples[:, None] < finish)
             )
             down = n - swing.sum(axis=1).max()
-            key = (down < min(min_down, n), longest)
+            key = (down < min(min_down, n), longest, -shortest)  # shortest longest stance; then no stutter step
             if best is None or key < best[0]:
                 best = (key, start)
         self.gait, self.offsets = gait, offsets
