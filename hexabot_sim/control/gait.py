@@ -279,7 +279,7 @@ class GaitPlanner:
         n, t = self.n_legs, self.time  # the planner's own clock: its phases and events agree on it
         stance = self.in_stance(np.array(t))
         finish, lift = self._finish.copy(), self._finish_lift.copy()
-        for leg in np.flatnonzero(~stance):
+        for leg in np.flatnonzero(~stance).tolist():
             if not lift[leg] <= t < finish[leg]:  # a swing of the current gait
                 finish[leg] = self._next_touchdown(leg, t)
                 lift[leg] = finish[leg] - self.swing_time

@@ -211,13 +211,15 @@ class WalkingController:
     def _heights(self, targets: np.ndarray, times: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> None:
         """Adds the source's step and stand heights (rows of `times`) to the planned targets (n + 1, legs, 3)."""
         stand = self._add_lift(targets, times, stance, swing_s)
-        targets[..., 2] -= (stand - self._heights0[1])[:, None]  # type: ignore[index]  (higher: feet deeper)
+        assert self._heights0 is not None
+        targets[..., 2] -= (stand - self._heights0[1])[:, None]  # a higher stand: the feet deeper below the hips
 
     def _add_lift(self, targets: np.ndarray, times: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
         """Adds the change of the source's step height to the swings' lift; returns its stand heights (n + 1,)."""
-        step, stand = self.source.heights(times)  # type: ignore[union-attr]
+        assert self.source is not None and self._heights0 is not None
+        step, stand = self.source.heights(times)
         lift = np.where(stance, 0.0, np.sin(np.pi * swing_s) ** 2)  # (n + 1, legs)
-        targets[..., 2] += (step - self._heights0[0])[:, None] * lift  # type: ignore[index]
+        targets[..., 2] += (step - self._heights0[0])[:, None] * lift
         return stand
 
     def _publish(self, rows: np.ndarray, stance: np.ndarray) -> None:

@@ -123,7 +123,8 @@ def read_schedule(name: str, raw: Any) -> tuple:
                 f"{where}: t = {time:g} s is not after the previous row's {previous:g} s; times must increase"
             )
         previous = time
-        row = [time, _number(where, "vx", vx, -1.0, 1.0, "m/s"), _number(where, "vy", vy, -1.0, 1.0, "m/s")]
+        row: list[float | str | None] = [time, _number(where, "vx", vx, -1.0, 1.0, "m/s")]
+        row.append(_number(where, "vy", vy, -1.0, 1.0, "m/s"))
         row.append(_number(where, "yaw_rate", w, -3.0, 3.0, "rad/s"))
         row.append(None if gait is None else str(gait).strip().lower())
         row.append(None if step is None else _number(where, "step_height", step, 0.002, 0.1, "m"))

@@ -35,7 +35,7 @@ def schedule_metrics(p: Any, t: np.ndarray, columns: dict[str, np.ndarray], sett
     1 mm/s); yaw-rate error: |mean yaw rate - command| / |command| (rows turning at 1 mrad/s or more); the mean
     yaw rate is the heading change over the window divided by its length.
     """
-    table = []
+    table: list[dict[str, Any]] = []
     for i, a, b in segment_windows(p, t, settle):
         w = (t >= a - 1e-9) & (t <= b + 1e-9)
         row = commands.setpoints(p)[i]
@@ -49,8 +49,8 @@ def schedule_metrics(p: Any, t: np.ndarray, columns: dict[str, np.ndarray], sett
             "speed_error": float(np.hypot(*(v - cmd_v)) / speed) if speed >= 1e-3 else None,
             "yaw_rate_error": abs(rate - cmd_w) / abs(cmd_w) if abs(cmd_w) >= 1e-3 else None,
         })  # fmt: skip
-    speed_errors = [r["speed_error"] for r in table if r["speed_error"] is not None]
-    yaw_errors = [r["yaw_rate_error"] for r in table if r["yaw_rate_error"] is not None]
+    speed_errors = [float(r["speed_error"]) for r in table if r["speed_error"] is not None]
+    yaw_errors = [float(r["yaw_rate_error"]) for r in table if r["yaw_rate_error"] is not None]
     metrics = {
         "schedule_rows_measured": Metric(len(table), "1", "schedule rows long enough to measure a steady walk"),
         "schedule_speed_error_max": Metric(
