@@ -263,6 +263,10 @@ class GaitPlanner:
                 s = np.where(old, (t - self._finish_lift) / np.where(old, self._finish - self._finish_lift, 1.0), s)
         return s
 
+    def switch_swing(self, leg: int) -> tuple[float, float]:
+        """(lift-off, touchdown) [s] of the leg's swing under way at the last switch (-inf, -inf: none)."""
+        return float(self._finish_lift[leg]), float(self._finish[leg])
+
     def switch(self, gait: Gait, min_down: int = 3, candidates: int = 48) -> None:
         """Walks with another gait (same period) from the planner's time on (the next chunk).
 
@@ -309,6 +313,7 @@ class GaitPlanner:
         self.start_time = best[1]  # type: ignore[index]
         self._finish, self._finish_lift, self._no_lift_before = finish, lift, no_lift
         self.switches.append((t, gait.name))
+        self.clock_from = float(no_lift[0])  # [s] the old gait's swings have landed: the new gait's may begin
 
     def plan(self, cmd: Command, n_steps: int, scale: Scale | None = None) -> np.ndarray:
         """Targets (n_steps + 1, n_legs, 3) at time, time + dt, ..., time + n_steps dt; advances the planner n_steps dt.

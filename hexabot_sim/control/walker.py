@@ -378,14 +378,20 @@ class GroundController(WalkingController):
         self.par[[K.DEPTH_MIN, K.DEPTH_MAX]] = ground.depth_range
         self.par[[K.ATTITUDE_GAIN, K.HEIGHT_GAIN]] = ground.attitude_gain, ground.height_gain
         self.par[[K.TOUCH_THRESHOLD, K.UPDATE_EVERY]] = ground.touch_threshold, ground.update_every
-        self.par[K.SWING_TIME] = planner.swing_time
-        self.par[K.SEEK_SPEED] = math.pi * planner.step_height / (2 * planner.swing_time)  # [m/s] half the swing's peak
+        self._swing_time(planner)
         self.par[[K.DT, K.SETTLE_TIME, K.RAMP_TIME]] = self.dt, settings.settle_time, settings.ramp_time
         self.par[K.QUAT_ADR] = self.quat_adr
         self.events: list[Touchdown] = []
+        self._new_swing_time_at = math.inf  # [s] after a gait switch: when the kernel takes the new gait's swing time
         self._events = np.zeros((n, 3))  # swings that ended in one step (kernels.targets): one a leg at most
         self._row_prev = np.zeros(3 * n)  # the targets at the current time (hip frames)
         self._started = False
+
+    def _swing_time(self, planner: GaitPlanner) -> None:
+        """The kernel's swing time and late-touchdown seek speed (half the swing's peak) from the planner's gait."""
+        K = self.kernels
+        self.par[K.SWING_TIME] = planner.swing_time
+        self.par[K.SEEK_SPEED] = math.pi * planner.step_height / (2 * planner.swing_time)
 
     @property
     def updates(self) -> int:
@@ -421,18 +427,36 @@ class GroundController(WalkingController):
         return super()._rolling_offsets(shifted, stance, swing_s)
 
     def _record(self, n: int) -> None:
-        """Keeps the n swings that ended in the last kernel call."""
-        self.events += [Touchdown(int(leg), float(planned), float(t)) for leg, planned, t in self._events[:n]]
+        """Keeps the n swings that ended in the last kernel call.
+
+        The kernel dates a swing's planned touchdown as its lift-off plus the swing time in force; a swing of the
+        gait before a switch that lands late, after the kernel took the new gait's swing time, is re-dated with
+        its own (the planner's record of it).
+        """
+        for leg, planned, t in self._events[:n]:
+            leg, planned = int(leg), float(planned)
+            if self.planner.switches:
+                lift, touchdown = self.planner.switch_swing(leg)
+                swing_time = float(self.par[self.kernels.SWING_TIME])
+                if abs(planned - swing_time - lift) <= 1.5 * self.dt:
+                    planned += (touchdown - lift) - swing_time
+            self.events.append(Touchdown(leg, planned, float(t)))
 
     def __call__(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
         """Sets data.ctrl for the step from data.time to data.time + dt."""
         K = self.kernels
         k = self._k
         if k >= self._chunk:
+            switches = len(self.planner.switches)
             self._replan(data.time)
             k = 0
             self.cmd[:] = self.commands[-1][1:]
+            if len(self.planner.switches) > switches:  # a gait switch: the swings under way keep their timing
+                self._new_swing_time_at = self.planner.clock_from
         rows, stance, t = self._rows, self._stance, data.time
+        if t >= self._new_swing_time_at - 1.5 * self.dt:  # the last old swing's last step is done; a new one lifts
+            self._swing_time(self.planner)
+            self._new_swing_time_at = math.inf
         if not self._started:  # the targets at the start
             n = K.targets(self.par, self.geo, self.legs, self.flags, self.plane, self.cmd, rows[k], stance[k], t,
                           rows[k], self._sensordata, self._row_prev, self._events)  # fmt: skip

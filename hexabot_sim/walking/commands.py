@@ -171,11 +171,6 @@ def schedule_problem(p: Any, check: Callable[[Any], str]) -> str:
         where = f"schedule row {i + 1} (t = {row.t:g} s)"
         if row.gait not in gaits:
             return f"{where}: unknown gait {row.gait!r}; known: {', '.join(gaits)}"
-        if row.gait != p.gait and p.on_ground():
-            return (
-                f"{where}: a gait change ({p.gait} to {row.gait}) needs the planned controller for now; set "
-                "touchdown=planned and level_body=off, or keep one gait"
-            )
         c = row.command
         try:
             q = dataclasses.replace(

@@ -43,11 +43,10 @@ class KeySteering:
         p: The walk's parameters (the start: its command, gait and heights).
         steering: The command source the controller queries.
         check: feasibility(params) -> '' or why not (walking.parameters.feasibility).
-        gait_changes: Whether the controller can change gait (the planned one can; refused otherwise).
     """
 
-    def __init__(self, p: Any, steering: Steering, check: Callable[[Any], str], gait_changes: bool) -> None:
-        self.p, self.steering, self.check, self.gait_changes = p, steering, check, gait_changes
+    def __init__(self, p: Any, steering: Steering, check: Callable[[Any], str]) -> None:
+        self.p, self.steering, self.check = p, steering, check
         self.gait_keys = dict(zip((KEY_KP_1, KEY_KP_2, KEY_KP_3), p.gaits(), strict=False))
         self.note = ""  # why the last key was refused
 
@@ -70,9 +69,6 @@ class KeySteering:
             stand += HEIGHT_STEP if code == KEY_PAGE_UP else -HEIGHT_STEP
         elif code in self.gait_keys:
             gait = self.gait_keys[code]
-            if gait != s.gait and not self.gait_changes:
-                self.note = "gait changes need touchdown=planned and level_body=off"
-                return True
             now = s.now  # the gait changes at once: it must carry the twist in force too
             problem = self._problem(float(now[0]), float(now[1]), float(now[2]), s.stand_height, gait)
             if problem:

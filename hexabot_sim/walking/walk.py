@@ -142,7 +142,7 @@ def live(p: WalkParams) -> Live:
     keys = None
     if not (p.schedule or p.waypoints):
         steering = Steering(p.command(), p.gait, p.step_height, p.stand_height, start=SETTLE_TIME)
-        keys = KeySteering(p, steering, feasibility, gait_changes=not p.on_ground())
+        keys = KeySteering(p, steering, feasibility)
     # The same controller a run uses (terrain, levelling), its command from the keys.
     controller = make_controller(p, model, data, source=None if keys is None else keys.steering)
 

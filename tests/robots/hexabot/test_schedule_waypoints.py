@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from helpers import cli, walk, walk_params
 
+from hexabot_sim import params
 from hexabot_sim.errors import UsageError
 from hexabot_sim.walking.commands import MAX_TABLE_BYTES
 
@@ -149,3 +150,21 @@ def test_schedule_scale_multiplies_the_rows_twists_and_is_checked_like_them(tmp_
     csv = _write(tmp_path / "s.csv", "t,vx,vy,yaw_rate\n0,0.05,0,0\n3,0,0,0.2\n")
     plan = sweep.plan("hexabot-walk", ["schedule_scale=0.5,1,2"], {}, {"schedule": csv, "duration": "6"})
     assert [c.schedule_scale for c in plan.cells] == [0.5, 1.0, 2.0]
+
+
+@pytest.mark.slow
+def test_a_gait_switch_on_rough_ground_with_feet_that_find_it():
+    """Tripod -> wave at 0.05 m/s on 1 cm rough ground (hexabot-rough: sensed touchdown): no fall, a dip under 10 %,
+    and every touchdown dated against its own swing (a tripod swing under way that lands late is not dated against
+    the wave's shorter swing): no touchdown further from its plan than in steady tripod walking (0.088 s, seed 0)."""
+    from hexabot_sim.robots.hexabot import walk as scenario
+    from hexabot_sim.walking import course
+
+    rows = [[0, 0.05, 0, 0, "tripod"], [3.5, 0.05, 0, 0, "wave"]]
+    p = params.resolve(scenario.HexabotParams, {"roughness": 0.01, "touchdown": "sensed"}, {"schedule": rows,
+                       "duration": 8.0})  # fmt: skip
+    r = scenario.run("hexabot-rough", p)
+    t = r.columns["t"]
+    assert r.extras["gait_switches"][0][1] == "wave" and not r.metrics["fell"].value
+    assert course.speed_dip(t, r.columns["vx_body"], 0.05, 1.0, 2.5, 6.5) < 0.10
+    assert r.metrics["touchdown_error_max"].value < 0.1
