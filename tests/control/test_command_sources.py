@@ -123,3 +123,18 @@ def test_follower_walks_a_point_robot_through_its_waypoints():
     turn_time = 0.1 * math.sqrt(2) / ACCELERATION
     assert max(errors) < 0.1 * turn_time / 2
     assert math.remainder(pose[2] - math.pi / 2, 2 * math.pi) == pytest.approx(0.0, abs=0.05)
+
+
+def test_a_waypoints_heading_is_held_along_the_segment_that_ends_there():
+    """A crab course: straight along +x to a waypoint whose heading is pi/2; the body turns to face +y while its
+    velocity stays along the path (the holonomic twist), and the path is kept as on a straight course."""
+    f = PathFollower([(0.6, 0.0, math.pi / 2)], 0.1, 0.5, 0.5, "tripod", 0.03, 0.09)
+    pose, t, worst = np.zeros(3), 0.0, 0.0
+    while t < 20.0 and f.arrived_at is None:
+        seg = f.segment(t, tuple(pose))
+        pose = _se2(pose, seg.command, seg.until - t)
+        worst = max(worst, abs(pose[1]))
+        t = seg.until
+    assert f.arrived_at is not None and abs(pose[0] - 0.6) < 0.01
+    assert pose[2] == pytest.approx(math.pi / 2, abs=0.02)
+    assert worst < 0.005  # turning while walking sideways does not pull it off the line
