@@ -17,6 +17,10 @@ Two corrections make the body go where it is told:
 - Heading hold (optional): the body's yaw from the IMU quaternion (sensor "imu_quat", not the free
   joint) is compared with the integral of the commanded yaw rate, and the yaw rate of the next
   chunk is corrected by heading_gain times the error.
+
+A command that changes (control/commands.py: a schedule, the viewer's steering, a path follower) is asked at
+each planning: its twist holds until the source says it changes (the chunk ends there), its gait switches the
+planner, its step and stand heights are added to the targets.
 """
 
 from __future__ import annotations
@@ -96,8 +100,8 @@ class WalkingController:
     ) -> None:
         self.layout = layout
         self.source = source  # a command that changes (control/commands.py); None: settings.command throughout
-        # The heights the planner was built with (the source's at time 0): the source's changes are added to them.
         self.stance_log: list[tuple[np.ndarray, np.ndarray]] = []  # with a source: (times, stance flags) per chunk
+        # The heights the planner was built with (the source's at time 0): the source's changes are added to them.
         self._heights0 = None if source is None else [float(v[0]) for v in source.heights(np.zeros(1))]
         self.planner = planner
         self.settings = settings
