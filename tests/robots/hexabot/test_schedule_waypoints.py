@@ -168,3 +168,24 @@ def test_a_gait_switch_on_rough_ground_with_feet_that_find_it():
     assert r.extras["gait_switches"][0][1] == "wave" and not r.metrics["fell"].value
     assert course.speed_dip(t, r.columns["vx_body"], 0.05, 1.0, 2.5, 6.5) < 0.10
     assert r.metrics["touchdown_error_max"].value < 0.1
+
+
+@pytest.mark.slow
+def test_a_schedules_heights_raise_the_body_and_the_swings():
+    """stand_height 0.09 -> 0.11 m and step_height 0.03 -> 0.05 m at 2.5 s: the body rises by 20 mm and each foot's
+    highest point in a swing (its site, from mj_kinematics) by 20 mm (measured: 20.0 and 19.9 mm)."""
+    import mujoco
+
+    r = walk(schedule=[[0, 0.05, 0, 0, None, 0.03, 0.09], [2.5, 0.05, 0, 0, None, 0.05, 0.11]], duration=6.0)
+    t, z = r.columns["t"], r.columns["z"]
+    assert z[t > 4.5].mean() - z[(t > 1.5) & (t < 2.5)].mean() == pytest.approx(0.02, abs=0.001)
+    model, data = r.model, mujoco.MjData(r.model)
+    site = model.site("lf_foot").id
+    rows = np.arange(0, len(t), 5)
+    apex = np.empty(len(rows))
+    for i, k in enumerate(rows):
+        data.qpos[:] = r.trajectory.qpos[k]
+        mujoco.mj_kinematics(model, data)
+        apex[i] = data.site_xpos[site][2]
+    before, after = apex[(t[rows] > 1.0) & (t[rows] < 2.5)].max(), apex[t[rows] > 4.0].max()
+    assert after - before == pytest.approx(0.02, abs=0.002) and not r.metrics["fell"].value
