@@ -280,7 +280,8 @@ class GaitPlanner:
         """
         if len(gait.offsets) != self.n_legs:
             raise ValueError(f"the {gait.name} gait is for {len(gait.offsets)} legs; the robot has {self.n_legs}")
-        n, t = self.n_legs, self.time  # the planner's own clock: its phases and events agree on it
+        # The planner's own clock (its phases and events agree on it), and no earlier than the gait clock's start.
+        n, t = self.n_legs, max(self.time, self.start_time)
         stance = self.in_stance(np.array(t))
         finish, lift = self._finish.copy(), self._finish_lift.copy()
         for leg in np.flatnonzero(~stance).tolist():

@@ -171,6 +171,8 @@ def schedule_problem(p: Any, check: Callable[[Any], str]) -> str:
         where = f"schedule row {i + 1} (t = {row.t:g} s)"
         if row.gait not in gaits:
             return f"{where}: unknown gait {row.gait!r}; known: {', '.join(gaits)}"
+        if row.gait != p.gait and p.duty:
+            return f"{where}: a schedule that changes gait walks each gait at its own duty; set duty=0"
         c = row.command
         try:
             q = dataclasses.replace(
@@ -196,12 +198,13 @@ def switch_problem(p: Any, neutral: np.ndarray, settle: float) -> str:
     switch stretches some stances (a foot waits for the new gait's clock) beyond any row's own cycle.
     """
     rows = setpoints(p)
-    if all(r.gait == p.gait for r in rows):
+    if all(r.gait == rows[0].gait for r in rows):
         return ""
     dt = p.period / REPLAY_SAMPLES
     schedule = Schedule(rows, settle, p.period, p.step_height, p.stand_height)
-    planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral, dt, start_time=settle)
     gaits = p.gaits()
+    first = p.the_gait() if rows[0].gait == p.gait else gaits[rows[0].gait]  # as walking.scene.make_controller
+    planner = GaitPlanner(first, p.period, p.step_height, neutral, dt, start_time=settle)
     layout = p.ROBOT.layout
     rot, hips = layout.hip_rotations(), layout.hip_positions()
     while planner.time < p.duration - 1e-9:

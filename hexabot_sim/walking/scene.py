@@ -112,8 +112,12 @@ def acceleration_limit(p: WalkParams) -> float:
     (the most any of a schedule's rows needs)."""
     cases = [(p, p.command())]
     for row in commands.setpoints(p):
-        cases.append((dataclasses.replace(p, step_height=row.step_height, stand_height=row.stand_height,
-                                          schedule=()), row.command))  # fmt: skip
+        c = row.command
+        q = dataclasses.replace(
+            p, vx=c.vx, vy=c.vy, yaw_rate=c.yaw_rate, gait=row.gait, step_height=row.step_height,
+            stand_height=row.stand_height, schedule=(),
+        )  # fmt: skip
+        cases.append((q, c))
     peak = 0.0
     for q_params, cmd in cases:
         hip, dt = _plan_cycle(q_params, cmd)
@@ -128,7 +132,10 @@ def make_controller(
     """The walking controller of a run (the ground-finding one for sensed touchdown or a levelled body); its
     command from `source` (the viewer's steering), else the walk's schedule or waypoints, else vx, vy, yaw_rate."""
     trims, _, _ = _perturbations(p)
-    planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), p.timestep, start_time=SETTLE_TIME)
+    gait = p.the_gait()
+    if p.schedule and commands.setpoints(p)[0].gait != p.gait:  # the walk starts in the first row's gait
+        gait = p.gaits()[commands.setpoints(p)[0].gait]
+    planner = GaitPlanner(gait, p.period, p.step_height, neutral(p), p.timestep, start_time=SETTLE_TIME)
     source = commands.source(p, SETTLE_TIME) if source is None else source
     settings = WalkSettings(
         p.command(), settle_time=SETTLE_TIME, ramp_time=p.period if source is None else 0.0,
