@@ -11,6 +11,7 @@ Usage: python scripts/command_targets.py [--seeds N] [--quick]
               a period) across each switch, and the feet's bounces (a loaded foot unloading for under 60 ms,
               from mj_contactForce: walking.course.count_bounces, until issue 19's foot_bounces) in the 2.5 s
               around each switch against 2.5 s of the steady gait after it          target dip <= 10 %
+              and the same on 1 cm rough ground (hexabot-rough, sensed touchdown), seeds 0 and 1
 
 Prints one line per measurement; --quick runs the figure-eight on flat ground only.
 """
@@ -68,9 +69,10 @@ def eight(scenario: str, seed: int) -> None:
     )
 
 
-def switch() -> None:
+def switch(scenario: str = "hexabot-walk", seed: int = 0) -> None:
     rows = [[0, 0.05, 0, 0, "tripod"], [5, 0.05, 0, 0, "wave"], [11, 0.05, 0, 0, "tripod"]]
-    r = hs.run("hexabot-walk", schedule=rows, duration=17.0)
+    r = hs.run(scenario, schedule=rows, duration=17.0, seed=seed)
+    print(f"switch {scenario} seed {seed}:")
     raw = r.raw
     t = raw.columns["t"]
     loaded = raw.extras["contacts"].loaded(float(raw.model.body_subtreemass[raw.model.body("torso").id]))
@@ -82,7 +84,9 @@ def switch() -> None:
             f"switch to {gait} at {when:.3g} s: speed dip {100 * dip:.2f} %, bounces in the 2.5 s around it "
             f"{across}, in 2.5 s of steady {gait} after it {steady}"
         )
-    print(f"switch fell: {r.metrics['fell'].value}")
+    late = r.metrics.get("touchdown_error_max")
+    late_text = "" if late is None else f", touchdown_error_max {late.value:.3f} s"
+    print(f"switch fell: {r.metrics['fell'].value}{late_text}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -97,6 +101,8 @@ def main(argv: list[str] | None = None) -> int:
         eight("hexabot-rough", seed)
     schedule()
     switch()
+    for seed in range(min(args.seeds, 2)):
+        switch("hexabot-rough", seed)
     return 0
 
 
