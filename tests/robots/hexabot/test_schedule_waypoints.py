@@ -47,8 +47,10 @@ def test_bad_schedules_are_refused_before_the_walk_with_one_line_naming_the_row(
 def test_unreadable_and_huge_tables_are_refused(tmp_path, capsys):
     huge = tmp_path / "huge.csv"
     huge.write_text("t,vx,vy,yaw_rate\n" + "0,0,0,0\n" * (MAX_TABLE_BYTES // 8 + 1))
+    many = tmp_path / "many.csv"
+    many.write_text("t,vx,vy,yaw_rate\n" + "".join(f"{i},0.05,0,0\n" for i in range(1001)))
     for value, words in ((huge, "is larger than 1024 KiB"), (tmp_path, "is a directory"),
-                         (tmp_path / "none.csv", "not found")):  # fmt: skip
+                         (tmp_path / "none.csv", "not found"), (many, "has 1001 rows; the limit is 1000")):  # fmt: skip
         code, _, err = cli(capsys, "run", "hexabot-walk", "--set", f"schedule={value}", "--out", str(tmp_path / "o"))
         assert code == 2 and words in err and len(err.strip().splitlines()) == 1
 
