@@ -191,3 +191,21 @@ def test_a_schedules_heights_raise_the_body_and_the_swings():
         apex[i] = data.site_xpos[site][2]
     before, after = apex[(t[rows] > 1.0) & (t[rows] < 2.5)].max(), apex[t[rows] > 4.0].max()
     assert after - before == pytest.approx(0.02, abs=0.002) and not r.metrics["fell"].value
+
+
+def test_bounces_and_the_speed_dip_are_counted_as_defined():
+    """count_bounces on a hand-made contact pattern (2 ms rows): a 40 ms gap between loads is a bounce, a 60 ms or
+    longer one a swing; speed_dip of a speed that drops to half for exactly one period is 50 %."""
+    from hexabot_sim.walking import course
+
+    t = np.arange(0, 2.0, 0.002)
+    loaded = np.ones((len(t), 2), dtype=bool)
+    loaded[(t >= 0.5) & (t < 0.54), 0] = False  # 40 ms: a bounce
+    loaded[(t >= 1.0) & (t < 1.06), 0] = False  # 60 ms: not one
+    loaded[(t >= 1.2) & (t < 1.21), 1] = False  # 10 ms: a bounce
+    loaded[(t >= 1.5), 1] = False  # lifted and not back: not one
+    assert course.count_bounces(loaded, t, 0.0, 2.0) == 2
+    assert course.count_bounces(loaded, t, 0.6, 2.0) == 1
+    v = np.where((t >= 0.8) & (t < 1.3), 0.05, 0.1)
+    assert course.speed_dip(t, v, 0.1, 0.5, 0.0, 2.0) == pytest.approx(0.5)
+    assert course.speed_dip(t, v, 0.1, 0.5, 0.0, 0.7) == pytest.approx(0.0)
