@@ -46,7 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--debug", action="store_true", help="show the Python traceback of an internal error (or HEXABOT_SIM_DEBUG=1)"
     )
     sub = parser.add_subparsers(
-        dest="command", required=True, parser_class=_Parser, metavar="{list,run,view,sweep,compare,check,kin,clean}"
+        dest="command", required=True, parser_class=_Parser, metavar="{list,run,view,sweep,compare,check,kin,export,clean}"
     )
     sub.add_parser("list", help="scenarios and their parameters with defaults and units")
     run = sub.add_parser("run", help="run a scenario and write a run folder")
@@ -109,6 +109,18 @@ def build_parser() -> argparse.ArgumentParser:
         help="also derive T0n and J with sympy, printed with c1/s23 abbreviations and as LaTeX "
         "(needs sympy, the extra 'symbolic': pip install \".[symbolic]\" in the hexabot-sim folder)",
     )
+    export = sub.add_parser(
+        "export",
+        help="a robot's MJCF (qpos = DH q) and URDF, from its name or robot file",
+        description="Writes the MJCF whose body frames are the DH frames (MuJoCo's qpos is the DH q; sites base, "
+        "frame1..frameN, tool) and/or a URDF with the same link frames and inertials. An existing file is replaced "
+        "only with --force; each file is written under a temporary name and renamed into place.",
+    )
+    export.add_argument("robot", metavar="ROBOT|FILE", help="rrp, elbow, stanford, scara, leg, or a robot file (.toml)")
+    export.add_argument("--mjcf", metavar="OUT.xml", help="the MJCF file to write")
+    export.add_argument("--urdf", metavar="OUT.urdf", help="the URDF file to write")
+    export.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE", help="link length [m]")
+    export.add_argument("--force", action="store_true", help="replace the files if they exist")
     view = sub.add_parser(
         "view",
         help="MuJoCo's interactive viewer: a scenario driven live, or a run folder replayed",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -65,6 +66,7 @@ def to_mjcf(
     comment: str = "",
     link_radius: float = 0.02,
     density: float = ALUMINIUM_DENSITY,
+    masses: Sequence[float | None] = (),
 ) -> str:
     """The MJCF of a serial chain whose body frames are the frames its joints act in (qpos == q).
 
@@ -80,14 +82,14 @@ def to_mjcf(
         comment: Text for the header comment (e.g. the report the table comes from); must not contain "--".
         link_radius: Radius of the link capsules in [m]; joint housings are HOUSING_SCALE times larger.
         density: Density of the solid cylinders that give each link its mass and inertia in [kg/m^3].
+        masses: Each link's mass in [kg] (a robot file's `mass`), or None for the cylinders' own: the inertia
+            scales with it, the centre of mass stays.
 
     Returns:
         The MJCF text (one robot, no floor or lights: a scene file includes it).
     """
     _validate(chain, comment, link_radius, density)
-    bodies, base_solids, base_sites = _bodies(chain, link_radius)
-    for body in bodies:
-        body.mass, body.com, body.inertia = _cylinders_inertia(body.solids, density)
+    bodies, base_solids, base_sites = link_bodies(chain, link_radius, density, masses)
     q_home = home_pose(chain)
     kp = _mass_diagonal(chain, bodies, q_home) * (2 * math.pi * SERVO_BANDWIDTH) ** 2  # (n,) [N m/rad or N/m]
     return _write(chain, bodies, base_solids, base_sites, q_home, kp, comment, link_radius, density)
@@ -139,6 +141,19 @@ def _placement(a: float, alpha: float, theta: float, d: float) -> np.ndarray:
     t[:3, :3] = [[ct, -st, 0.0], [ca * st, ca * ct, -sa], [sa * st, sa * ct, ca]]
     t[:3, 3] = (a, -sa * d, ca * d)
     return t
+
+
+def link_bodies(
+    chain: SerialChain, radius: float, density: float, masses: Sequence[float | None] = ()
+) -> tuple[list[_Body], list[_Solid], list[_Site]]:
+    """The bodies (frames, solids, sites, mass, centre of mass, inertia) of the MJCF, also used by the URDF writer."""
+    bodies, base_solids, base_sites = _bodies(chain, radius)
+    for k, body in enumerate(bodies):
+        body.mass, body.com, body.inertia = _cylinders_inertia(body.solids, density)
+        mass = masses[k] if k < len(masses) else None
+        if mass is not None:  # a given mass: the same shape, scaled in density
+            body.inertia, body.mass = body.inertia * (mass / body.mass), float(mass)
+    return bodies, base_solids, base_sites
 
 
 def _bodies(chain: SerialChain, radius: float) -> tuple[list[_Body], list[_Solid], list[_Site]]:
