@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import errno
 import os
 import time
 import warnings
@@ -18,6 +17,7 @@ from hexabot_sim import folders, gl, output, registry
 from hexabot_sim import params as params_mod
 from hexabot_sim import video as video_options
 from hexabot_sim.errors import HexabotError, OutputError, UsageError
+from hexabot_sim.exporting import export
 from hexabot_sim.result import Metric
 from hexabot_sim.scenario import Scenario
 
@@ -381,17 +381,17 @@ class Result:
             raise UsageError(f"the folder {str(folder)!r} for the video does not exist")
         if not os.access(folder, os.W_OK | os.X_OK):
             raise OutputError(f"the folder {str(folder)!r} for the video cannot be written")
-        _check_replace(path, force)
+        folders.check_replace(path, force)
         staging = path.with_name(f".{path.name}.partial-{os.getpid()}.mp4")
         try:
             record, _ = output.write_video(folder, self.raw, settings, backend, progress, name=staging.name)
             if not record["written"]:
                 raise OutputError(f"no video: {record['reason']}")
-            _check_replace(path, force)  # again: the file may have appeared while the video rendered
+            folders.check_replace(path, force)  # again: the file may have appeared while the video rendered
             if force:
                 os.replace(staging, path)
             else:
-                _publish_new(staging, path)
+                folders.publish_new(staging, path)
         except OSError as e:
             raise OutputError(f"writing the video {str(path)!r} failed: {e.strerror or e}") from None
         finally:
@@ -405,103 +405,6 @@ def _argument_words(text: str) -> str:
     for flag, argument in (("add --force", "pass force=True"), ("--force", "force=True"), ("--out", "out")):
         text = text.replace(flag, argument)
     return text
-
-
-def _check_replace(path: Path, force: bool, what: str = "video path", how: str = "pass force=True") -> None:
-    """An existing `path` is replaced only with force, and only if it is a file (or a link, itself replaced)."""
-    if not os.path.lexists(path):
-        return
-    if not force:
-        raise UsageError(f"{what} {str(path)!r} exists; {how} to replace it, or choose another name")
-    if not (path.is_symlink() or path.is_file()):
-        raise UsageError(f"{what} {str(path)!r} exists and is not a regular file; it is never replaced")
-
-
-def _publish_new(staging: Path, path: Path, what: str = "video path", meanwhile: str = "the video rendered") -> None:
-    """Renames `staging` to `path` only if `path` does not exist (a hard link never replaces; rename would)."""
-    try:
-        os.link(staging, path)
-    except FileExistsError:
-        raise UsageError(f"{what} {str(path)!r} appeared while {meanwhile}; it was left alone") from None
-    except OSError as e:
-        if e.errno not in (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EMLINK):
-            raise
-        os.replace(staging, path)  # a file system without hard links: checked just before
-
-
-def export(
-    robot: str | os.PathLike[str] | Any,
-    *,
-    mjcf: str | os.PathLike[str] | None = None,
-    urdf: str | os.PathLike[str] | None = None,
-    force: bool = False,
-    lengths: Mapping[str, float] | None = None,
-) -> list[Path]:
-    """Writes the MJCF (body frames = DH frames, qpos = q) and/or the URDF of a robot, as `hexabot-sim export` does.
-
-    Args:
-        robot: A package robot's name (rrp, elbow, stanford, scara, leg), the path of a robot file, or a RobotSpec.
-        mjcf: The MJCF file to write, or None.
-        urdf: The URDF file to write, or None.
-        force: Replace existing files (regular files only); without it an existing file is an error.
-        lengths: The robot's named lengths to change, in [m].
-
-    Returns:
-        The paths written. Both models are made before anything is written, and each file is written to a
-        temporary name in its folder and renamed into place: an error leaves no file half-written.
-
-    Raises:
-        hexabot_sim.errors.UsageError: a bad robot, file or length; an existing path without force; no path.
-        hexabot_sim.errors.OutputError: a file could not be written.
-    """
-    from hexabot_sim.kinematics import robots
-    from hexabot_sim.kinematics import urdf as urdf_mod
-    from hexabot_sim.kinematics.mjcf import to_mjcf
-
-    _check_flag("force", force)
-    _check_path("mjcf", mjcf)
-    _check_path("urdf", urdf)
-    if mjcf is None and urdf is None:
-        raise UsageError("export needs an output: --mjcf FILE and/or --urdf FILE (mjcf=..., urdf=... in Python)")
-    spec = robots.resolve(robot)
-    chain = spec.chain(lengths)
-    where = f"{spec.name} ({spec.source})" if spec.source else spec.name
-    comment = f"{where}: {spec.summary}".replace("--", "- -")
-    texts: dict[Path, tuple[str, str]] = {}
-    if mjcf is not None:
-        texts[Path(mjcf)] = ("MJCF file", to_mjcf(chain, comment=comment, masses=spec.masses))
-    if urdf is not None:
-        if Path(urdf) in texts:
-            raise UsageError(f"--mjcf and --urdf name the same file {str(urdf)!r}")
-        try:
-            texts[Path(urdf)] = ("URDF file", urdf_mod.to_urdf(chain, comment=comment, masses=spec.masses))
-        except UsageError as e:
-            raise UsageError(f"{where}: {e}") from None
-    for path, (what, _) in texts.items():
-        if path.is_dir():
-            raise UsageError(f"{what} {str(path)!r} is a folder; give a file name")
-        if not path.parent.is_dir():
-            raise UsageError(f"the folder {str(path.parent)!r} for the {what} does not exist")
-        _check_replace(path, force, what, "add --force (force=True)")
-    written = []
-    for path, (what, text) in texts.items():
-        staging = path.with_name(f".{path.name}.partial-{os.getpid()}")
-        try:
-            with open(staging, "x", encoding="utf-8") as f:
-                f.write(text)
-                f.flush()
-                os.fsync(f.fileno())
-            _check_replace(path, force, what, "add --force (force=True)")
-            if force:
-                os.replace(staging, path)
-            else:
-                _publish_new(staging, path, what, "it was written")
-        except OSError as e:
-            raise OutputError(f"writing the {what} {str(path)!r} failed: {e.strerror or e}") from None
-        finally:
-            staging.unlink(missing_ok=True)
-        written.append(path)
-    return written
 
 
 def _short(metric: Metric) -> str:

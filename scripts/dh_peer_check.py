@@ -22,7 +22,7 @@ import roboticstoolbox as rtb  # type: ignore[import-not-found]
 from spatialmath import SE3  # type: ignore[import-not-found]
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from hexabot_sim.kinematics import robot_file  # noqa: E402
+from hexabot_sim.kinematics import robot_file
 
 TOL = 1e-12
 
@@ -31,8 +31,9 @@ def random_table(rng: np.random.Generator, n: int, convention: str) -> tuple[str
     rows = []
     for i in range(n):
         kind = "prismatic" if rng.random() < 0.3 else "revolute"
-        row = {"name": f"j{i + 1}", "type": kind, "a": float(rng.uniform(-0.5, 0.5)), "d": float(rng.uniform(-0.5, 0.5)),
-               "theta": float(rng.uniform(-math.pi, math.pi)), "alpha": float(rng.uniform(-math.pi, math.pi))}  # fmt: skip
+        row = {"name": f"j{i + 1}", "type": kind, "a": float(rng.uniform(-0.5, 0.5)),
+               "d": float(rng.uniform(-0.5, 0.5)), "theta": float(rng.uniform(-math.pi, math.pi)),
+               "alpha": float(rng.uniform(-math.pi, math.pi))}  # fmt: skip
         row["lower"], row["upper"] = (-0.3, 0.4) if kind == "prismatic" else (-3.0, 3.0)
         rows.append(row)
     frames = [rng.uniform(-0.3, 0.3, 3).tolist() + rng.uniform(-math.pi, math.pi, 3).tolist() for _ in range(2)]
@@ -67,7 +68,9 @@ def peer(rows: list[dict], convention: str, tool: np.ndarray, base: np.ndarray) 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--tables", type=int, default=700, help="random tables (default 700: 50 per size and convention)")
+    parser.add_argument(
+        "--tables", type=int, default=700, help="random tables (default 700: 50 per size and convention)"
+    )
     args = parser.parse_args()
     rng = np.random.default_rng(2026)
     worst = {"fk": 0.0, "J": 0.0}
@@ -81,7 +84,8 @@ def main() -> int:
             worst["fk"] = max(worst["fk"], float(np.max(np.abs(chain.fk(q) - robot.fkine(q).A))))
             worst["J"] = max(worst["J"], float(np.max(np.abs(chain.jacobian(q) - robot.jacob0(q)))))
     print(f"{args.tables} random tables x 5 configurations against roboticstoolbox {rtb.__version__}: "
-          f"worst |FK difference| {worst['fk']:.2e}, worst |J difference| {worst['J']:.2e} (limit {TOL:g})")  # fmt: skip
+          f"worst |FK difference| {worst['fk']:.2e}, worst |J difference| {worst['J']:.2e} "
+          f"(limit {TOL:g})")  # fmt: skip
     return 0 if max(worst.values()) <= TOL else 1
 
 

@@ -3,9 +3,12 @@ long a call takes.
 
 Usage: python scripts/ik_check.py [--cases N]   (default 1,000; about a minute)
 
-Each case: a random 6-joint table (revolute ranges ±0.9π, 30 % prismatic joints with a 0.5 m stroke, standard
-and modified DH alternating, random base and tool), a random q inside the ranges, the target pose FK(q), and
-numeric_ik.solve (as `kin FILE --target` calls it). Recovered: one solution equals q within numeric_ik.DEDUP_TOL
+Each case: a random 6-joint table (revolute ranges ±0.9π; each joint prismatic with probability 0.3, a 0.5 m
+stroke, at most 2 of them: with 3 or more of 6 joints sliding, a random table is a chain whose J has rank < 6
+everywhere, with no isolated solution to recover; standard and modified DH alternating; a random tool offset), a
+random q inside the ranges where J has full rank (σmin / σmax > 1e-6; drawn again otherwise), the target pose
+FK(q), and numeric_ik.solve (as `kin FILE --target` calls it). Recovered: one solution equals q within
+numeric_ik.DEDUP_TOL
 (angles mod 2π). Prints the rate, the worst residuals and the time per call (mean, median, 95th percentile, max).
 """
 
@@ -20,16 +23,16 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from hexabot_sim.kinematics import numeric_ik  # noqa: E402
-from hexabot_sim.kinematics.chain import Joint, SerialChain  # noqa: E402
+from hexabot_sim.kinematics import numeric_ik
+from hexabot_sim.kinematics.chain import Joint, SerialChain
 
 
 def random_chain(rng: np.random.Generator, k: int) -> SerialChain:
-    joints = []
+    joints: list[Joint] = []
     for i in range(6):
         dh = {"theta": rng.uniform(-math.pi, math.pi), "d": rng.uniform(-0.3, 0.3), "a": rng.uniform(-0.3, 0.3),
               "alpha": rng.uniform(-math.pi, math.pi)}  # fmt: skip
-        if rng.random() < 0.3:
+        if rng.random() < 0.3 and sum(j.prismatic for j in joints) < 2:
             joints.append(Joint(f"j{i + 1}", "prismatic", lower=-0.2, upper=0.3, **dh))
         else:
             joints.append(Joint(f"j{i + 1}", lower=-0.9 * math.pi, upper=0.9 * math.pi, **dh))
@@ -45,8 +48,12 @@ def main() -> int:
     rng = np.random.default_rng(2026)
     recovered, times, worst_pos, worst_rot, counts = 0, [], 0.0, 0.0, []
     for k in range(args.cases):
-        chain = random_chain(rng, k)
-        q = np.array([rng.uniform(j.lower, j.upper) for j in chain.joints])
+        while True:
+            chain = random_chain(rng, k)
+            q = np.array([rng.uniform(j.lower, j.upper) for j in chain.joints])
+            sigma = np.linalg.svd(chain.jacobian(q), compute_uv=False)
+            if sigma[-1] > 1e-6 * sigma[0]:
+                break
         target = chain.fk(q)
         started = time.perf_counter()
         solutions = numeric_ik.solve(chain, target)

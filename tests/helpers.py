@@ -92,7 +92,10 @@ def random_table(rng: np.random.Generator, n: int, convention: str, angles: str)
         else:
             row["lower"], row["upper"] = -0.9 * math.pi * unit, 0.9 * math.pi * unit
         joints.append(row)
-    frame = lambda: {"xyz": rng.uniform(-0.3, 0.3, 3).tolist(), "rpy": (rng.uniform(-math.pi, math.pi, 3) * unit).tolist()}  # noqa: E731
+
+    def frame() -> dict:
+        return {"xyz": rng.uniform(-0.3, 0.3, 3).tolist(), "rpy": (rng.uniform(-math.pi, math.pi, 3) * unit).tolist()}
+
     return {"name": "random", "convention": convention, "angles": angles, "joints": joints, "tool": frame(),
             "base": frame()}  # fmt: skip
 

@@ -46,7 +46,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--debug", action="store_true", help="show the Python traceback of an internal error (or HEXABOT_SIM_DEBUG=1)"
     )
     sub = parser.add_subparsers(
-        dest="command", required=True, parser_class=_Parser, metavar="{list,run,view,sweep,compare,check,kin,export,clean}"
+        dest="command",
+        required=True,
+        parser_class=_Parser,
+        metavar="{list,run,view,sweep,compare,check,kin,export,clean}",
     )
     sub.add_parser("list", help="scenarios and their parameters with defaults and units")
     run = sub.add_parser("run", help="run a scenario and write a run folder")
@@ -77,7 +80,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="kinematics of a robot or a robot file: T0n, J, singularities, IK",
         description="DH table and singular sets; with --q also T0n, J, det and the singular conditions that hold; "
         "with --target every IK branch and its FK residual (a robot file: numeric IK from many seeds, x,y,z for "
-        "fewer than 6 joints, x,y,z,roll,pitch,yaw for 6 or more; sigma_min reported). Units: m; revolute joints and target angles in rad "
+        "fewer than 6 joints, x,y,z,roll,pitch,yaw for 6 or more; sigma_min reported). Units: m; revolute joints "
+        "and target angles in rad "
         "(or deg with --deg). Negative values are typed as they are: --q -1,0.5,0.2. Allowed: link lengths "
         "0.001 to 10 m (the offsets elbow d, stanford d2 and d6, scara d4 may be 0); |revolute q| and |angle| "
         "<= 1000 rad; |prismatic q| <= 100 m; |x|, |y|, |z| of a target <= 1000 m. Warnings (stderr, and "

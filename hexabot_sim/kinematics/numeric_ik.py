@@ -143,7 +143,8 @@ def solve(chain: SerialChain, target: ArrayLike, where: str | None = None) -> li
     """Every distinct joint solution found for `target`, within the joint ranges, ordered by q1, then q2, ...
 
     Levenberg–Marquardt on the geometric Jacobian from SEEDS_PER_ROUND random seeds inside the joint ranges (and
-    q = 0 clipped into them) at once; up to MAX_ROUNDS rounds of new seeds while none has reached the target. Each step is clipped to the joint
+    q = 0 clipped into them) at once; up to MAX_ROUNDS rounds of new seeds while none has reached the target.
+    Each step is clipped to the joint
     ranges; unlimited revolute joints are wrapped to (-π, π]. Orientation errors are weighted by the chain's size,
     so m and rad count alike. Solutions whose joint values agree within DEDUP_TOL (angles mod 2π) are one.
 

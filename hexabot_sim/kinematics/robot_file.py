@@ -175,7 +175,8 @@ class _Reader:
     def name(self, value: Any, where: str, what: str) -> str:
         if not isinstance(value, str) or not NAME.fullmatch(value):
             raise self.fail(
-                where, f"{what} must be 1 to 64 letters, digits, _ . - (starting with a letter or _); got {_shown(value)}"
+                where,
+                f"{what} must be 1 to 64 letters, digits, _ . - (starting with a letter or _); got {_shown(value)}",
             )
         return value
 
@@ -284,10 +285,14 @@ class _Reader:
         if kind == "fixed" and (any(has) or "mass" in row):
             raise self.fail(where, "a fixed row takes no 'lower', 'upper' or 'mass'")
         if has[0] != has[1]:
-            raise self.fail(where, f"give both 'lower' and 'upper', or neither; got only '{'lower' if has[0] else 'upper'}'")
+            raise self.fail(
+                where, f"give both 'lower' and 'upper', or neither; got only '{'lower' if has[0] else 'upper'}'"
+            )
         if all(has):
             for key in ("lower", "upper"):
-                out[key] = self.distance(row[key], where, key) if kind == "prismatic" else self.angle(row[key], where, key)
+                out[key] = (
+                    self.distance(row[key], where, key) if kind == "prismatic" else self.angle(row[key], where, key)
+                )
             lo, hi = _value(out["lower"], self.lengths), _value(out["upper"], self.lengths)
             if not lo < hi:
                 unit = "m" if kind == "prismatic" else self.unit
@@ -341,7 +346,7 @@ def _cos_sin(angle: float, unit: str) -> tuple[float, float]:
     """cos and sin, exact at quarter turns (a tool turned by 90 deg has exact 0 and 1 entries)."""
     quarter = angle / (90.0 if unit == "deg" else math.pi / 2)
     if quarter == round(quarter):
-        return ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0))[int(round(quarter)) % 4]
+        return ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0))[round(quarter) % 4]
     rad = math.radians(angle) if unit == "deg" else angle
     return math.cos(rad), math.sin(rad)
 

@@ -75,7 +75,10 @@ def test_nothing_is_written_when_one_model_is_refused(tmp_path, capsys):
     [
         (["export", "elbow"], "export needs an output: --mjcf FILE and/or --urdf FILE"),
         (["export", "puma", "--mjcf", "x.xml"], "unknown robot 'puma'"),
-        (["export", "elbow", "--mjcf", "no/such/folder/x.xml"], "the folder 'no/such/folder' for the MJCF file does not"),
+        (
+            ["export", "elbow", "--mjcf", "no/such/folder/x.xml"],
+            "the folder 'no/such/folder' for the MJCF file does not",
+        ),
         (["export", "elbow", "--mjcf", "same", "--urdf", "same"], "--mjcf and --urdf name the same file 'same'"),
         (["export", "elbow", "--mjcf", "x.xml", "--set", "a2=0"], "length 'a2' of elbow must be 0.001 to 10 m"),
     ],

@@ -46,9 +46,13 @@ def test_exported_models_compile_and_match_the_dh_chain(convention):
             mujoco.mj_kinematics(urdf, data_u)
             expected = chain.fk(q)
             mujoco.mj_jacSite(xml, data_x, jacp, jacr, site)
-            worst["mjcf fk"] = max(worst["mjcf fk"], np.abs(pose_of(data_x.site_xmat[site], data_x.site_xpos[site]) - expected).max())
+            worst["mjcf fk"] = max(
+                worst["mjcf fk"], np.abs(pose_of(data_x.site_xmat[site], data_x.site_xpos[site]) - expected).max()
+            )
             worst["mjcf jac"] = max(worst["mjcf jac"], np.abs(np.vstack([jacp, jacr]) - chain.jacobian(q)).max())
-            worst["urdf fk"] = max(worst["urdf fk"], np.abs(pose_of(data_u.xmat[tool], data_u.xpos[tool]) - expected).max())
+            worst["urdf fk"] = max(
+                worst["urdf fk"], np.abs(pose_of(data_u.xmat[tool], data_u.xpos[tool]) - expected).max()
+            )
     assert max(worst.values()) <= TOL, worst
 
 

@@ -181,7 +181,9 @@ def test_kin_file_text_and_json(tmp_path, capsys):
     rot = pose[:3, :3]
     rpy = [math.atan2(rot[2, 1], rot[2, 2]), -math.asin(rot[2, 0]), math.atan2(rot[1, 0], rot[0, 0])]
     target = ",".join(repr(float(v)) for v in [*pose[:3, 3], *rpy])
-    code, out, err = cli(capsys, "kin", str(path), "--json", "--q", ",".join(repr(float(v)) for v in q), f"--target={target}")
+    code, out, err = cli(
+        capsys, "kin", str(path), "--json", "--q", ",".join(repr(float(v)) for v in q), f"--target={target}"
+    )
     assert code == 0, err
     import json
 
