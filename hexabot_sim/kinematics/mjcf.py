@@ -11,6 +11,9 @@ import numpy as np
 
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics.chain import Joint, SerialChain
+from hexabot_sim.kinematics.xml_text import num as _num
+from hexabot_sim.kinematics.xml_text import nums as _nums
+from hexabot_sim.kinematics.xml_text import quat as _quat
 
 ALUMINIUM_DENSITY = 2700.0  # [kg/m^3] density of the links' material (aluminium alloy, handbook value)
 SERVO_BANDWIDTH = 5.0  # [Hz] natural frequency f_n of each position servo on its own joint inertia at home
@@ -289,36 +292,6 @@ def _mass_diagonal(chain: SerialChain, bodies: list[_Body], q: np.ndarray) -> np
                 v = np.cross(z, centre - o)
                 diagonal[j] += bodies[k].mass * v @ v + z @ rot @ bodies[k].inertia @ rot.T @ z
     return diagonal
-
-
-def _quat(rot: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method: the largest pivot), (4,)."""
-    trace = np.trace(rot)
-    pivots = [trace, rot[0, 0], rot[1, 1], rot[2, 2]]
-    i = int(np.argmax(pivots))
-    if i == 0:
-        w = math.sqrt(1 + trace) / 2
-        q = [w, (rot[2, 1] - rot[1, 2]) / (4 * w), (rot[0, 2] - rot[2, 0]) / (4 * w), (rot[1, 0] - rot[0, 1]) / (4 * w)]
-    elif i == 1:
-        x = math.sqrt(1 + rot[0, 0] - rot[1, 1] - rot[2, 2]) / 2
-        q = [(rot[2, 1] - rot[1, 2]) / (4 * x), x, (rot[0, 1] + rot[1, 0]) / (4 * x), (rot[0, 2] + rot[2, 0]) / (4 * x)]
-    elif i == 2:
-        y = math.sqrt(1 - rot[0, 0] + rot[1, 1] - rot[2, 2]) / 2
-        q = [(rot[0, 2] - rot[2, 0]) / (4 * y), (rot[0, 1] + rot[1, 0]) / (4 * y), y, (rot[1, 2] + rot[2, 1]) / (4 * y)]
-    else:
-        z = math.sqrt(1 - rot[0, 0] - rot[1, 1] + rot[2, 2]) / 2
-        q = [(rot[1, 0] - rot[0, 1]) / (4 * z), (rot[0, 2] + rot[2, 0]) / (4 * z), (rot[1, 2] + rot[2, 1]) / (4 * z), z]
-    quat = np.array(q)  # (4,)
-    return quat if quat[0] >= 0 else -quat
-
-
-def _num(value: float) -> str:
-    """Full precision (repr round-trips exactly); -0.0 written as 0.0."""
-    return repr(float(value) + 0.0)
-
-
-def _nums(values: np.ndarray | list[float] | tuple[float, ...]) -> str:
-    return " ".join(_num(v) for v in values)
 
 
 def _pose_attributes(t: np.ndarray, euler: tuple[float, float] | None = None) -> str:

@@ -20,9 +20,10 @@ RESIDUAL_TOL: float = 1e-10
 # made from among the solutions (scripts/ik_check.py); more rounds only while no solution has been found.
 SEEDS_PER_ROUND: int = 192
 MAX_ROUNDS: int = 3
-MAX_ITERATIONS: int = 40  # Levenberg–Marquardt iterations per round
+MAX_ITERATIONS: int = 25  # Levenberg–Marquardt iterations per round
 LAMBDA_START: float = 1e-3  # damping, relative to the size² of the chain (J is in m per rad or m per m)
-LAMBDA_MAX: float = 1e8  # a seed whose damping grows beyond this has stalled
+LAMBDA_MAX: float = 1e6  # a seed whose damping grows beyond this has stalled (about 10 refused steps in a row)
+STALL: float = 1e-4  # a seed whose accepted step lowers its squared error by less than this fraction has stalled
 DEDUP_TOL: float = 1e-6  # [rad or m] solutions agreeing this closely (angles mod 2π) are one
 MAX_SOLUTIONS: int = 16  # reported at most (a redundant chain has a continuum of them)
 NEAR_SINGULAR: float = 1e-6  # a solution with σmin / σmax of its task Jacobian below this is flagged
@@ -70,23 +71,18 @@ class _Batch:
         theta = self.theta + np.where(self.prismatic, 0.0, q)  # (S, n)
         d = self.d + np.where(self.prismatic, q, 0.0)  # (S, n)
         ct, st = np.cos(theta), np.sin(theta)
-        ca, sa, a = np.broadcast_to(self.ca, ct.shape), np.broadcast_to(self.sa, ct.shape), self.a
-        link = np.zeros((s, self.n, 4, 4))  # (S, n, 4, 4)
-        link[..., 3, 3] = 1.0
-        if self.standard:  # Rz(theta) Tz(d) Tx(a) Rx(alpha)
-            link[..., 0, 0], link[..., 0, 1], link[..., 0, 2], link[..., 0, 3] = ct, -st * ca, st * sa, a * ct
-            link[..., 1, 0], link[..., 1, 1], link[..., 1, 2], link[..., 1, 3] = st, ct * ca, -ct * sa, a * st
-            link[..., 2, 1], link[..., 2, 2], link[..., 2, 3] = sa, ca, d
+        ca, sa = np.broadcast_to(self.ca, ct.shape), np.broadcast_to(self.sa, ct.shape)
+        a, zero, one = np.broadcast_to(self.a, ct.shape), np.zeros(ct.shape), np.ones(ct.shape)
+        if self.standard:  # Rz(theta) Tz(d) Tx(a) Rx(alpha), row by row
+            rows = (ct, -st * ca, st * sa, a * ct, st, ct * ca, -ct * sa, a * st, zero, sa, ca, d)
         else:  # Rx(alpha) Tx(a) Rz(theta) Tz(d)
-            link[..., 0, 0], link[..., 0, 1], link[..., 0, 3] = ct, -st, a
-            link[..., 1, 0], link[..., 1, 1], link[..., 1, 2], link[..., 1, 3] = st * ca, ct * ca, -sa, -d * sa
-            link[..., 2, 0], link[..., 2, 1], link[..., 2, 2], link[..., 2, 3] = st * sa, ct * sa, ca, d * ca
-        out = np.empty((s, self.n + 2, 4, 4))  # (S, n + 2, 4, 4)
-        out[:, 0] = self.base
+            rows = (ct, -st, zero, a, st * ca, ct * ca, -sa, -d * sa, st * sa, ct * sa, ca, d * ca)
+        link = np.stack((*rows, zero, zero, zero, one), axis=-1).reshape(s, self.n, 4, 4)  # (S, n, 4, 4)
+        out = [np.broadcast_to(self.base, (s, 4, 4))]
         for i in range(self.n):
-            out[:, i + 1] = out[:, i] @ link[:, i]
-        out[:, -1] = out[:, -2] @ self.tool
-        return out
+            out.append(out[-1] @ link[:, i])
+        out.append(out[-1] @ self.tool)
+        return np.stack(out, axis=1)  # (S, n + 2, 4, 4)
 
     def jacobian(self, frames: np.ndarray) -> np.ndarray:
         """Geometric Jacobians (S, 6, n) of the tool point from `frames` (S, n + 2, 4, 4)."""
@@ -94,9 +90,16 @@ class _Batch:
         axes = frames[:, offset : offset + self.n]  # (S, n, 4, 4)
         z, o = axes[..., :3, 2], axes[..., :3, 3]  # (S, n, 3)
         p = frames[:, -1, None, :3, 3]  # (S, 1, 3)
-        linear = np.where(self.prismatic[:, None], z, np.cross(z, p - o))  # (S, n, 3)
-        angular = np.where(self.prismatic[:, None], 0.0, z)  # (S, n, 3)
-        return np.concatenate([linear, angular], axis=2).transpose(0, 2, 1)  # (S, 6, n)
+        r = p - o  # (S, n, 3)
+        jac = np.empty((z.shape[0], 6, self.n))  # (S, 6, n)
+        for k in range(3):  # z × r, written out (np.cross costs more than the product at these sizes)
+            i, j = (k + 1) % 3, (k + 2) % 3
+            jac[:, k] = z[..., i] * r[..., j] - z[..., j] * r[..., i]
+            jac[:, 3 + k] = z[..., k]
+        if self.prismatic.any():  # a slide moves along z and does not turn
+            jac[:, :3, self.prismatic] = z[:, self.prismatic].transpose(0, 2, 1)
+            jac[:, 3:, self.prismatic] = 0.0
+        return jac
 
 
 def _rotation_error(rot: np.ndarray, goal: np.ndarray) -> np.ndarray:
@@ -217,25 +220,22 @@ def _descend(batch, seeds, goal, pose, size, lo, hi, wrap):
     err, jac = _error(batch, q, goal, pose, size)
     cost = np.einsum("sm,sm->s", err, err)  # (S,)
     lam = np.full(len(q), LAMBDA_START * size * size)  # (S,)
+    stalled = np.zeros(len(q), dtype=bool)  # (S,) in a local minimum (or at a limit): not worth more steps
     eye = np.eye(batch.n)
     for _ in range(MAX_ITERATIONS):
-        active = (cost > (0.1 * RESIDUAL_TOL) ** 2) & (lam < LAMBDA_MAX * size * size)
+        active = (cost > (0.1 * RESIDUAL_TOL) ** 2) & (lam < LAMBDA_MAX * size * size) & ~stalled  # (S,)
         if not active.any():
             break
-        # Solve (JᵀJ + λI) dq = Jᵀe for every active seed.
-        jt = jac[active].transpose(0, 2, 1)  # (A, n, m)
-        lhs = jt @ jac[active] + lam[active, None, None] * eye
-        dq = np.linalg.solve(lhs, (jt @ err[active][..., None]))[..., 0]  # (A, n)
-        trial = _limit(q[active] + dq, lo, hi, wrap)
+        # Solve (JᵀJ + λI) dq = Jᵀe for every seed (the whole batch: cheaper than picking the active ones out).
+        jt = jac.transpose(0, 2, 1)  # (S, n, m)
+        dq = np.linalg.solve(jt @ jac + lam[:, None, None] * eye, (jt @ err[..., None]))[..., 0]  # (S, n)
+        trial = _limit(q + dq, lo, hi, wrap)
         t_err, t_jac = _error(batch, trial, goal, pose, size)
-        t_cost = np.einsum("sm,sm->s", t_err, t_err)
-        better = t_cost < cost[active]
-        idx = np.flatnonzero(active)
-        take = idx[better]
-        q[take], err[take], jac[take], cost[take] = trial[better], t_err[better], t_jac[better], t_cost[better]
-        lam[take] *= 0.2
-        lam[idx[~better]] *= 5.0
-        lam = np.maximum(lam, 1e-12 * size * size)
+        t_cost = np.einsum("sm,sm->s", t_err, t_err)  # (S,)
+        better = active & (t_cost < cost)
+        stalled |= better & (t_cost > (1.0 - STALL) * cost)
+        q[better], err[better], jac[better], cost[better] = trial[better], t_err[better], t_jac[better], t_cost[better]
+        lam = np.where(better, np.maximum(lam * 0.2, 1e-12 * size * size), np.where(active, lam * 5.0, lam))
     frames = batch.frames(q)
     tip = frames[:, -1]
     pos_err = np.linalg.norm(goal[:3, 3] - tip[:, :3, 3] if pose else goal - tip[:, :3, 3], axis=1)

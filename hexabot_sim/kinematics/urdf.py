@@ -10,20 +10,13 @@ import numpy as np
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics.chain import SerialChain
 from hexabot_sim.kinematics.mjcf import ALUMINIUM_DENSITY, link_bodies
+from hexabot_sim.kinematics.xml_text import num as _num
+from hexabot_sim.kinematics.xml_text import nums as _nums
 
 # A DH table has no actuator limits; URDF requires them on revolute and prismatic joints. These are written, and
 # said to be placeholders in the file's header: set them for the real hardware.
 EFFORT_PLACEHOLDER = 100.0  # [N m or N]
 VELOCITY_PLACEHOLDER = 2.0  # [rad/s or m/s]
-
-
-def _num(value: float) -> str:
-    """Full precision (repr round-trips exactly); -0.0 written as 0.0."""
-    return repr(float(value) + 0.0)
-
-
-def _nums(values: Sequence[float] | np.ndarray) -> str:
-    return " ".join(_num(v) for v in values)
 
 
 def rpy(rot: np.ndarray) -> tuple[float, float, float]:
