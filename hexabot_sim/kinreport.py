@@ -208,8 +208,8 @@ def at_configuration(robot: Robot, q: Sequence[float], degrees: bool = False) ->
         "J": chain.jacobian(qa).tolist(),
     }
     if robot.closed_form:
-        kind, value = inverse.det_or_manipulability(robot.name, qa, robot.lengths)
-        flags = inverse.singularities(robot.name, qa, robot.lengths)
+        kind, value = inverse.det_or_manipulability(robot.name, qa, robot.lengths, chain)
+        flags = inverse.singularities(robot.name, qa, robot.lengths, chain)
         out |= {kind: value}
     else:
         kind, value, sigma_min = numeric_ik.det_or_manipulability(chain, qa)
@@ -286,7 +286,7 @@ def solve(robot: Robot, target: Sequence[float], degrees: bool = False) -> dict[
         return _solve_numeric(robot, target, degrees)
     chain, name = robot.chain, robot.name
     goal = _target(robot, target, degrees)
-    branches, dropped = inverse.ik_branches(name, goal, robot.lengths)
+    branches, dropped = inverse.ik_branches(name, goal, robot.lengths, chain)
     units = _units(robot, degrees)
     position = goal[:3, 3] if goal.ndim == 2 else goal[:3]
     dropped_text = [
@@ -322,7 +322,7 @@ def _solve_numeric(robot: Robot, target: Sequence[float], degrees: bool) -> dict
     """solve() for a robot file: numeric_ik from many seeds; redundant chains and near-singular solutions warned."""
     goal = _target(robot, target, degrees)
     units = _units(robot, degrees)
-    where = f"{robot.name} target ({_tuple(goal[:3, 3] if goal.ndim == 2 else goal)}) m"
+    where = f"{robot.name} ({robot.spec.source}) target ({_tuple(goal[:3, 3] if goal.ndim == 2 else goal)}) m"
     solutions = numeric_ik.solve(robot.chain, goal, where)
     out, warnings = [], []
     for k, sol in enumerate(solutions, start=1):
