@@ -72,6 +72,8 @@ def to_urdf(
     if "--" in comment:
         raise UsageError("comment must not contain '--' (it ends an XML comment)")
     for j in chain.joints:
+        if j.name in ("base_fixed", "tool_fixed"):
+            raise UsageError(f"joint '{j.name}': the URDF names its own fixed joints so; rename the joint")
         if j.prismatic and (j.lower is None or j.upper is None):
             raise UsageError(f"joint '{j.name}' is prismatic without 'lower' and 'upper': URDF requires the limits")
     bodies, base_solids, _ = link_bodies(chain, link_radius, density, masses)

@@ -75,3 +75,5 @@ def test_urdf_joint_types_and_the_refusal_of_a_free_slide():
     free = SerialChain("free", (Joint("s", "prismatic", a=0.1),))
     with pytest.raises(UsageError, match="joint 's' is prismatic without 'lower' and 'upper': URDF requires"):
         to_urdf(free)
+    with pytest.raises(UsageError, match="joint 'tool_fixed': the URDF names its own fixed joints so"):
+        to_urdf(SerialChain("clash", (Joint("tool_fixed", a=0.1),)))
