@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from helpers import cli
 
+import hexabot_sim as hs
 from hexabot_sim import api
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import robots
@@ -91,7 +92,7 @@ def test_bad_exports_are_one_line(tmp_path, capsys, monkeypatch, argv, message):
 
 
 def test_the_api_exports_a_spec_and_refuses_a_folder(tmp_path):
-    (path,) = api.export(robots.get("leg"), urdf=tmp_path / "leg.urdf", lengths={"l3": 0.12})
+    (path,) = hs.export(robots.get("leg"), urdf=tmp_path / "leg.urdf", lengths={"l3": 0.12})
     assert path == tmp_path / "leg.urdf" and 'name="tool"' in path.read_text()
     with pytest.raises(UsageError, match="is a folder"):
         api.export("leg", mjcf=tmp_path)
