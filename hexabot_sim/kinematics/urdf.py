@@ -112,7 +112,7 @@ def to_urdf(
         out.append(f'    <parent link="{parent}"/>')
         out.append(f'    <child link="{body.name}"/>')
         out.append('    <axis xyz="0 0 1"/>')
-        if kind != "continuous":
+        if joint.lower is not None and joint.upper is not None:  # continuous joints have none
             out.append(
                 f'    <limit lower="{_num(joint.lower)}" upper="{_num(joint.upper)}" '
                 f'effort="{_num(EFFORT_PLACEHOLDER)}" velocity="{_num(VELOCITY_PLACEHOLDER)}"/>'
