@@ -399,3 +399,25 @@ def display_path(path: Path) -> str:
         return printable(os.path.relpath(path) if Path(path).resolve().is_relative_to(Path.cwd()) else str(path))
     except (OSError, ValueError):  # OSError: a name too long to resolve
         return printable(str(path))
+
+
+def check_replace(path: Path, force: bool, what: str = "video path", how: str = "pass force=True") -> None:
+    """An existing `path` is replaced only with force, and only if it is a file (or a link, itself replaced)."""
+    if not os.path.lexists(path):
+        return
+    if not force:
+        raise UsageError(f"{what} {str(path)!r} exists; {how} to replace it, or choose another name")
+    if not (path.is_symlink() or path.is_file()):
+        raise UsageError(f"{what} {str(path)!r} exists and is not a regular file; it is never replaced")
+
+
+def publish_new(staging: Path, path: Path, what: str = "video path", meanwhile: str = "the video rendered") -> None:
+    """Renames `staging` to `path` only if `path` does not exist (a hard link never replaces; rename would)."""
+    try:
+        os.link(staging, path)
+    except FileExistsError:
+        raise UsageError(f"{what} {str(path)!r} appeared while {meanwhile}; it was left alone") from None
+    except OSError as e:
+        if e.errno not in (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EMLINK):
+            raise
+        os.replace(staging, path)  # a file system without hard links: checked just before
