@@ -1,0 +1,237 @@
+"""What every legged environment shares: the sensed observation, the commanded twist, the reward, falls, frames."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any, ClassVar
+
+import gymnasium
+import mujoco
+import numpy as np
+from gymnasium import spaces
+
+from hexabot_sim.envs.scene import EPISODE_SECONDS, PLATE_SITE, EnvScene, Randomization, check_range
+from hexabot_sim.kinematics import legged
+from hexabot_sim.walking.parameters import FALL_TILT_DEG, WalkParams
+
+TOUCH_THRESHOLD: float = 0.3  # [N] a foot's touch reading above this counts as a foot down (as GroundSettings')
+COMMAND_RANGE: tuple[tuple[float, float], ...] = ((0.0, 0.1), (-0.05, 0.05), (-0.2, 0.2))  # vx, vy [m/s], yaw rate
+
+
+@dataclasses.dataclass(frozen=True)
+class Reward:
+    """The reward's weights and scales (all per control step).
+
+    reward = velocity exp(-|v_xy - c_xy|^2 / velocity_sigma^2) + yaw exp(-(w_z - c_w)^2 / yaw_sigma^2)
+             - energy P - attitude sin^2(tilt) - slip sum over the feet down of |v_foot,xy|^2
+
+    v_xy: the body's horizontal velocity in its heading frame [m/s]; w_z: its yaw rate [rad/s]; c: the command;
+    P: the servos' mechanical power sum |tau_i dq_i| [W]; tilt: the plate's angle from level; v_foot,xy: the
+    horizontal speed of each foot whose touch sensor reads more than TOUCH_THRESHOLD [m/s].
+
+    Attributes:
+        velocity, yaw: Weights of the two tracking terms [1].
+        velocity_sigma: Speed error that costs 1/e of the velocity term [m/s].
+        yaw_sigma: Yaw-rate error that costs 1/e of the yaw term [rad/s].
+        energy: Penalty per watt [1/W].
+        attitude: Penalty per sin^2 of the tilt [1].
+        slip: Penalty per (m/s)^2 of a foot's horizontal speed while down [s^2/m^2].
+    """
+
+    velocity: float = 1.0
+    yaw: float = 0.5
+    velocity_sigma: float = 0.05
+    yaw_sigma: float = 0.2
+    energy: float = 0.01
+    attitude: float = 1.0
+    slip: float = 20.0
+
+    def __post_init__(self) -> None:
+        for field in dataclasses.fields(self):
+            value = getattr(self, field.name)
+            positive = field.name.endswith("sigma")
+            if not (math.isfinite(value) and (value > 0 if positive else value >= 0)):
+                raise ValueError(f"reward {field.name} must be a finite number {'> 0' if positive else '>= 0'}; "
+                                 f"got {value!r}")  # fmt: skip
+
+
+class LeggedEnv(gymnasium.Env):
+    """A legged robot (a robot folder with a '<robot>-walk' scenario) on contact physics, told to walk at a body twist.
+
+    The subclasses choose the action (joint targets, or the twist given to the verified gait controller); the
+    rest is here: the observation, the commanded twist drawn per episode, the reward, a fall, the frames.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 50}  # fps: per instance
+
+    def __init__(
+        self,
+        p: WalkParams,
+        frame_skip: int,
+        terrain: str,
+        slope_deg: float,
+        roughness: float,
+        command_range,
+        reward: Reward | dict | None,
+        randomize_friction,
+        randomize_mass,
+        randomize_servo_gain,
+        render_mode: str | None,
+        width: int,
+        height: int,
+        camera: str,
+    ) -> None:
+        if isinstance(frame_skip, bool) or not isinstance(frame_skip, int | np.integer) or frame_skip < 1:
+            raise ValueError(f"frame_skip must be an integer >= 1; got {frame_skip!r}")
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise ValueError(
+                f"unknown render_mode {render_mode!r}; known: None, {', '.join(self.metadata['render_modes'])}"
+            )
+        try:
+            rows = [tuple(r) for r in command_range]
+        except TypeError:
+            rows = []
+        if len(rows) != 3:
+            raise ValueError(f"command_range must be three (low, high) pairs: vx, vy, yaw rate; got {command_range!r}")
+        names = ("vx", "vy", "yaw rate")
+        ranges = [check_range(f"command_range {n}", r, -3.0, 3.0) for n, r in zip(names, rows, strict=True)]
+        self.command_range = np.array(ranges)  # (3, 2)
+        self.reward_weights = reward if isinstance(reward, Reward) else Reward(**(reward or {}))
+        randomization = Randomization(randomize_friction, randomize_mass, randomize_servo_gain)
+        self.frame_skip = int(frame_skip)
+        self.dt = self.frame_skip * p.timestep  # [s] the control period
+        reach = float(np.abs(self.command_range[:2]).max()) * math.sqrt(2) * EPISODE_SECONDS
+        self.scene = EnvScene(p, terrain, slope_deg, roughness, reach, randomization)
+        self.model, self.data = self.scene.model, self.scene.data
+        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.dt)}
+        self.render_mode, self.width, self.height, self.camera = render_mode, width, height, camera
+        self._frames = None
+        self._addresses(p)
+        n = self.n_joints
+        # Observation: gravity in the body (3), gyro (3), accelerometer (3), joint angles (n), joint speeds (n),
+        # foot touch (n_legs), the commanded twist (3).
+        self.obs_slices = {
+            "gravity": slice(0, 3), "gyro": slice(3, 6), "accelerometer": slice(6, 9), "joint_angles": slice(9, 9 + n),
+            "joint_speeds": slice(9 + n, 9 + 2 * n), "foot_touch": slice(9 + 2 * n, 9 + 2 * n + self.n_legs),
+            "command": slice(9 + 2 * n + self.n_legs, 12 + 2 * n + self.n_legs),
+        }  # fmt: skip
+        size = 12 + 2 * n + self.n_legs
+        self.observation_space = spaces.Box(-np.inf, np.inf, (size,), np.float64)
+        self._obs = np.zeros(size)
+        self._power = np.zeros(n)
+        self._velocity = np.zeros(6)
+        self.command = np.zeros(3)
+
+    def _addresses(self, p: WalkParams) -> None:
+        """Sensor addresses and ids, looked up by name once."""
+        m = self.model
+        layout = p.ROBOT.layout
+        self.n_legs, self.n_joints = layout.n_legs, 3 * layout.n_legs
+
+        def adr(name: str) -> int:
+            return int(m.sensor_adr[m.sensor(name).id])
+
+        self._quat, self._gyro, self._acc, self._plate = (
+            adr("imu_quat"),
+            adr("imu_gyro"),
+            adr("imu_acc"),
+            adr(PLATE_SITE),
+        )
+        self._touch = np.array([adr(f"{leg}_touch") for leg in layout.legs])
+        self._foot_sites = [m.site(f"{leg}_foot").id for leg in layout.legs]
+        self._torso = m.body("torso").id
+        joints = [f"{leg}_{j}" for leg in layout.legs for j in legged.JOINTS]
+        qadr = [int(m.jnt_qposadr[m.joint(name).id]) for name in joints]
+        if qadr != list(range(7, 7 + self.n_joints)):
+            raise ValueError(f"the model must put the {self.n_joints} leg joints after the free joint")
+        self._cos_fall = math.cos(math.radians(FALL_TILT_DEG))
+        self._bad_qacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
+
+    # ------------------------------------------------------------------------------------------- episode
+
+    def _start(self, seed: int | None) -> None:
+        """Seeds the RNG (Gymnasium's reset), draws the command, the ground and the randomisation, places the robot."""
+        super().reset(seed=seed)
+        rng = self.np_random
+        self.command[:] = rng.uniform(self.command_range[:, 0], self.command_range[:, 1])
+        if self.scene.reset(rng) and self._frames is not None:  # a new heightfield: frames of the new model
+            self._frames.close()
+            self._frames = None
+        self._warnings = int(self.data.warning[self._bad_qacc].number)
+        self._obs[self.obs_slices["command"]] = self.command
+
+    def _observe(self) -> np.ndarray:
+        """The observation (a new array; the buffer behind it is reused)."""
+        d, obs = self.data, self._obs
+        s = d.sensordata
+        q = self._quat
+        w, x, y, z = s[q], s[q + 1], s[q + 2], s[q + 3]
+        # Gravity's direction in the body frame: R^T (0, 0, -1), minus R's third row.
+        obs[0], obs[1], obs[2] = 2 * (w * y - x * z), -2 * (y * z + w * x), 2 * (x * x + y * y) - 1
+        obs[3:6] = s[self._gyro : self._gyro + 3]
+        obs[6:9] = s[self._acc : self._acc + 3]
+        n = self.n_joints
+        obs[9 : 9 + n] = d.qpos[7:]
+        obs[9 + n : 9 + 2 * n] = d.qvel[6:]
+        np.take(s, self._touch, out=obs[self.obs_slices["foot_touch"]])
+        return obs.copy()
+
+    def _reward(self, obs: np.ndarray) -> tuple[float, bool, dict[str, Any]]:
+        """(reward, terminated, info) of the state reached (obs: its observation)."""
+        m, d, rw = self.model, self.data, self.reward_weights
+        xmat = d.xmat[self._torso]  # (9,) body -> world, row-major
+        c, s = xmat[0], xmat[3]  # the body's x axis in the world: its heading
+        norm = math.hypot(c, s) or 1.0
+        c, s = c / norm, s / norm
+        vx_w, vy_w = d.qvel[0], d.qvel[1]
+        vx, vy = c * vx_w + s * vy_w, -s * vx_w + c * vy_w  # in the heading frame
+        wx, wy, wz = d.qvel[3], d.qvel[4], d.qvel[5]  # the free joint's angular velocity, body frame
+        yaw_rate = xmat[6] * wx + xmat[7] * wy + xmat[8] * wz  # its world z component
+        cmd = self.command
+        track_v = rw.velocity * math.exp(-((vx - cmd[0]) ** 2 + (vy - cmd[1]) ** 2) / rw.velocity_sigma**2)
+        track_w = rw.yaw * math.exp(-((yaw_rate - cmd[2]) ** 2) / rw.yaw_sigma**2)
+        np.multiply(d.qfrc_actuator[6:], d.qvel[6:], out=self._power)
+        power = float(np.abs(self._power, out=self._power).sum())
+        tilt2 = obs[0] * obs[0] + obs[1] * obs[1]  # sin^2 of the tilt
+        slip = 0.0
+        touch = obs[self.obs_slices["foot_touch"]]
+        for i, site in enumerate(self._foot_sites):
+            if touch[i] > TOUCH_THRESHOLD:
+                mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_SITE, site, self._velocity, 0)
+                slip += self._velocity[3] ** 2 + self._velocity[4] ** 2
+        reward = track_v + track_w - rw.energy * power - rw.attitude * tilt2 - rw.slip * slip
+        fell = -obs[2] < self._cos_fall or d.sensordata[self._plate] > 0.0
+        diverged = int(d.warning[self._bad_qacc].number) != self._warnings or not math.isfinite(d.qpos[2])
+        info = {
+            "x": float(d.qpos[0]), "y": float(d.qpos[1]), "vx": vx, "vy": vy, "yaw_rate": yaw_rate,
+            "reward_velocity": track_v, "reward_yaw": track_w, "power": power, "tilt_sin2": tilt2, "foot_slip": slip,
+            "fell": bool(fell), "diverged": bool(diverged),
+        }  # fmt: skip
+        return float(reward), bool(fell or diverged), info
+
+    def _check_action(self, action, n: int) -> np.ndarray:
+        """The action as a float array of n, or a ValueError saying what was wrong."""
+        a = np.asarray(action, dtype=np.float64)
+        if a.shape != (n,):
+            raise ValueError(f"the action must be {n} numbers (shape ({n},)); got shape {a.shape}")
+        if not np.isfinite(a).all():
+            raise ValueError(f"the action must be finite numbers in [-1, 1]; got {a.tolist()}")
+        return a
+
+    # ------------------------------------------------------------------------------------------- frames
+
+    def render(self) -> np.ndarray | None:
+        """The frame (height, width, 3) of the current state from `camera` (render_mode "rgb_array"), else None."""
+        if self.render_mode != "rgb_array":
+            return None
+        if self._frames is None:
+            from hexabot_sim.render import Frames
+
+            self._frames = Frames(self.model, self.width, self.height, self.camera)
+        return self._frames(self.data)
+
+    def close(self) -> None:
+        if self._frames is not None:
+            self._frames.close()
+            self._frames = None
