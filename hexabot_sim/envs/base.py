@@ -122,6 +122,7 @@ class LeggedEnv(gymnasium.Env):
         self._power = np.zeros(n)
         self._velocity = np.zeros(6)
         self.command = np.zeros(3)
+        self._views()
 
     def _addresses(self, p: WalkParams) -> None:
         """Sensor addresses and ids, looked up by name once."""
@@ -146,6 +147,7 @@ class LeggedEnv(gymnasium.Env):
         if qadr != list(range(7, 7 + self.n_joints)):
             raise ValueError(f"the model must put the {self.n_joints} leg joints after the free joint")
         self._cos_fall = math.cos(math.radians(FALL_TILT_DEG))
+        self._site_type = int(mujoco.mjtObj.mjOBJ_SITE)  # an int: pybind converts it ~2 us faster than the enum
         self._bad_qacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
 
     # ------------------------------------------------------------------------------------------- episode
@@ -158,57 +160,81 @@ class LeggedEnv(gymnasium.Env):
         if self.scene.reset(rng) and self._frames is not None:  # a new heightfield: frames of the new model
             self._frames.close()
             self._frames = None
-        self._warnings = int(self.data.warning[self._bad_qacc].number)
+        self._warning = self.data.warning[self._bad_qacc]  # a live view of MuJoCo's counter
+        self._warnings = int(self._warning.number)
+        self._command = tuple(self.command.tolist())
         self._obs[self.obs_slices["command"]] = self.command
+
+    def _views(self) -> None:
+        """Views of MjData's arrays (its memory is allocated once) paired with the observation's slices they fill:
+        a step copies them without making arrays."""
+        d, obs, sl = self.data, self._obs, self.obs_slices
+        s = d.sensordata
+        touch = self._touch
+        contiguous = bool((np.diff(touch) == 1).all())
+        self._copies = [
+            (obs[sl["gyro"]], s[self._gyro : self._gyro + 3]),
+            (obs[sl["accelerometer"]], s[self._acc : self._acc + 3]),
+            (obs[sl["joint_angles"]], d.qpos[7:]),
+            (obs[sl["joint_speeds"]], d.qvel[6:]),
+        ]
+        if contiguous:
+            self._copies.append((obs[sl["foot_touch"]], s[touch[0] : touch[-1] + 1]))
+        self._touch_view = None if contiguous else (s, touch, obs[sl["foot_touch"]])
+        self._quat_view = s[self._quat : self._quat + 4]
+        self._xmat_view = d.xmat[self._torso]
+        self._twist_view = d.qvel[:6]
+        self._torque_view, self._speed_view = d.qfrc_actuator[6:], d.qvel[6:]
+        self._torque_abs, self._speed_abs = np.zeros(self.n_joints), np.zeros(self.n_joints)
+        self._gravity_view, self._touch_obs = obs[:3], obs[sl["foot_touch"]]
 
     def _observe(self) -> np.ndarray:
         """The observation (a new array; the buffer behind it is reused)."""
-        d, obs = self.data, self._obs
-        s = d.sensordata
-        q = self._quat
-        w, x, y, z = s[q], s[q + 1], s[q + 2], s[q + 3]
+        w, x, y, z = self._quat_view.tolist()
         # Gravity's direction in the body frame: R^T (0, 0, -1), minus R's third row.
+        obs = self._obs
         obs[0], obs[1], obs[2] = 2 * (w * y - x * z), -2 * (y * z + w * x), 2 * (x * x + y * y) - 1
-        obs[3:6] = s[self._gyro : self._gyro + 3]
-        obs[6:9] = s[self._acc : self._acc + 3]
-        n = self.n_joints
-        obs[9 : 9 + n] = d.qpos[7:]
-        obs[9 + n : 9 + 2 * n] = d.qvel[6:]
-        np.take(s, self._touch, out=obs[self.obs_slices["foot_touch"]])
+        for dest, src in self._copies:
+            dest[:] = src
+        if self._touch_view is not None:
+            s, touch, dest = self._touch_view
+            np.take(s, touch, out=dest)
         return obs.copy()
 
     def _reward(self, obs: np.ndarray) -> tuple[float, bool, dict[str, Any]]:
         """(reward, terminated, info) of the state reached (obs: its observation)."""
         m, d, rw = self.model, self.data, self.reward_weights
-        xmat = d.xmat[self._torso]  # (9,) body -> world, row-major
-        c, s = xmat[0], xmat[3]  # the body's x axis in the world: its heading
-        norm = math.hypot(c, s) or 1.0
-        c, s = c / norm, s / norm
-        vx_w, vy_w = d.qvel[0], d.qvel[1]
+        r00, _, _, r10, _, _, r20, r21, r22 = self._xmat_view.tolist()  # body -> world, row-major
+        vx_w, vy_w, _, wx, wy, wz = self._twist_view.tolist()  # world linear velocity, body angular velocity
+        norm = math.hypot(r00, r10) or 1.0
+        c, s = r00 / norm, r10 / norm  # the heading: the body's x axis in the world's xy plane
         vx, vy = c * vx_w + s * vy_w, -s * vx_w + c * vy_w  # in the heading frame
-        wx, wy, wz = d.qvel[3], d.qvel[4], d.qvel[5]  # the free joint's angular velocity, body frame
-        yaw_rate = xmat[6] * wx + xmat[7] * wy + xmat[8] * wz  # its world z component
-        cmd = self.command
-        track_v = rw.velocity * math.exp(-((vx - cmd[0]) ** 2 + (vy - cmd[1]) ** 2) / rw.velocity_sigma**2)
-        track_w = rw.yaw * math.exp(-((yaw_rate - cmd[2]) ** 2) / rw.yaw_sigma**2)
-        np.multiply(d.qfrc_actuator[6:], d.qvel[6:], out=self._power)
-        power = float(np.abs(self._power, out=self._power).sum())
-        tilt2 = obs[0] * obs[0] + obs[1] * obs[1]  # sin^2 of the tilt
+        yaw_rate = r20 * wx + r21 * wy + r22 * wz  # the angular velocity's world z component
+        cx, cy, cw = self._command
+        track_v = rw.velocity * math.exp(-((vx - cx) ** 2 + (vy - cy) ** 2) / rw.velocity_sigma**2)
+        track_w = rw.yaw * math.exp(-((yaw_rate - cw) ** 2) / rw.yaw_sigma**2)
+        np.abs(self._torque_view, out=self._torque_abs)
+        np.abs(self._speed_view, out=self._speed_abs)
+        power = float(self._torque_abs @ self._speed_abs)  # sum |tau_i dq_i| [W]
+        gx, gy, gz = self._gravity_view.tolist()
+        tilt2 = gx * gx + gy * gy  # sin^2 of the tilt
         slip = 0.0
-        touch = obs[self.obs_slices["foot_touch"]]
-        for i, site in enumerate(self._foot_sites):
-            if touch[i] > TOUCH_THRESHOLD:
-                mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_SITE, site, self._velocity, 0)
-                slip += self._velocity[3] ** 2 + self._velocity[4] ** 2
+        velocity = self._velocity
+        for site, touch in zip(self._foot_sites, self._touch_obs.tolist(), strict=True):
+            if touch > TOUCH_THRESHOLD:
+                mujoco.mj_objectVelocity(m, d, self._site_type, site, velocity, 0)  # (angular, linear), world
+                _, _, _, ux, uy, _ = velocity.tolist()
+                slip += ux * ux + uy * uy
+        slip = float(slip)
         reward = track_v + track_w - rw.energy * power - rw.attitude * tilt2 - rw.slip * slip
-        fell = -obs[2] < self._cos_fall or d.sensordata[self._plate] > 0.0
-        diverged = int(d.warning[self._bad_qacc].number) != self._warnings or not math.isfinite(d.qpos[2])
+        fell = -gz < self._cos_fall or d.sensordata[self._plate] > 0.0
+        diverged = self._warning.number != self._warnings or not math.isfinite(d.qpos[2])
         info = {
             "x": float(d.qpos[0]), "y": float(d.qpos[1]), "vx": vx, "vy": vy, "yaw_rate": yaw_rate,
             "reward_velocity": track_v, "reward_yaw": track_w, "power": power, "tilt_sin2": tilt2, "foot_slip": slip,
             "fell": bool(fell), "diverged": bool(diverged),
         }  # fmt: skip
-        return float(reward), bool(fell or diverged), info
+        return reward, bool(fell or diverged), info
 
     def _check_action(self, action, n: int) -> np.ndarray:
         """The action as a float array of n, or a ValueError saying what was wrong."""

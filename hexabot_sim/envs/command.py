@@ -115,7 +115,7 @@ class LeggedCommandEnv(LeggedEnv):
         for _ in range(self._settle_steps):
             controller(m, d)
             mujoco.mj_step(m, d)
-        self._warnings = int(d.warning[self._bad_qacc].number)
+        self._warnings = int(self._warning.number)
         return self._observe(), {"command": self.command.copy()}
 
     def step(self, action) -> tuple[np.ndarray, float, bool, bool, dict]:

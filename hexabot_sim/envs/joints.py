@@ -94,7 +94,7 @@ class LeggedJointsEnv(LeggedEnv):
         mujoco.mj_forward(self.model, d)
         mujoco.mj_step(self.model, d, nstep=self._settle_steps)  # on the home targets: it lands on its feet
         d.time = 0.0
-        self._warnings = int(d.warning[self._bad_qacc].number)
+        self._warnings = int(self._warning.number)
         return self._observe(), {"command": self.command.copy()}
 
     def step(self, action) -> tuple[np.ndarray, float, bool, bool, dict]:
