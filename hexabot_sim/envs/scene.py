@@ -115,7 +115,7 @@ class EnvScene:
         self.slope = Slope(slope_deg if terrain == "slope" else 0.0, (1.0, 0.0), "uphill")
         self.ground = self._ground(0)
         spec = mujoco.MjSpec.from_string(build_xml(p, self.ground))
-        self._add_plate_sensor(spec)
+        self._add_sensors(spec)
         if self.roughness:  # elevation range +-roughness: every seed's patch (peak |h| = roughness) fits
             spec.hfield("terrain").size[2] = 2 * self.roughness
             spec.geom("terrain").pos[2] = -self.roughness
@@ -127,8 +127,9 @@ class EnvScene:
         rough = RoughPatch(self.roughness, seed, self.extent) if self.roughness else None
         return Ground(slope=self.slope, rough=rough)
 
-    def _add_plate_sensor(self, spec: mujoco.MjSpec) -> None:
-        """A box site around the plate and a touch sensor on it: the plate's contact force (a fall)."""
+    def _add_sensors(self, spec: mujoco.MjSpec) -> None:
+        """A box site around the plate and a touch sensor on it (the plate's contact force: a fall), the joints'
+        torques and the feet's velocities."""
         px, py, pz = self.p.ROBOT.layout.plate
         m = PLATE_SITE_MARGIN
         spec.body("torso").add_site(
@@ -138,6 +139,16 @@ class EnvScene:
         spec.add_sensor(
             name=PLATE_SITE, type=mujoco.mjtSensor.mjSENS_TOUCH, objtype=mujoco.mjtObj.mjOBJ_SITE, objname=PLATE_SITE
         )
+        # What the reward reads, as sensors too, so a batch stepped by mujoco.rollout (vector.py) reads it from the
+        # sensor data alone: each joint's actuator torque and each foot's velocity (world frame).
+        layout = self.p.ROBOT.layout
+        for leg in layout.legs:
+            for joint in legged.JOINTS:
+                spec.add_sensor(name=f"env_{leg}_{joint}_torque", type=mujoco.mjtSensor.mjSENS_JOINTACTFRC,
+                                objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=f"{leg}_{joint}")  # fmt: skip
+        for leg in layout.legs:
+            spec.add_sensor(name=f"env_{leg}_foot_velocity", type=mujoco.mjtSensor.mjSENS_FRAMELINVEL,
+                            objtype=mujoco.mjtObj.mjOBJ_SITE, objname=f"{leg}_foot")  # fmt: skip
 
     def _nominal(self) -> None:
         """Keeps the values a reset randomises, and the addresses it writes."""
