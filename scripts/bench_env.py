@@ -6,11 +6,14 @@ controls replayed from the same start on a second MjData (`frame_skip` x mj_step
 action's controls for the joint-level envs and Ant-v5, as their step calls it; for HexabotCommand-v0 the controls the
 gait controller wrote before every physics step, recorded in a first run, one mj_step each). Env step and bare
 replay alternate step by step (the shared machine's load weighs on both alike); the replay must end in the env's
-final state bit for bit, or the line fails: it would not time the same physics. Of `repeat` runs, each side's best.
+final state bit for bit, or the line fails: it would not time the same physics. Every repeat runs the same physics,
+so each step keeps its best time of the repeats, on either side (load spikes of a shared machine drop out).
+Then the batched vector environment (envs/vector.py) against Gymnasium's AsyncVectorEnv and SyncVectorEnv.
 """
 
 from __future__ import annotations
 
+import os
 import time
 
 import mujoco
@@ -54,28 +57,28 @@ def _record(env, actions: np.ndarray) -> tuple[list[np.ndarray], np.ndarray, np.
     return controls, start, d.qpos.copy()
 
 
-def _side_by_side(env, actions, controls, start, end, per_call: int) -> tuple[float, float]:
-    """(seconds in env.step, seconds of its bare physics), interleaved step by step so the machine's load weighs on
-    both alike: after each env.step, a second MjData of the same model replays that step's controls (`per_call`
-    mj_steps each) from the same start. Both must end in the recorded final state."""
+def _side_by_side(env, actions, controls, start, end, per_call: int) -> tuple[np.ndarray, np.ndarray]:
+    """Seconds of each env.step and of its bare physics (two arrays of len(actions)), interleaved step by step so
+    the machine's load weighs on both alike: after each env.step, a second MjData of the same model replays that
+    step's controls (`per_call` mj_steps each) from the same start. Both must end in the recorded final state."""
     m = env.model
     env.reset(seed=0)
     bare = mujoco.MjData(m)
     mujoco.mj_setState(m, bare, start, mujoco.mjtState.mjSTATE_INTEGRATION)
     mujoco.mj_forward(m, bare)
     per_action = len(controls) // len(actions)
-    env_s = bare_s = 0.0
+    env_s, bare_s = np.zeros(len(actions)), np.zeros(len(actions))
     clock = time.perf_counter
     for k, a in enumerate(actions):
         began = clock()
         env.step(a)
-        env_s += clock() - began
+        env_s[k] = clock() - began
         chunk = controls[k * per_action : (k + 1) * per_action]
         began = clock()
         for ctrl in chunk:
             bare.ctrl[:] = ctrl
             mujoco.mj_step(m, bare, nstep=per_call)
-        bare_s += clock() - began
+        bare_s[k] = clock() - began
     if not (np.array_equal(env.data.qpos, end) and np.array_equal(bare.qpos, end)):
         raise RuntimeError("the replay did not reproduce the episode: the bare loop would not time the same physics")
     return env_s, bare_s
@@ -98,18 +101,55 @@ def bench_env(repeat: int) -> dict | str:
         frame_skip = env.frame_skip
         per_call = 1 if hasattr(env, "controller") else frame_skip  # the command env: one control per mj_step
         controls, start, end = _record(env, actions)
-        env_s, bare_s = [], []
+        # Every repeat runs the same physics: each step's least disturbed time, on either side, is its best.
+        env_s, bare_s = np.full(n, np.inf), np.full(n, np.inf)
         for _ in range(repeat):
             seconds, bare_seconds = _side_by_side(env, actions, controls, start, end, per_call)
-            env_s.append(seconds)
-            bare_s.append(bare_seconds)
+            np.minimum(env_s, seconds, out=env_s)
+            np.minimum(bare_s, bare_seconds, out=bare_s)
         env.close()
-        env_us, bare_us = min(env_s) / n * 1e6, min(bare_s) / n * 1e6
+        env_us, bare_us = env_s.sum() / n * 1e6, bare_s.sum() / n * 1e6
         out[env_id] = {
             "steps": n, "frame_skip": frame_skip, "dt": env.dt, "env_us": env_us, "bare_us": bare_us,
             "steps_per_s": 1e6 / env_us, "ratio": env_us / bare_us,
         }  # fmt: skip
+    out["vector"] = bench_vector(repeat)
     return out
+
+
+VECTOR_ENVS: int = 8  # environments of the vector comparison
+VECTOR_STEPS: int = 50  # vector steps timed per repeat
+
+
+def bench_vector(repeat: int, env_id: str = "hexabot_sim/HexabotJoints-v0") -> dict:
+    """Environment steps per second of `VECTOR_ENVS` copies: the rollout-batched env against Gymnasium's
+    AsyncVectorEnv (a subprocess each) and SyncVectorEnv, alternating step by step, random actions, autoreset
+    included; each one's every step deterministic, so each step keeps its best time of the repeats."""
+    import gymnasium
+
+    import hexabot_sim.envs  # noqa: F401 (registers our ids)
+
+    modes = ("vector_entry_point", "async", "sync")
+    envs = {mode: gymnasium.make_vec(env_id, num_envs=VECTOR_ENVS, vectorization_mode=mode) for mode in modes}
+    space = envs["sync"].action_space
+    space.seed(0)
+    actions = [space.sample() for _ in range(VECTOR_STEPS)]
+    best = {mode: np.full(VECTOR_STEPS, np.inf) for mode in modes}  # each step's best time of the repeats
+    try:
+        for _ in range(repeat):
+            for env in envs.values():
+                env.reset(seed=0)
+            for k, a in enumerate(actions):  # the three alternate step by step: the same load on each
+                for mode, env in envs.items():
+                    began = time.perf_counter()
+                    env.step(a)
+                    best[mode][k] = min(best[mode][k], time.perf_counter() - began)
+    finally:
+        for env in envs.values():
+            env.close()
+    best = {mode: float(times.sum()) for mode, times in best.items()}
+    n = VECTOR_ENVS * VECTOR_STEPS
+    return {"env_id": env_id, "num_envs": VECTOR_ENVS, **{f"{mode}_steps_per_s": n / best[mode] for mode in modes}}
 
 
 def fmt_env(r: dict | str) -> tuple[str, bool]:
@@ -121,6 +161,14 @@ def fmt_env(r: dict | str) -> tuple[str, bool]:
     for env_id, v in r.items():
         if isinstance(v, str):
             lines.append(f"env       {env_id}: not measured ({v})")
+            continue
+        if env_id == "vector":
+            batched, asynchronous, sync = (v[f"{m}_steps_per_s"] for m in ("vector_entry_point", "async", "sync"))
+            lines.append(
+                f"env       {v['env_id']} x{v['num_envs']} on {os.cpu_count()} cores: batched by mujoco.rollout "
+                f"{batched:.0f} env-steps/s, AsyncVectorEnv {asynchronous:.0f} ({batched / asynchronous:.2f}x), "
+                f"SyncVectorEnv {sync:.0f} ({batched / sync:.2f}x)"
+            )
             continue
         verdict = ""
         if env_id != "Ant-v5" and ant_ratio is not None:
