@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any
 
 import gymnasium
 import mujoco
@@ -14,6 +14,9 @@ from gymnasium import spaces
 from hexabot_sim.envs.scene import EPISODE_SECONDS, PLATE_SITE, EnvScene, Randomization, check_range
 from hexabot_sim.kinematics import legged
 from hexabot_sim.walking.parameters import FALL_TILT_DEG, WalkParams
+
+if TYPE_CHECKING:
+    from hexabot_sim.render import Frames
 
 TOUCH_THRESHOLD: float = 0.3  # [N] a foot's touch reading above this counts as a foot down (as GroundSettings')
 COMMAND_RANGE: tuple[tuple[float, float], ...] = ((0.0, 0.1), (-0.05, 0.05), (-0.2, 0.2))  # vx, vy [m/s], yaw rate
@@ -63,7 +66,7 @@ class LeggedEnv(gymnasium.Env):
     rest is here: the observation, the commanded twist drawn per episode, the reward, a fall, the frames.
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 50}  # fps: per instance
+    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 50}  # noqa: RUF012 (fps: per instance)
 
     def __init__(
         self,
@@ -106,7 +109,7 @@ class LeggedEnv(gymnasium.Env):
         self.model, self.data = self.scene.model, self.scene.data
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.dt)}
         self.render_mode, self.width, self.height, self.camera = render_mode, width, height, camera
-        self._frames = None
+        self._frames: Frames | None = None
         self._addresses(p)
         n = self.n_joints
         # Observation: gravity in the body (3), gyro (3), accelerometer (3), joint angles (n), joint speeds (n),

@@ -11,6 +11,7 @@ import numpy as np
 from gymnasium import spaces
 
 from hexabot_sim.control.gait import Command
+from hexabot_sim.control.walker import WalkingController
 from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward
 from hexabot_sim.envs.scene import check_range, robot_params
 from hexabot_sim.walking.parameters import SETTLE_TIME
@@ -85,7 +86,7 @@ class LeggedCommandEnv(LeggedEnv):
         self._action = np.zeros(4)
         # Settle on the home stance up to the gait clock's start, in whole control periods.
         self._settle_steps = math.ceil(round(SETTLE_TIME / self.p_controller.timestep) / self.frame_skip) * frame_skip
-        self.controller = None
+        self.controller: WalkingController | None = None
 
     def _controller_params(self, base):
         """The walk parameters the controller is made with: every corner of the ranges checked for feasibility,

@@ -174,8 +174,9 @@ class EnvScene:
         m = self.model
         changed = False
         if self.roughness:
-            self.ground = self._ground(int(rng.integers(2**32)))
-            norm, base, size = self.ground.rough.hfield_levels()
+            patch = RoughPatch(self.roughness, int(rng.integers(2**32)), self.extent)
+            self.ground = Ground(slope=self.slope, rough=patch)
+            norm, base, size = patch.hfield_levels()
             r = self.roughness
             _, adr, n = self.hfield
             m.hfield_data[adr : adr + n] = ((base + size * norm + r) / (2 * r)).ravel()  # row 0 at -y, as MuJoCo

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from typing import Any, ClassVar
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -29,7 +29,7 @@ class LeggedJointsVectorEnv(VectorEnv):
     they end (Gymnasium's NEXT_STEP autoreset) and truncated after `max_episode_steps`.
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
+    metadata: dict[str, Any] = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}  # noqa: RUF012
 
     def __init__(self, num_envs: int = 8, max_episode_steps: int = 1000, threads: int | None = None, **kwargs) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
@@ -42,7 +42,7 @@ class LeggedJointsVectorEnv(VectorEnv):
         self.single_observation_space, self.single_action_space = first.observation_space, first.action_space
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.action_space = batch_space(self.single_action_space, num_envs)
-        self.frame_skip, self.dt = first.frame_skip, first.dt
+        self.frame_skip, self.dt, self._n_joints = first.frame_skip, first.dt, first.n_joints
         self.models = [env.model for env in self.envs]
         threads = threads or os.cpu_count() or 1
         self._thread_data = [mujoco.MjData(first.model) for _ in range(min(threads, num_envs))]
@@ -87,6 +87,7 @@ class LeggedJointsVectorEnv(VectorEnv):
         return obs
 
     def reset(self, *, seed: int | list[int] | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+        seeds: list[int | None]
         if isinstance(seed, list | tuple):
             seeds = list(seed)
         else:
@@ -99,7 +100,7 @@ class LeggedJointsVectorEnv(VectorEnv):
 
     def step(self, actions) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
         a = np.asarray(actions, dtype=np.float64)
-        n, nj = self.num_envs, self.single_action_space.shape[0]
+        n, nj = self.num_envs, self._n_joints
         if a.shape != (n, nj):
             raise ValueError(f"the actions must be shape ({n}, {nj}); got {a.shape}")
         if not np.isfinite(a).all():
@@ -118,7 +119,7 @@ class LeggedJointsVectorEnv(VectorEnv):
         truncated = (self._steps >= self.max_episode_steps) & ~terminated
         # NEXT_STEP autoreset: the environments that ended at the last step start again now.
         for i in np.flatnonzero(self._autoreset):
-            obs[i] = self._reset_one(i, None)
+            obs[i] = self._reset_one(int(i), None)
             reward[i], terminated[i], truncated[i] = 0.0, False, False
         self._autoreset = terminated | truncated
         info |= {"fell": fell, "diverged": diverged}
