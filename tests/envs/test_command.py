@@ -65,3 +65,30 @@ def test_ranges_the_legs_cannot_deliver_are_refused():
         env = LeggedCommandEnv()
         env.reset(seed=0)
         env.step(np.zeros(3))
+
+
+def test_the_controller_writes_the_controls_and_mujoco_steps_them():
+    """The controls seen at every physics step (MuJoCo's control callback), replayed with bare mj_step from the same
+    start: the same state bit for bit."""
+    import mujoco
+
+    env = LeggedCommandEnv()
+    env.reset(seed=1)
+    m = env.model
+    spec = mujoco.mjtState.mjSTATE_INTEGRATION
+    start = np.empty(mujoco.mj_stateSize(m, spec))
+    mujoco.mj_getState(m, env.data, start, spec)
+    controls = []
+    mujoco.set_mjcb_control(lambda model, data: controls.append(data.ctrl.copy()))
+    try:
+        for _ in range(3):
+            env.step(action_for(env, (0.05, 0.02, 0.1)))
+    finally:
+        mujoco.set_mjcb_control(None)
+    assert len(controls) == 3 * env.frame_skip
+    bare = mujoco.MjData(m)
+    mujoco.mj_setState(m, bare, start, spec)
+    for ctrl in controls:
+        bare.ctrl[:] = ctrl
+        mujoco.mj_step(m, bare)
+    assert np.array_equal(bare.qpos, env.data.qpos)

@@ -129,3 +129,25 @@ def test_bad_actions_say_what_is_allowed(action, words):
     env.reset(seed=0)
     with pytest.raises(ValueError, match=words):
         env.step(action)
+
+
+def test_a_step_is_frame_skip_physics_steps_and_nothing_else():
+    """The step's physics replayed with bare mj_step from the same start, on a fresh MjData: the same state bit for
+    bit (the environment reads, it does not push)."""
+    import mujoco
+
+    env = LeggedJointsEnv(terrain="rough")
+    env.reset(seed=2)
+    m = env.model
+    spec = mujoco.mjtState.mjSTATE_INTEGRATION
+    start = np.empty(mujoco.mj_stateSize(m, spec))
+    mujoco.mj_getState(m, env.data, start, spec)
+    bare = mujoco.MjData(m)
+    mujoco.mj_setState(m, bare, start, spec)
+    env.action_space.seed(2)
+    for _ in range(10):
+        env.step(env.action_space.sample())
+        bare.ctrl[:] = env.data.ctrl
+        for _ in range(env.frame_skip):
+            mujoco.mj_step(m, bare)
+    assert np.array_equal(bare.qpos, env.data.qpos) and np.array_equal(bare.qvel, env.data.qvel)
