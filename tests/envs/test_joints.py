@@ -79,9 +79,11 @@ def test_standing_reads_the_weight_on_the_feet():
     assert obs[8] == pytest.approx(9.81, rel=0.01)
 
 
-def test_action_bounds_and_rough_ground_stay_finite():
-    """Bang-bang actions at the bounds (and beyond them: clipped) on the roughest ground: no NaN, ever."""
-    env = LeggedJointsEnv(terrain="rough", roughness=0.03)
+@pytest.mark.parametrize("ground", [{"terrain": "rough", "roughness": 0.03}, {"terrain": "slope", "slope_deg": 30.0}])
+def test_action_bounds_and_the_worst_ground_stay_finite(ground):
+    """Bang-bang actions at the bounds (and beyond them: clipped) on the roughest ground and the steepest slope:
+    no NaN, ever."""
+    env = LeggedJointsEnv(**ground)
     for seed in range(2):
         obs, _ = env.reset(seed=seed)
         for k in range(60):
