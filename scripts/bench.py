@@ -65,9 +65,11 @@ from pathlib import Path
 os.environ.setdefault("MUJOCO_GL", "egl")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this tree's hexabot_sim, not an installed one
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # bench_env beside this file (also when run by path)
+
 import mujoco
 import numpy as np
-from bench_env import bench_env, fmt_env  # beside this script
+from bench_env import bench_env, fmt_env
 
 from hexabot_sim import gl, params, registry, render
 from hexabot_sim.result import at_home
