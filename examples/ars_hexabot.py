@@ -8,7 +8,7 @@ common random numbers), keeps the b directions whose better return is highest an
 alpha / (b sigma_R) sum (r+ - r-) delta_i, sigma_R the standard deviation of those 2b returns. Rollouts run on a
 process pool (one environment per worker).
 
-    python examples/ars_hexabot.py [--iterations 30] [--workers 2] [--plot curve.png]
+    python examples/ars_hexabot.py [--iterations 30] [--workers 2] [--plot c.png] [--save p.npz] [--video a.mp4]
 
 Before and after training it reports the mean return of the policy over the same evaluation seeds (episodes of
 --horizon steps of 0.1 s, commands drawn per episode by the environment).
@@ -79,6 +79,23 @@ def evaluate(pool, weights, mu, sigma, seeds, horizon) -> np.ndarray:
     return np.array([r[0] for r in pool.map(rollout, [(weights, mu, sigma, s, horizon) for s in seeds])])
 
 
+def write_video(path: str, weights, mu, sigma, seed: int, horizon: int) -> None:
+    """One episode of the policy, a frame per action (the environment's render_fps), encoded by imageio-ffmpeg."""
+    import gymnasium
+    import imageio.v2 as imageio
+
+    env = gymnasium.make(ENV_ID, render_mode="rgb_array").unwrapped
+    obs, _ = env.reset(seed=seed)
+    with imageio.get_writer(path, fps=env.metadata["render_fps"], macro_block_size=2) as writer:
+        writer.append_data(env.render())
+        for _ in range(horizon):
+            obs, _, terminated, _, _ = env.step(np.clip(weights[:, :-1] @ ((obs - mu) / sigma) + weights[:, -1], -1, 1))
+            writer.append_data(env.render())
+            if terminated:
+                break
+    env.close()
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--iterations", type=int, default=30)
@@ -91,6 +108,8 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1))
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--plot", help="write the learning curve to this PNG")
+    parser.add_argument("--save", help="write the policy (weights, mu, sigma) to this .npz")
+    parser.add_argument("--video", help="write an MP4 of the learned policy's first evaluation episode")
     args = parser.parse_args()
 
     env = _worker_env()
@@ -127,6 +146,13 @@ def main() -> None:
     print(f"after {args.iterations} iterations ({curve[-1][0]:.0f} s on {args.workers} workers): return "
           f"{score.mean():.1f} +- {score.std():.1f} (before {before.mean():.1f}); higher in {better} of "
           f"{len(score)} evaluation episodes, by {np.mean(score - before):+.1f} on average")  # fmt: skip
+    mu, sigma = stats.mean_std()
+    if args.save:
+        np.savez(args.save, weights=weights, mu=mu, sigma=sigma)
+        print(f"policy: {args.save}")
+    if args.video:
+        write_video(args.video, weights, mu, sigma, int(eval_seeds[0]), args.horizon)
+        print(f"video: {args.video}")
     if args.plot:
         from matplotlib.figure import Figure
 

@@ -91,6 +91,9 @@ class LeggedEnv(gymnasium.Env):
             raise ValueError(
                 f"unknown render_mode {render_mode!r}; known: None, {', '.join(self.metadata['render_modes'])}"
             )
+        for name, value in (("width", width), ("height", height)):
+            if isinstance(value, bool) or not isinstance(value, int | np.integer) or not 1 <= value <= 8192:
+                raise ValueError(f"{name} must be an integer from 1 to 8192 pixels; got {value!r}")
         try:
             rows = [tuple(r) for r in command_range]
         except TypeError:
@@ -122,7 +125,6 @@ class LeggedEnv(gymnasium.Env):
         size = 12 + 2 * n + self.n_legs
         self.observation_space = spaces.Box(-np.inf, np.inf, (size,), np.float64)
         self._obs = np.zeros(size)
-        self._power = np.zeros(n)
         self._velocity = np.zeros(6)
         self.command = np.zeros(3)
         self._views()

@@ -118,6 +118,7 @@ def test_target_mapping_reaches_the_servo_ranges():
         ({"command_range": ((0, 1),)}, "command_range must be three (low, high) pairs"),
         ({"reward": {"velocity_sigma": 0.0}}, "reward velocity_sigma must be a finite number > 0"),
         ({"render_mode": "human"}, "unknown render_mode 'human'"),
+        ({"width": 0}, "width must be an integer from 1 to 8192 pixels"),
     ],
 )
 def test_bad_arguments_say_what_is_allowed(kwargs, words):
