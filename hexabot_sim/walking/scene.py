@@ -41,8 +41,11 @@ def _perturbations(p: WalkParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return trims, com, friction
 
 
-def build_xml(p: WalkParams) -> str:
-    """The robot's scene with the run's options, stance, friction, perturbations and ground written in."""
+def build_xml(p: WalkParams, ground: Ground | None = None) -> str:
+    """The robot's scene with the run's options, stance, friction, perturbations and ground written in.
+
+    `ground`: another ground than the run's `terrain(p)` (a Gymnasium environment's patch, hexabot_sim/envs).
+    """
     layout = p.ROBOT.layout
     root = models.load_tree(p.ROBOT.scene)
     models.find(root, "option").attrib.update(timestep=models.fmt(p.timestep), integrator=p.integrator)
@@ -53,7 +56,7 @@ def build_xml(p: WalkParams) -> str:
     q0, _ = legged.ik_hip_batch(layout, legged.body_to_hip(layout, feet))
     z0 = p.stand_height + layout.foot_radius
     pose = [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0]
-    ground = terrain(p)
+    ground = terrain(p) if ground is None else ground
     if not ground.flat:
         pose, q0 = _add_terrain(root, p, ground)
     torso.set("pos", models.fmt(pose[:3]))
