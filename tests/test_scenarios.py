@@ -18,7 +18,7 @@ STEMS: dict[str, tuple[str, ...]] = {
     "step": ("foot_position", "foot_velocity", "joints", "foot_orientation", "singularity", "workspace"),
     "step_sweep": ("sweep", "workspace"),
     "velocity": ("velocity",),
-    "walk": ("path", "gait_diagram", "velocity", "body", "slip"),
+    "walk": ("path", "gait_diagram", "foot_forces", "velocity", "body", "slip"),
 }
 # Scenarios with more figures than their module's smoke run: the terrain presets (any robot's) draw the ground too.
 EXTRA_STEMS: dict[str, tuple[str, ...]] = {

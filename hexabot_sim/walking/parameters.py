@@ -29,7 +29,7 @@ SPEED_MARGIN: float = 0.9  # planned joint speeds must stay below this fraction 
 LOADED_FRACTION: float = 0.05  # a foot counts as loaded above this fraction of the robot's weight
 
 
-CSV_FIXED_COLUMNS: int = 13  # columns of timeseries.csv besides the legs' (4 each: contact, 3 joints)
+CSV_FIXED_COLUMNS: int = 13  # columns of timeseries.csv besides the legs' (6 each: contact, 2 forces, 3 joints)
 
 # Cost of a run for params.check_run_cost, measured on the 2-core development machine (10 s vs 60 s
 # walks): seconds per physics step (controller + mj_step: 25 us in bench.py, with a margin for a loaded
@@ -465,4 +465,4 @@ def start_problem(p: WalkParams, ground: Ground) -> str:
 
 def csv_columns(robot: WalkingRobot) -> int:
     """Columns of a walk's timeseries.csv (the run-cost estimate counts them)."""
-    return CSV_FIXED_COLUMNS + 4 * robot.layout.n_legs
+    return CSV_FIXED_COLUMNS + 6 * robot.layout.n_legs
