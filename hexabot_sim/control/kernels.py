@@ -278,11 +278,12 @@ def ramp(par, t):
 
 @jit
 def ground_step(par, geo, k, legs, flags, plane, counts, cmd, rows, stance, r, t, row_prev, q_cmd, dq, trims,
-                qpos, sensordata, ctrl, events):  # fmt: skip
+                qpos, sensordata, ctrl, events, extra):  # fmt: skip
     """One control step of GroundController from t to t + dt (row r of the chunk's rows is time t).
 
     Updates the stance plane every UPDATE_EVERY steps, sets the targets at t + dt, and advances the
-    servos by one resolved-rate step from row_prev (the targets at t) to them. Returns the number of
+    servos by one resolved-rate step from row_prev (the targets at t) to them, its feed plus `extra`
+    (3 n,) (the legs' admittance, control/compliance.py; zeros without). Returns the number of
     swings that ended (written to events).
     """
     dt = par[DT]
@@ -294,6 +295,7 @@ def ground_step(par, geo, k, legs, flags, plane, counts, cmd, rows, stance, r, t
                        row1, events)  # fmt: skip
     rate = np.empty(row_prev.shape[0])
     feed(k[3], row_prev, row1, dt, rate)
+    rate += extra
     row_prev[:] = row1
     servo(k, qpos, trims, q_cmd, dq, rate, dt, ctrl)
     return n_events
@@ -350,7 +352,7 @@ def _compile_all() -> None:
     servo(k, qpos, trims, q_cmd, dq, rows[0], 0.002, ctrl)
     targets(par, geo, legs, flags, plane, cmd, rows[0], stance[0], 0.0, rows[0], sensordata, row, events)
     ground_step(par, geo, k, legs, flags, plane, counts, cmd, rows, stance, 0, 0.0, row, q_cmd, dq, trims, qpos,
-                sensordata, ctrl, events)  # fmt: skip
+                sensordata, ctrl, events, np.zeros(nq))  # fmt: skip
 
 
 _KERNELS = (rate_steps, feed, servo, plane_fit, update_plane, _event, targets, ramp, ground_step)

@@ -27,6 +27,7 @@ import math
 import mujoco
 import numpy as np
 
+from hexabot_sim.control.compliance import Admittance, AdmittanceSettings
 from hexabot_sim.control.gait import Command, GaitPlanner
 from hexabot_sim.control.resolved_rate import ResolvedRateGains, step_constants
 from hexabot_sim.kinematics import legged
@@ -35,11 +36,12 @@ from hexabot_sim.kinematics import legged
 def kernels():
     """control/kernels.py, imported on first use and compiled (importing numba takes ~0.15 s, which
     `hexabot-sim list` should not pay: it imports this module for the parameter tables)."""
-    from hexabot_sim.control import kernels
+    from hexabot_sim.control import compliance_kernels, kernels
     from hexabot_sim.signals import signals_held
 
     with signals_held():  # a Ctrl-C inside numba's compiler would break the kernels (see kernels.warm_up)
         kernels.warm_up()
+        compliance_kernels.warm_up()
     return kernels
 
 
@@ -58,6 +60,8 @@ class WalkSettings:
         heading_gain: Yaw-rate correction per radian of heading error [1/s].
         trims: Servo zero errors (3 n_legs,) [rad], leg by leg: each servo holds q_cmd + trim while its encoder
             reads q - trim; empty: none.
+        admittance: The legs' admittance around the position servos, driven by the touch sensors
+            (control/compliance.py); None: stiff position-controlled legs.
     """
 
     command: Command
@@ -66,6 +70,7 @@ class WalkSettings:
     heading_hold: bool = False
     heading_gain: float = 2.0
     trims: tuple[float, ...] = ()
+    admittance: AdmittanceSettings | None = None
 
 
 def yaw_of(quat: np.ndarray) -> float:
@@ -137,6 +142,11 @@ class WalkingController:
         self._qpos = data.qpos
         self._ctrl = data.ctrl
         self._sensordata = data.sensordata
+        self.admittance = None if settings.admittance is None else Admittance(
+            model, layout.legs, self.hips, layout.yaws, gains.task_gain, self.dt, settings.admittance
+        )  # fmt: skip
+        self._no_extra = np.zeros(nq)  # the feed correction without an admittance
+        self._feed_row = np.zeros(nq)
 
     def scale(self, t: np.ndarray | float) -> np.ndarray | float:
         """Fraction of the command in force at t (vectorised): 0 while settling, then a linear ramp to 1."""
@@ -184,6 +194,7 @@ class WalkingController:
         rates = np.empty(rows[1:].size)
         self.kernels.feed(self.consts[3], rows[:-1].ravel(), rows[1:].ravel(), self.dt, rates)
         self._feed = rates.reshape(rows.shape[0] - 1, rows.shape[1])
+        self._rows, self._stance = rows, stance
 
     def _rolling_offsets(self, hip: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
         """Offsets (n + 1, legs, 3) of the foot-centre targets for feet that roll without slipping.
@@ -237,7 +248,11 @@ class WalkingController:
         if k >= self._chunk:
             self._replan(data.time)
             k = 0
-        self.kernels.servo(self.consts, self._qpos, self.trims, self.q_cmd, self.dq, self._feed[k], self.dt, self._ctrl)
+        feed = self._feed[k]
+        if self.admittance is not None:
+            extra = self.admittance.update(self._sensordata, self._rows[k], self._stance[k])
+            feed = np.add(feed, extra, out=self._feed_row)
+        self.kernels.servo(self.consts, self._qpos, self.trims, self.q_cmd, self.dq, feed, self.dt, self._ctrl)
         self._k = k + 1
 
 
@@ -388,9 +403,12 @@ class GroundController(WalkingController):
                           rows[k], self._sensordata, self._row_prev, self._events)  # fmt: skip
             self._record(n)
             self._started = True
+        extra = self._no_extra
+        if self.admittance is not None:
+            extra = self.admittance.update(self._sensordata, self._row_prev, stance[k])
         n = K.ground_step(self.par, self.geo, self.consts, self.legs, self.flags, self.plane, self.counts, self.cmd,
                           rows, stance, k, t, self._row_prev, self.q_cmd, self.dq, self.trims, self._qpos,
-                          self._sensordata, self._ctrl, self._events)  # fmt: skip
+                          self._sensordata, self._ctrl, self._events, extra)  # fmt: skip
         if n:
             self._record(n)
         self._k = k + 1

@@ -13,7 +13,7 @@ from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.kinematics import legged
 from hexabot_sim.params import allowed, apart, check_run_cost, param
 from hexabot_sim.simulate import step_count
-from hexabot_sim.terrain import Ground, Kerb, Limits, RoughPatch, Slope
+from hexabot_sim.terrain import Ground, Kerb, Limits, RoughPatch, Slope, Stairs
 from hexabot_sim.terrain.heightfield import CELL as HFIELD_CELL
 from hexabot_sim.terrain.heightfield import MARGIN as HFIELD_MARGIN
 from hexabot_sim.terrain.heightfield import MAX_POINTS as HFIELD_MAX_POINTS
@@ -136,12 +136,22 @@ class WalkParams:
         0.0, "m", "a step up across the path (0: none)", ge=0.0, le=0.1, typo=("mm", 1e-3)
     )  # fmt: skip
     kerb_distance: float = param(0.5, "m", "distance of the kerb's edge ahead of the start", ge=0.3, le=100.0)
+    stairs_rise: float = param(
+        0.0, "m", "stairs across the path: the rise of each step (0: none)", ge=0.0, le=0.1, typo=("mm", 1e-3)
+    )
+    stairs_run: float = param(0.25, "m", "depth of each stair step along the path", ge=0.05, le=2.0)
+    stairs_count: int = param(3, "1", "steps up before the landing", ge=1, le=50)
+    stairs_distance: float = param(0.5, "m", "distance of the first step's edge ahead of the start", ge=0.3, le=100.0)
     touchdown: str = param(
         "planned", "", "swing ends at the planned phase, or when the foot's touch sensor fires (sensed)",
         choices=("planned", "sensed"),
     )  # fmt: skip
     level_body: str = param("off", "", "keep the body level from the IMU (on) or follow the ground (off)",
                             choices=("off", "on"))  # fmt: skip
+    load_sharing: str = param(
+        "off", "", "stance legs yield to their touch sensors' force error, sharing the load (admittance), or hold "
+        "their planned height (off)", choices=("admittance", "off"),
+    )  # fmt: skip
 
     def __post_init__(self) -> None:
         if self.duty and not self.gait_duty_range()[0] <= self.duty < 1.0:
@@ -157,7 +167,7 @@ class WalkParams:
             )
         n = step_count(self.duration, self.timestep)
         step_s, row_s, row_bytes = RUN_COST
-        if self.on_ground() or self.slope_deg or self.roughness or self.kerb_height:
+        if self.on_ground() or self.slope_deg or self.roughness or self.kerb_height or self.stairs_rise:
             step_s = TERRAIN_STEP_SECONDS
         check_run_cost(
             n, n + 1, csv_columns(self.ROBOT), step_s, row_s, row_bytes, "lower 'duration' or raise 'timestep'"
@@ -306,10 +316,18 @@ def terrain(p: WalkParams) -> Ground:
     # stepped down off its end at 20.5 m, where the terrain's heights still had the kerb).
     reach = speed * p.duration / math.cos(math.radians(p.slope_deg)) + HFIELD_MARGIN
     kerb_length, kerb_width = max(KERB_LENGTH, reach - p.kerb_distance), max(KERB_WIDTH, 2 * reach)
+    obstacles: tuple[Kerb | Stairs, ...] = ()
+    if p.kerb_height:
+        obstacles += (Kerb(p.kerb_height, p.kerb_distance, along_xy, kerb_length, kerb_width),)
+    if p.stairs_rise:
+        landing = max(KERB_LENGTH, reach - p.stairs_distance - (p.stairs_count - 1) * p.stairs_run)
+        obstacles += (
+            Stairs(p.stairs_rise, p.stairs_run, p.stairs_count, p.stairs_distance, along_xy, landing, kerb_width),
+        )
     return Ground(
         slope=Slope(p.slope_deg, (float(uphill[0]), float(uphill[1])), p.slope_heading),
         rough=RoughPatch(p.roughness, p.seed, extent) if p.roughness else None,
-        obstacles=(Kerb(p.kerb_height, p.kerb_distance, along_xy, kerb_length, kerb_width),) if p.kerb_height else (),
+        obstacles=obstacles,
     )
 
 

@@ -8,6 +8,7 @@ import mujoco
 import numpy as np
 
 from hexabot_sim import models
+from hexabot_sim.control.compliance import AdmittanceSettings
 from hexabot_sim.control.gait import GaitPlanner
 from hexabot_sim.control.resolved_rate import ResolvedRateGains
 from hexabot_sim.control.walker import GroundController, GroundSettings, WalkingController, WalkSettings
@@ -118,7 +119,7 @@ def make_controller(p: WalkParams, model: mujoco.MjModel, data: mujoco.MjData) -
     planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), p.timestep, start_time=SETTLE_TIME)
     settings = WalkSettings(
         p.command(), settle_time=SETTLE_TIME, ramp_time=p.period, heading_hold=p.heading_hold == "on",
-        trims=tuple(trims.tolist()),
+        trims=tuple(trims.tolist()), admittance=AdmittanceSettings() if p.load_sharing == "admittance" else None,
     )  # fmt: skip
     gains = ResolvedRateGains(p.task_gain, 0.01, 0.01, p.max_joint_speed, acceleration_limit(p))
     q0 = model.key("home").qpos[7:].reshape(-1, 3)

@@ -146,3 +146,24 @@ def test_standing_feet_carry_the_weight(robot):
     m = result.metrics
     per_foot = ("foot_bounces", "load_share", "stance_loaded_fraction")
     assert {f"{name}_{leg}" for name in per_foot for leg in legs} <= set(m)
+
+
+@pytest.mark.parametrize("scene", ["hexabot_scene", "quadbot_scene"])
+def test_sensed_foot_forces_are_the_feet_normal_forces(scene):
+    """The touch sensors a controller (or a Gymnasium env) reads give each foot's normal contact force: MuJoCo's
+    mj_contactForce over the foot geom's contacts, on the robot standing on its home keyframe."""
+    from hexabot_sim import models
+    from hexabot_sim.control.compliance import sensed_foot_forces
+
+    model = mujoco.MjModel.from_xml_path(str(models.model_path(scene)))
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    for _ in range(300):  # 0.6 s: settled on its feet
+        mujoco.mj_step(model, data)
+    names = [model.sensor(i).name for i in range(model.nsensor)]
+    legs = [name[: -len("_touch")] for name in names if name.endswith("_touch")]
+    sensed = sensed_foot_forces(model, data, tuple(legs))
+    normal, _ = _recompute(model, data.qpos[None].copy(), data.qvel[None].copy(), data.ctrl[None].copy(), legs)
+    np.testing.assert_allclose(sensed, normal[0], rtol=1e-3, atol=1e-3)
+    weight = model.body_subtreemass[model.body("torso").id] * -model.opt.gravity[2]
+    assert sensed.sum() == pytest.approx(weight, rel=0.01)

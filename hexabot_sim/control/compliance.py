@@ -1,0 +1,91 @@
+"""Legs that share the load: sensed foot forces and an admittance per leg around the position servos (issue 19).
+
+A position-controlled leg in a stance of four or more feet holds a height, not a force: the loads are
+undetermined, and a foot whose share falls near zero unloads and lands again many times a stance. Here
+each leg's foot target gets a vertical offset dz from a virtual mass-spring-damper driven by its foot's
+force error, as the admittance of CSIRO's OpenSHC does on its hexapods:
+
+    M ddz + D dz + K dz = F - F_ref          (dz > 0 lifts the foot: an overloaded foot yields)
+
+F is the foot's touch sensor (what a real robot has: a force-sensing pad, or joint torque from the servo
+current), low-passed over `filter_time`; F_ref is the stance feet's share of the measured total: the
+least-norm forces that carry it with no moment about the body origin (force distribution over the feet
+the plan has down; equal shares where they span no plane). In swing the error is zero and dz springs
+back. The offset enters the resolved-rate step as a feed term (K_task dz + dz/dt on the foot's z, which
+the body and hip frames share), so the servos stay position servos.
+
+The per-step work is compiled (numba: compliance_kernels.py, imported on first use like kernels.py, so that
+importing this module for its settings stays cheap); `Admittance` owns its state.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import mujoco
+import numpy as np
+
+
+def sensed_foot_forces(model: mujoco.MjModel, data: mujoco.MjData, legs: tuple[str, ...]) -> np.ndarray:
+    """Normal force [N] (n_legs,) on each foot as its touch sensor `<leg>_touch` reads it (what a real robot's foot
+    pad measures; not MuJoCo's contact list). `data` must be forward-computed (after mj_step or mj_forward)."""
+    return np.array([float(data.sensordata[model.sensor_adr[model.sensor(f"{leg}_touch").id]]) for leg in legs])
+
+
+@dataclasses.dataclass(frozen=True)
+class AdmittanceSettings:
+    """The virtual leg: stiffness [N/m], natural frequency [Hz] and damping ratio of M ddz + D dz + K dz = F - F_ref,
+    the sensor's low-pass time constant [s] and the largest offset [m] either way."""
+
+    stiffness: float = 2000.0
+    frequency: float = 8.0
+    damping_ratio: float = 1.0
+    filter_time: float = 0.005
+    limit: float = 0.01
+    preload: float = 0.0  # [N] > 0: F_ref = preload on every leg, stance and swing (a preloaded spring leg)
+
+
+class Admittance:
+    """The admittance of every leg of a walking controller: call `update` once per control step."""
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        legs: tuple[str, ...],
+        hips: np.ndarray,
+        yaws: np.ndarray,
+        task_gain: float,
+        dt: float,
+        settings: AdmittanceSettings,
+    ) -> None:
+        from hexabot_sim.control import compliance_kernels as ck
+
+        self._kernel = ck.admittance
+        self._dz = ck.DZ
+        n = len(legs)
+        self.settings = settings
+        self.geo = np.zeros((n, 5))
+        self.geo[:, ck.COS], self.geo[:, ck.SIN] = np.cos(yaws), np.sin(yaws)
+        self.geo[:, ck.HIP_X], self.geo[:, ck.HIP_Y] = hips[:, 0], hips[:, 1]
+        self.geo[:, ck.TOUCH_ADR] = [model.sensor_adr[model.sensor(f"{leg}_touch").id] for leg in legs]
+        omega = 2 * math.pi * settings.frequency
+        mass = settings.stiffness / omega**2
+        self.par = np.zeros(ck.NPAR)
+        self.par[ck.STIFFNESS], self.par[ck.MASS] = settings.stiffness, mass
+        self.par[ck.DAMPING] = 2 * settings.damping_ratio * math.sqrt(settings.stiffness * mass)
+        self.par[ck.ALPHA] = dt / (settings.filter_time + dt)
+        self.par[ck.DT], self.par[ck.LIMIT], self.par[ck.TASK_GAIN] = dt, settings.limit, task_gain
+        self.par[ck.PRELOAD] = settings.preload
+        self.state = np.zeros((n, 3))
+        self.extra = np.zeros(3 * n)  # the feed correction of the step (z entries only)
+
+    @property
+    def offsets(self) -> np.ndarray:
+        """Each foot target's vertical offset dz [m] (n_legs,) now (positive: lifted)."""
+        return self.state[:, self._dz].copy()
+
+    def update(self, sensordata: np.ndarray, row: np.ndarray, stance: np.ndarray) -> np.ndarray:
+        """Advances the legs by one step; returns the feed correction (3 n_legs,) for the resolved-rate step."""
+        self._kernel(self.par, self.geo, self.state, sensordata, row, stance, self.extra)
+        return self.extra
