@@ -24,7 +24,7 @@ STEMS: dict[str, tuple[str, ...]] = {
 EXTRA_STEMS: dict[str, tuple[str, ...]] = {
     name: ("terrain",)
     for name, scenario in registry.SCENARIOS.items()
-    if any(scenario.defaults.get(key) for key in ("slope_deg", "roughness", "kerb_height"))
+    if any(scenario.defaults.get(key) for key in ("slope_deg", "roughness", "kerb_height", "stairs_rise"))
 }
 
 

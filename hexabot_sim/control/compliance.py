@@ -21,7 +21,6 @@ importing this module for its settings stays cheap); `Admittance` owns its state
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import mujoco
 import numpy as np
@@ -35,15 +34,25 @@ def sensed_foot_forces(model: mujoco.MjModel, data: mujoco.MjData, legs: tuple[s
 
 @dataclasses.dataclass(frozen=True)
 class AdmittanceSettings:
-    """The virtual leg: stiffness [N/m], natural frequency [Hz] and damping ratio of M ddz + D dz + K dz = F - F_ref,
-    the sensor's low-pass time constant [s] and the largest offset [m] either way."""
+    """The virtual leg D dz/dt + K dz = F - F_ref of every stance foot, and how its reference is shared.
 
-    stiffness: float = 2000.0
-    frequency: float = 8.0
-    damping_ratio: float = 1.0
-    filter_time: float = 0.005
+    Attributes:
+        damping: D [N s/m]: with a stance leg's own stiffness k_leg, the force error decays in D / k_leg.
+        stiffness: K [N/m]: a weak spring that keeps dz from drifting (F - F_ref settles at K dz).
+        filter_time: The touch sensor's low-pass time constant [s].
+        limit: The largest offset [m] either way.
+        return_time: In swing, dz returns to zero with this time constant [s].
+        ramp_time: A foot's share ramps up over this time after touchdown and down before lift-off [s].
+        least_weight: Its smallest weight in the force distribution (at touchdown and lift-off).
+    """
+
+    damping: float = 600.0
+    stiffness: float = 200.0
+    filter_time: float = 0.004
     limit: float = 0.01
-    preload: float = 0.0  # [N] > 0: F_ref = preload on every leg, stance and swing (a preloaded spring leg)
+    return_time: float = 0.05
+    ramp_time: float = 0.08
+    least_weight: float = 1.0
 
 
 class Admittance:
@@ -57,6 +66,7 @@ class Admittance:
         yaws: np.ndarray,
         task_gain: float,
         dt: float,
+        stance_time: float,
         settings: AdmittanceSettings,
     ) -> None:
         from hexabot_sim.control import compliance_kernels as ck
@@ -69,15 +79,13 @@ class Admittance:
         self.geo[:, ck.COS], self.geo[:, ck.SIN] = np.cos(yaws), np.sin(yaws)
         self.geo[:, ck.HIP_X], self.geo[:, ck.HIP_Y] = hips[:, 0], hips[:, 1]
         self.geo[:, ck.TOUCH_ADR] = [model.sensor_adr[model.sensor(f"{leg}_touch").id] for leg in legs]
-        omega = 2 * math.pi * settings.frequency
-        mass = settings.stiffness / omega**2
         self.par = np.zeros(ck.NPAR)
-        self.par[ck.STIFFNESS], self.par[ck.MASS] = settings.stiffness, mass
-        self.par[ck.DAMPING] = 2 * settings.damping_ratio * math.sqrt(settings.stiffness * mass)
+        self.par[ck.DAMPING], self.par[ck.STIFFNESS] = settings.damping, settings.stiffness
         self.par[ck.ALPHA] = dt / (settings.filter_time + dt)
         self.par[ck.DT], self.par[ck.LIMIT], self.par[ck.TASK_GAIN] = dt, settings.limit, task_gain
-        self.par[ck.PRELOAD] = settings.preload
-        self.state = np.zeros((n, 3))
+        self.par[ck.RETURN_TIME], self.par[ck.RAMP_TIME] = settings.return_time, settings.ramp_time
+        self.par[ck.STANCE_TIME], self.par[ck.LEAST_WEIGHT] = stance_time, settings.least_weight
+        self.state = np.zeros((n, 4))
         self.extra = np.zeros(3 * n)  # the feed correction of the step (z entries only)
 
     @property

@@ -7,36 +7,38 @@ import numpy as np
 from hexabot_sim.control.kernels import jit
 
 # Scalars `par` of the kernel.
-STIFFNESS, MASS, DAMPING, ALPHA, DT, LIMIT, TASK_GAIN, PRELOAD = range(8)
-NPAR = 8
-# Per-leg constants `geo` (n, 5) and state `state` (n, 3).
+DAMPING, STIFFNESS, ALPHA, DT, LIMIT, TASK_GAIN, RETURN_TIME, RAMP_TIME, STANCE_TIME, LEAST_WEIGHT = range(10)
+NPAR = 10
+# Per-leg constants `geo` (n, 5) and state `state` (n, 4).
 COS, SIN, HIP_X, HIP_Y, TOUCH_ADR = range(5)
-DZ, VZ, FORCE = range(3)
+DZ, VZ, FORCE, TIMER = range(4)
 
 
 @jit
-def reference(x, y, total, out):
-    """Least-norm forces (n,) on the feet at (x, y) (n,) that carry `total` with no moment about the origin:
-    F = A^T (A A^T)^-1 (total, 0, 0), A = (1; x; y). Equal shares where the feet span no plane."""
+def reference(x, y, w, total, out):
+    """Forces (n,) on the feet at (x, y) (n,) that carry `total` with no moment about the origin and the least
+    weighted norm sum F_i^2 / w_i: F = W A^T (A W A^T)^-1 (total, 0, 0), A = (1; x; y), W = diag(w) (w = 1:
+    the least-norm distribution). Shares in proportion to w where the feet span no plane."""
     n = x.shape[0]
-    sx = sy = sxx = sxy = syy = 0.0
+    s0 = sx = sy = sxx = sxy = syy = 0.0
     for i in range(n):
-        sx += x[i]
-        sy += y[i]
-        sxx += x[i] * x[i]
-        sxy += x[i] * y[i]
-        syy += y[i] * y[i]
-    # A A^T = [[n, sx, sy], [sx, sxx, sxy], [sy, sxy, syy]]; (A A^T)^-1 (1, 0, 0) is its first column / det.
+        s0 += w[i]
+        sx += w[i] * x[i]
+        sy += w[i] * y[i]
+        sxx += w[i] * x[i] * x[i]
+        sxy += w[i] * x[i] * y[i]
+        syy += w[i] * y[i] * y[i]
+    # A W A^T = [[s0, sx, sy], [sx, sxx, sxy], [sy, sxy, syy]]; its inverse's first column is (c0, c1, c2) / det.
     c0 = sxx * syy - sxy * sxy
     c1 = sy * sxy - sx * syy
     c2 = sx * sxy - sy * sxx
-    det = n * c0 + sx * c1 + sy * c2
-    if n < 3 or det <= 1e-9 * max(1.0, n * (sxx + syy)) ** 2:
+    det = s0 * c0 + sx * c1 + sy * c2
+    if n < 3 or det <= 1e-9 * max(1e-12, s0 * (sxx + syy)) ** 2:
         for i in range(n):
-            out[i] = total / max(n, 1)
+            out[i] = total * w[i] / s0 if s0 > 0.0 else total / max(n, 1)
         return
     for i in range(n):
-        out[i] = total * (c0 + c1 * x[i] + c2 * y[i]) / det
+        out[i] = total * w[i] * (c0 + c1 * x[i] + c2 * y[i]) / det
 
 
 @jit
@@ -46,7 +48,7 @@ def admittance(par, geo, state, sensordata, row, stance, extra):
     resolved-rate feed correction into `extra` (3 n,) (only the z entries)."""
     n = state.shape[0]
     dt = par[DT]
-    xs, ys, ref = np.empty(n), np.empty(n), np.empty(n)
+    xs, ys, ws, ref = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     idx = np.empty(n, dtype=np.int64)
     total = 0.0
     m = 0
@@ -54,24 +56,28 @@ def admittance(par, geo, state, sensordata, row, stance, extra):
         state[i, FORCE] += par[ALPHA] * (sensordata[int(geo[i, TOUCH_ADR])] - state[i, FORCE])
         total += state[i, FORCE]
         if stance[i]:
+            state[i, TIMER] += dt
             c, s = geo[i, COS], geo[i, SIN]
             x, y = row[3 * i], row[3 * i + 1]
             xs[m] = c * x - s * y + geo[i, HIP_X]
             ys[m] = s * x + c * y + geo[i, HIP_Y]
+            # Load transfer: a foot's weight ramps up after touchdown and down before lift-off.
+            into = state[i, TIMER] / par[RAMP_TIME]
+            left = (par[STANCE_TIME] - state[i, TIMER]) / par[RAMP_TIME]
+            ws[m] = max(par[LEAST_WEIGHT], min(1.0, into, left))
             idx[m] = i
             m += 1
-    error = np.zeros(n)
-    if par[PRELOAD] > 0.0:  # a preloaded spring in stance and swing alike
-        for i in range(n):
-            error[i] = state[i, FORCE] - par[PRELOAD]
-    else:  # the force distribution of the stance feet
-        reference(xs[:m], ys[:m], total, ref)
-        for j in range(m):
-            error[idx[j]] = state[idx[j], FORCE] - ref[j]
-    k, mass, d, limit = par[STIFFNESS], par[MASS], par[DAMPING], par[LIMIT]
+        else:
+            state[i, TIMER] = 0.0
+    reference(xs[:m], ys[:m], ws[:m], total, ref)
+    limit = par[LIMIT]
     for i in range(n):
-        # Semi-implicit Euler: velocity first, then the offset with the new velocity.
-        state[i, VZ] += (error[i] - d * state[i, VZ] - k * state[i, DZ]) / mass * dt
+        state[i, VZ] = -state[i, DZ] / par[RETURN_TIME]  # swing: back to the plan
+    for j in range(m):
+        i = idx[j]
+        # D dz/dt + K dz = F - F_ref: an overloaded foot yields (dz > 0 lifts it), an underloaded one presses.
+        state[i, VZ] = (state[i, FORCE] - ref[j] - par[STIFFNESS] * state[i, DZ]) / par[DAMPING]
+    for i in range(n):
         dz = state[i, DZ] + state[i, VZ] * dt
         if dz > limit or dz < -limit:
             dz = max(-limit, min(limit, dz))
@@ -80,9 +86,13 @@ def admittance(par, geo, state, sensordata, row, stance, extra):
         extra[3 * i + 2] = par[TASK_GAIN] * dz + state[i, VZ]
 
 
-def warm_up() -> None:
-    """Compiles the kernels (or loads them from numba's cache) for the argument types the controller passes."""
+def compile_all() -> None:
+    """Calls each kernel once on arrays of the types the controller passes (kernels.warm_up calls this, with its
+    fallback to compiling in memory when numba's cache cannot be used)."""
     n = 6
-    geo, state, extra = np.zeros((n, 5)), np.zeros((n, 3)), np.zeros(3 * n)
+    geo, state, extra = np.zeros((n, 5)), np.zeros((n, 4)), np.zeros(3 * n)
     par = np.ones(NPAR)
     admittance(par, geo, state, np.zeros(8), np.ones(3 * n), np.ones(n, dtype=np.bool_), extra)
+
+
+KERNELS = (reference, admittance)

@@ -19,8 +19,9 @@ NUMBA_DISABLE_JIT=1 runs them as plain Python, for debugging.
 State of the ground-finding legs (GroundController), one row per leg:
 - `legs` float (n, NLEG): stance height z [m] (body/hip frame z of the foot target), its value at
   lift-off, the lift-off time [s], the horizontal target offset (x, y) [m] in the hip frame, the
-  offset at lift-off, the landing point (x, y) of the swing under way in the body frame, and the
-  planner's landing point of the next swing (set with each chunk's plan);
+  offset at lift-off, the landing point (x, y) of the swing under way in the body frame, the
+  planner's landing point of the next swing (set with each chunk's plan), and the elevator reflex's
+  trigger time [s] and the horizontal target (x, y) [m] (hip frame) it holds while lifting;
 - `flags` int (n, 3): swing mode (STANCE, SWING, EARLY, SEEKING), planned stance at the last step, grounded.
 """
 
@@ -51,8 +52,8 @@ feed = jit(resolved_rate.feed)
 # Swing state machine, per leg.
 STANCE, SWING, EARLY, SEEKING = 0, 1, 2, 3
 # Columns of `legs`.
-Z, Z_LIFT, T_LIFT, OFFSET, OFFSET_LIFT, LANDING, NEXT_LANDING = 0, 1, 2, 3, 5, 7, 9
-NLEG = 11
+Z, Z_LIFT, T_LIFT, OFFSET, OFFSET_LIFT, LANDING, NEXT_LANDING, T_REFLEX, HOLD = 0, 1, 2, 3, 5, 7, 9, 11, 12
+NLEG = 14
 # Columns of `flags`.
 MODE, WAS_STANCE, GROUNDED = 0, 1, 2
 # Per-leg constants `geo` (n, NGEO): cos and sin of the hip yaw, hip position (x, y) in the body frame, the
@@ -61,8 +62,10 @@ COS, SIN, HIP_X, HIP_Y, NEUTRAL_Z, TOUCH_ADR = 0, 1, 2, 3, 4, 5
 NGEO = 6
 # Scalars `par`: GroundSettings, the gait's timing and the command's ramp.
 (SENSED, LEVEL, STAND_HEIGHT, DEPTH_MIN, DEPTH_MAX, ATTITUDE_GAIN, HEIGHT_GAIN, TOUCH_THRESHOLD, UPDATE_EVERY,
- SWING_TIME, SEEK_SPEED, DT, SETTLE_TIME, RAMP_TIME, QUAT_ADR) = range(15)  # fmt: skip
-NPAR = 15
+ SWING_TIME, SEEK_SPEED, DT, SETTLE_TIME, RAMP_TIME, QUAT_ADR,
+ REFLEX_LIFT, REFLEX_UNTIL, REFLEX_RISE) = range(18)  # fmt: skip
+NPAR = 18
+REFLEX_FROM: float = 0.2  # a touch earlier in the swing is the foot leaving the ground, not an obstacle
 # Counters `counts`: control steps so far, plane updates, updates whose heights were clipped to the workspace.
 STEPS, UPDATES, CLIPPED = 0, 1, 2
 
@@ -169,6 +172,24 @@ def _event(events, n, leg, planned, touched):
 
 
 @jit
+def _smoothstep(x):
+    x = min(1.0, max(0.0, x))
+    return x * x * (3 - 2 * x)
+
+
+@jit
+def reflex(par, legs, i, t, s, z):
+    """The elevator reflex of leg i since its trigger: the swing's height z raised by REFLEX_LIFT over REFLEX_RISE
+    [s], the raise fading over the last 30 % of the swing; the horizontal target (hip frame) held where it was at
+    the touch while lifting, then let go to the plan's by 90 % of the swing. Returns (z, the hold's weight)."""
+    since = t - legs[i, T_REFLEX]
+    z += par[REFLEX_LIFT] * _smoothstep(since / par[REFLEX_RISE]) * (1.0 - _smoothstep((s - 0.7) / 0.3))
+    release = legs[i, T_LIFT] + 0.9 * par[SWING_TIME] - legs[i, T_REFLEX] - par[REFLEX_RISE]  # [s] to let go in
+    hold = 1.0 - _smoothstep((since - par[REFLEX_RISE]) / max(release, par[DT]))
+    return z, hold
+
+
+@jit
 def targets(par, geo, legs, flags, plane, cmd, row, stance, t, row_prev, sensordata, out, events):
     """The planner's hip-frame row (3 n,) at time t with the heights and offsets of uneven ground, into out.
 
@@ -221,7 +242,17 @@ def targets(par, geo, legs, flags, plane, cmd, row, stance, t, row_prev, sensord
                 legs[i, OFFSET + 1] = legs[i, OFFSET_LIFT + 1] * fade
             else:
                 legs[i, OFFSET] = legs[i, OFFSET + 1] = 0.0
-            if sensed and s >= 0.5 and touching:
+            # Elevator reflex: a touch before REFLEX_UNTIL of the swing is an obstacle in the way, not the ground.
+            blocked = sensed and touching and REFLEX_FROM < s < par[REFLEX_UNTIL] and par[REFLEX_LIFT] > 0.0
+            if blocked and legs[i, T_REFLEX] < legs[i, T_LIFT]:  # the first touch of this swing: hold and lift
+                legs[i, T_REFLEX] = t
+                legs[i, HOLD] = out[j] + legs[i, OFFSET]
+                legs[i, HOLD + 1] = out[j + 1] + legs[i, OFFSET + 1]
+            if legs[i, T_REFLEX] >= legs[i, T_LIFT]:
+                z, hold = reflex(par, legs, i, t, s, z)
+                legs[i, OFFSET] = (legs[i, HOLD] - out[j]) * hold
+                legs[i, OFFSET + 1] = (legs[i, HOLD + 1] - out[j + 1]) * hold
+            if sensed and s >= 0.5 and touching and not blocked:
                 n_events = _event(events, n_events, i, legs[i, T_LIFT] + swing_time, t)
                 legs[i, Z] = z
                 mode = STANCE if planned else EARLY
@@ -319,7 +350,7 @@ def warm_up() -> None:
         _compile_all()
     except Exception as error:  # retried without the cache; if that fails too, the first error stands
         where = getattr(getattr(ground_step, "_cache", None), "cache_path", "?")
-        for kernel in _KERNELS:
+        for kernel in _all_kernels():
             kernel._cache = NullCache()  # numba's own "no caching" (the dispatcher attribute cache=True sets)
         try:
             _compile_all()
@@ -334,9 +365,19 @@ def warm_up() -> None:
     _WARM[0] = True
 
 
+def _all_kernels() -> tuple:
+    """Every compiled kernel of the walking controllers: these and the legs' admittance (compliance_kernels.py)."""
+    from hexabot_sim.control import compliance_kernels
+
+    return _KERNELS + compliance_kernels.KERNELS
+
+
 def _compile_all() -> None:
     """Calls each kernel the controllers call from Python once, on arrays of the types they pass (for six
     legs; the types, hence the compiled code, are the same for any leg count)."""
+    from hexabot_sim.control import compliance_kernels
+
+    compliance_kernels.compile_all()
     par = np.zeros(NPAR)
     par[UPDATE_EVERY], par[DT], par[SWING_TIME] = 1.0, 0.002, 1.0
     gains = resolved_rate.ResolvedRateGains(max_joint_acceleration=200.0)
@@ -355,4 +396,4 @@ def _compile_all() -> None:
                 sensordata, ctrl, events, np.zeros(nq))  # fmt: skip
 
 
-_KERNELS = (rate_steps, feed, servo, plane_fit, update_plane, _event, targets, ramp, ground_step)
+_KERNELS = (rate_steps, feed, servo, plane_fit, update_plane, _event, _smoothstep, reflex, targets, ramp, ground_step)

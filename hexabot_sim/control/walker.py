@@ -36,12 +36,11 @@ from hexabot_sim.kinematics import legged
 def kernels():
     """control/kernels.py, imported on first use and compiled (importing numba takes ~0.15 s, which
     `hexabot-sim list` should not pay: it imports this module for the parameter tables)."""
-    from hexabot_sim.control import compliance_kernels, kernels
+    from hexabot_sim.control import kernels
     from hexabot_sim.signals import signals_held
 
     with signals_held():  # a Ctrl-C inside numba's compiler would break the kernels (see kernels.warm_up)
         kernels.warm_up()
-        compliance_kernels.warm_up()
     return kernels
 
 
@@ -143,7 +142,8 @@ class WalkingController:
         self._ctrl = data.ctrl
         self._sensordata = data.sensordata
         self.admittance = None if settings.admittance is None else Admittance(
-            model, layout.legs, self.hips, layout.yaws, gains.task_gain, self.dt, settings.admittance
+            model, layout.legs, self.hips, layout.yaws, gains.task_gain, self.dt, planner.stance_time,
+            settings.admittance,
         )  # fmt: skip
         self._no_extra = np.zeros(nq)  # the feed correction without an admittance
         self._feed_row = np.zeros(nq)
@@ -280,6 +280,12 @@ class GroundSettings:
         height_gain: Rate at which body-height errors are removed [1/s].
         touch_threshold: Touch-sensor force that counts as contact [N].
         update_every: Control steps between updates of the ground plane and the levelling.
+        reflex_lift: The elevator reflex (sensed touchdown): a swing foot that touches something before
+            `reflex_until` of its swing holds its horizontal target and lifts this much higher [m] over
+            `reflex_rise` [s], then reaches on to its landing point; 0: no reflex (such a touch is ignored
+            in the first half of the swing and is an early touchdown in the second).
+        reflex_until: Swing fraction before which a touch triggers the reflex instead of a touchdown.
+        reflex_rise: Time the reflex takes to lift [s].
     """
 
     sensed: bool = True
@@ -290,6 +296,9 @@ class GroundSettings:
     height_gain: float = 5.0
     touch_threshold: float = 0.3
     update_every: int = 5
+    reflex_lift: float = 0.0
+    reflex_until: float = 0.75
+    reflex_rise: float = 0.1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -352,6 +361,9 @@ class GroundController(WalkingController):
         self.par[K.SEEK_SPEED] = math.pi * planner.step_height / (2 * planner.swing_time)  # [m/s] half the swing's peak
         self.par[[K.DT, K.SETTLE_TIME, K.RAMP_TIME]] = self.dt, settings.settle_time, settings.ramp_time
         self.par[K.QUAT_ADR] = self.quat_adr
+        self.par[[K.REFLEX_LIFT, K.REFLEX_UNTIL]] = ground.reflex_lift, ground.reflex_until
+        self.par[K.REFLEX_RISE] = ground.reflex_rise
+        self.legs[:, K.T_REFLEX] = -math.inf
         self.events: list[Touchdown] = []
         self._events = np.zeros((n, 3))  # swings that ended in one step (kernels.targets): one a leg at most
         self._row_prev = np.zeros(3 * n)  # the targets at the current time (hip frames)

@@ -70,6 +70,8 @@ SLOPE_CAMERA_HEIGHT: float = 0.08  # [m] above the body's centre of mass (low: t
 # 336, 414 and 479 rad/s^2 (coxa, femur, tibia: torque over the mass-matrix diagonal, armature included).
 ACCELERATION_LIMIT: float = 200.0  # [rad/s^2] the limit, unless the planned cycle needs more
 
+REFLEX_LIFT: float = 1.0  # the elevator reflex lifts a blocked swing foot this many step heights higher
+
 ACCELERATION_HEADROOM: float = 1.2  # the limit is at least this times the planned cycle's peak joint acceleration
 
 
@@ -148,6 +150,10 @@ class WalkParams:
     )  # fmt: skip
     level_body: str = param("off", "", "keep the body level from the IMU (on) or follow the ground (off)",
                             choices=("off", "on"))  # fmt: skip
+    reflex: str = param(
+        "on", "", "with sensed touchdown, a swing foot that meets an obstacle early lifts higher and reaches again "
+        "(elevator reflex)", choices=("on", "off"),
+    )  # fmt: skip
     load_sharing: str = param(
         "off", "", "stance legs yield to their touch sensors' force error, sharing the load (admittance), or hold "
         "their planned height (off)", choices=("admittance", "off"),
@@ -358,18 +364,25 @@ def depth_range(p: WalkParams) -> tuple[float, float]:
 def largest_climbable_kerb(p: WalkParams) -> float:
     """Highest kerb [m] the walk can climb: a swing clears it and the legs can hold the cycle raised by it.
 
-    Clearing: the foot lifts step_height above the ground it left, and its centre must pass the kerb's
+    Clearing: the foot lifts step_height above the ground it left (with sensed touchdown and the elevator
+    reflex, a blocked foot lifts REFLEX_LIFT step heights more), and its centre must pass the kerb's
     edge at least a foot radius above it (measured: a 30 mm kerb with step_height 0.03 m made the
     robot stumble, 15 deg of roll; with 0.04 m it walked up cleanly). Holding: the whole planned cycle
     raised by the kerb height stays inside the reach and the joint ranges (depth_range).
     """
-    return min(p.step_height - p.ROBOT.layout.foot_radius, p.stand_height - depth_range(p)[0])
+    lift = p.step_height * (1.0 + REFLEX_LIFT) if reflex_on(p) else p.step_height
+    return min(lift - p.ROBOT.layout.foot_radius, p.stand_height - depth_range(p)[0])
+
+
+def reflex_on(p: WalkParams) -> bool:
+    """The walk's swing feet have the elevator reflex (it needs the touch sensors: sensed touchdown)."""
+    return p.touchdown == "sensed" and p.reflex == "on"
 
 
 def _climb_hint(p: WalkParams) -> str:
     """What raises the largest climbable kerb: the lift while the swing limits it, else the legs' reach above the
     stance (a deeper stance: it said "raise 'step_height'" where that could not help)."""
-    swing = p.step_height - p.ROBOT.layout.foot_radius
+    swing = p.step_height * (1.0 + REFLEX_LIFT if reflex_on(p) else 1.0) - p.ROBOT.layout.foot_radius
     return "raise 'step_height'" if swing <= p.stand_height - depth_range(p)[0] else "raise 'stand_height'"
 
 
@@ -383,7 +396,9 @@ def terrain_problem(p: WalkParams) -> str:
         friction=p.friction,
         climbable=largest_climbable_kerb(p) if ground.obstacles else math.inf,
         climbable_why=(
-            f"the foot lifts step_height = {p.step_height:g} m, less a foot radius of clearance; the legs reach "
+            f"the foot lifts step_height = {p.step_height:g} m"
+            + (f" and its reflex {REFLEX_LIFT:g} x more" if reflex_on(p) else "")
+            + ", less a foot radius of clearance; the legs reach "
             f"{(p.stand_height - depth_range(p)[0]) * 1000:.0f} mm above the stance"
         ) if ground.obstacles else "",
         climbable_hint=_climb_hint(p) + (" or lower 'roughness'" if p.roughness else "") if ground.obstacles else "",

@@ -17,6 +17,7 @@ from hexabot_sim.terrain import Ground
 from hexabot_sim.walking.parameters import (
     ACCELERATION_HEADROOM,
     ACCELERATION_LIMIT,
+    REFLEX_LIFT,
     SCENE_EXTENT,
     SETTLE_TIME,
     SLOPE_CAMERA_DISTANCE,
@@ -127,6 +128,6 @@ def make_controller(p: WalkParams, model: mujoco.MjModel, data: mujoco.MjData) -
         return WalkingController(model, data, p.ROBOT.layout, planner, gains, settings, q0)
     ground = GroundSettings(
         sensed=p.touchdown == "sensed", level=p.level_body == "on", stand_height=p.stand_height,
-        depth_range=depth_range(p),
+        depth_range=depth_range(p), reflex_lift=p.step_height * REFLEX_LIFT if p.reflex == "on" else 0.0,
     )  # fmt: skip
     return GroundController(model, data, p.ROBOT.layout, planner, gains, settings, q0, ground)

@@ -1,6 +1,7 @@
 """The hexabot on real ground: the terrain itself, feet that find the ground, a levelled body, refusals."""
 
 import concurrent.futures
+import dataclasses
 import math
 import multiprocessing
 
@@ -446,7 +447,44 @@ def test_a_3_cm_kerb_is_climbed():
     assert c["x"][-1] > 0.5 + 0.4  # the whole robot is past the kerb's edge
     above = c["z"][-1] - r.extras["terrain"].height(c["x"][-1], c["y"][-1])
     assert above == pytest.approx(0.098, abs=0.003)  # back at its height, now above the pavement
-    assert value(r, "largest_climbable_kerb") == pytest.approx(0.032)
+    # The reflex lifts a blocked foot one more step height: the lift is 2 x 40 mm less the foot radius.
+    assert value(r, "largest_climbable_kerb") == pytest.approx(0.072)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("reflex", ["on", "off"])
+def test_the_elevator_reflex_climbs_a_5_cm_kerb_with_the_default_step_height(reflex):
+    """Feet lifted 3 cm meet the 5 cm kerb's face: with the reflex they lift higher and climb it; without it the
+    robot stays at the kerb (its feet stub the face), and such a kerb is refused as above the largest climbable."""
+    overrides = {"kerb_height": 0.05, "touchdown": "sensed", "level_body": "on", "duration": 14.0, "reflex": reflex}
+    if reflex == "off":
+        with pytest.raises(UsageError, match="largest climbable, 22 mm"):
+            resolve(**overrides)
+        from hexabot_sim.walking import walk as walking
+
+        p = hexabot_parameters.WalkParams.__new__(scenario.HexabotParams)  # past the refusal: what would happen
+        for field in dataclasses.fields(scenario.HexabotParams):
+            object.__setattr__(p, field.name, overrides.get(field.name, field.default))
+        r = walking.run("hexabot-walk", p)
+        assert r.columns["x"][-1] < 0.5  # stuck in front of the kerb
+        return
+    r = walk(**overrides)
+    c = r.columns
+    assert not value(r, "fell")  # no plate contact, no tilt beyond 45 deg
+    assert c["x"][-1] > 0.5 + 0.4
+    above = c["z"][-1] - r.extras["terrain"].height(c["x"][-1], c["y"][-1])
+    assert above == pytest.approx(0.098, abs=0.003)
+
+
+@pytest.mark.slow
+def test_hexabot_stairs_climbs_three_steps():
+    r = scenario.run("hexabot-stairs", resolve(**registry.get("hexabot-stairs").defaults))
+    c = r.columns
+    assert not value(r, "fell")
+    assert c["x"][-1] > 0.5 + 2 * 0.25 + 0.4  # past the last step's edge, on the landing
+    above = c["z"][-1] - r.extras["terrain"].height(c["x"][-1], c["y"][-1])
+    assert r.extras["terrain"].height(c["x"][-1], c["y"][-1]) == pytest.approx(0.12)
+    assert above == pytest.approx(0.098, abs=0.003)
 
 
 @pytest.mark.parametrize("overrides", [{"roughness": 0.01}, {"kerb_height": 0.02}, {"slope_deg": 10.0}])
