@@ -1,21 +1,22 @@
 """Legs that share the load: sensed foot forces and an admittance per leg around the position servos (issue 19).
 
 A position-controlled leg in a stance of four or more feet holds a height, not a force: the loads are
-undetermined, and a foot whose share falls near zero unloads and lands again many times a stance. Here
-each leg's foot target gets a vertical offset dz from a virtual mass-spring-damper driven by its foot's
-force error, as the admittance of CSIRO's OpenSHC does on its hexapods:
+undetermined, and a foot whose share falls near zero unloads and lands again. Here each stance leg's foot
+target gets a vertical offset dz from a virtual damper and weak spring driven by its foot's force error,
+an admittance as CSIRO's OpenSHC runs on its hexapods:
 
-    M ddz + D dz + K dz = F - F_ref          (dz > 0 lifts the foot: an overloaded foot yields)
+    D dz/dt + K dz = F - F_ref          (dz > 0 lifts the foot: an overloaded foot yields, an unloaded one presses)
 
-F is the foot's touch sensor (what a real robot has: a force-sensing pad, or joint torque from the servo
-current), low-passed over `filter_time`; F_ref is the stance feet's share of the measured total: the
-least-norm forces that carry it with no moment about the body origin (force distribution over the feet
-the plan has down; equal shares where they span no plane). In swing the error is zero and dz springs
-back. The offset enters the resolved-rate step as a feed term (K_task dz + dz/dt on the foot's z, which
-the body and hip frames share), so the servos stay position servos.
+F is the foot's touch sensor (what a real robot has: a force-sensing foot pad, or the load from the servo
+current), low-passed over `filter_time`; F_ref is the force distribution of the feet the plan has down: the
+least-norm forces that carry the measured total with no moment about the body origin (weighted, so a foot's
+share can ramp up after touchdown and down before lift-off). In swing dz returns to zero. The offset enters
+the resolved-rate step as a feed term (K_task dz + dz/dt on the foot's z, which the body and hip frames
+share), so the servos stay position servos. With a stance leg's own stiffness k_leg the force error decays
+in about D / k_leg.
 
-The per-step work is compiled (numba: compliance_kernels.py, imported on first use like kernels.py, so that
-importing this module for its settings stays cheap); `Admittance` owns its state.
+The per-step work is compiled (numba: compliance_kernels.py, warmed up with control/kernels.py); importing
+this module for its settings stays cheap. `Admittance` owns its state.
 """
 
 from __future__ import annotations

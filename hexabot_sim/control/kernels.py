@@ -20,8 +20,9 @@ State of the ground-finding legs (GroundController), one row per leg:
 - `legs` float (n, NLEG): stance height z [m] (body/hip frame z of the foot target), its value at
   lift-off, the lift-off time [s], the horizontal target offset (x, y) [m] in the hip frame, the
   offset at lift-off, the landing point (x, y) of the swing under way in the body frame, the
-  planner's landing point of the next swing (set with each chunk's plan), and the elevator reflex's
-  trigger time [s] and the horizontal target (x, y) [m] (hip frame) it holds while lifting;
+  planner's landing point of the next swing (set with each chunk's plan), the elevator reflex's
+  trigger time [s] and the horizontal target (x, y) [m] (hip frame) it holds while lifting, and the
+  stance height's change per step [m] until the next plane update;
 - `flags` int (n, 3): swing mode (STANCE, SWING, EARLY, SEEKING), planned stance at the last step, grounded.
 """
 
@@ -52,8 +53,8 @@ feed = jit(resolved_rate.feed)
 # Swing state machine, per leg.
 STANCE, SWING, EARLY, SEEKING = 0, 1, 2, 3
 # Columns of `legs`.
-Z, Z_LIFT, T_LIFT, OFFSET, OFFSET_LIFT, LANDING, NEXT_LANDING, T_REFLEX, HOLD = 0, 1, 2, 3, 5, 7, 9, 11, 12
-NLEG = 14
+Z, Z_LIFT, T_LIFT, OFFSET, OFFSET_LIFT, LANDING, NEXT_LANDING, T_REFLEX, HOLD, Z_STEP = 0, 1, 2, 3, 5, 7, 9, 11, 12, 14
+NLEG = 15
 # Columns of `flags`.
 MODE, WAS_STANCE, GROUNDED = 0, 1, 2
 # Per-leg constants `geo` (n, NGEO): cos and sin of the hip yaw, hip position (x, y) in the body frame, the
@@ -119,11 +120,13 @@ def plane_fit(x, y, z, n, out):
 
 @jit
 def update_plane(par, geo, legs, flags, plane, counts, row, sensordata):
-    """Refits the stance plane and moves every grounded stance target by the levelling/height correction.
+    """Refits the stance plane and sets how every grounded stance target moves by the levelling/height correction.
 
     The plane z = a + b x + c y (body frame) through the stance feet's targets; a is driven to
     -stand_height, (b, c) to zero: from the IMU's roll and pitch (level) or the plane's own slope.
-    Heights are clipped to the legs' workspace depths.
+    Heights are clipped to the legs' workspace depths. The correction is spread over the steps until
+    the next update (Z_STEP, applied by ground_step): moved at once, every UPDATE_EVERY steps, the
+    targets' steps rang through the stance feet (force spikes every 10 ms, 130 % of a foot's share).
     """
     n_legs = legs.shape[0]
     xs, ys, zs = np.empty(n_legs), np.empty(n_legs), np.empty(n_legs)
@@ -154,12 +157,14 @@ def update_plane(par, geo, legs, flags, plane, counts, row, sensordata):
         db, dc = -gain * fit[1] * step, -gain * fit[2] * step
     lo, hi = -par[DEPTH_MAX], -par[DEPTH_MIN]
     clipped = False
+    for i in range(n_legs):
+        legs[i, Z_STEP] = 0.0  # a foot that lands before the next update keeps its height until then
     for m in range(n):
         i = idx[m]
         z = legs[i, Z] + da + db * xs[m] + dc * ys[m]
         if not lo <= z <= hi:
             z, clipped = min(hi, max(lo, z)), True
-        legs[i, Z] = z
+        legs[i, Z_STEP] = (z - legs[i, Z]) / par[UPDATE_EVERY]
     counts[UPDATES] += 1
     counts[CLIPPED] += clipped
     plane[0], plane[1], plane[2] = fit[0] + da, fit[1] + db, fit[2] + dc
@@ -321,6 +326,10 @@ def ground_step(par, geo, k, legs, flags, plane, counts, cmd, rows, stance, r, t
     if counts[STEPS] % int(par[UPDATE_EVERY]) == 0:
         update_plane(par, geo, legs, flags, plane, counts, row_prev, sensordata)
     counts[STEPS] += 1
+    for i in range(legs.shape[0]):  # the plane update's correction, a step's share of it
+        mode = flags[i, MODE]
+        if (mode == STANCE or mode == EARLY) and flags[i, GROUNDED]:
+            legs[i, Z] += legs[i, Z_STEP]
     row1 = np.empty(row_prev.shape[0])
     n_events = targets(par, geo, legs, flags, plane, cmd, rows[r + 1], stance[r + 1], t + dt, rows[r], sensordata,
                        row1, events)  # fmt: skip
