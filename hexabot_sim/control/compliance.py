@@ -27,9 +27,13 @@ import mujoco
 import numpy as np
 
 
-def sensed_foot_forces(model: mujoco.MjModel, data: mujoco.MjData, legs: tuple[str, ...]) -> np.ndarray:
+def sensed_foot_forces(model: mujoco.MjModel, data: mujoco.MjData, legs: tuple[str, ...] | None = None) -> np.ndarray:
     """Normal force [N] (n_legs,) on each foot as its touch sensor `<leg>_touch` reads it (what a real robot's foot
-    pad measures; not MuJoCo's contact list). `data` must be forward-computed (after mj_step or mj_forward)."""
+    pad measures; not MuJoCo's contact list). `legs`: the legs' names in the order wanted; None: every
+    `<leg>_touch` sensor of the model, in the model's order. `data` must be forward-computed (mj_step, mj_forward)."""
+    if legs is None:
+        names = [model.sensor(i).name for i in range(model.nsensor)]
+        legs = tuple(name[: -len("_touch")] for name in names if name.endswith("_touch"))
     return np.array([float(data.sensordata[model.sensor_adr[model.sensor(f"{leg}_touch").id]]) for leg in legs])
 
 

@@ -165,5 +165,6 @@ def test_sensed_foot_forces_are_the_feet_normal_forces(scene):
     sensed = sensed_foot_forces(model, data, tuple(legs))
     normal, _ = _recompute(model, data.qpos[None].copy(), data.qvel[None].copy(), data.ctrl[None].copy(), legs)
     np.testing.assert_allclose(sensed, normal[0], rtol=1e-3, atol=1e-3)
+    np.testing.assert_array_equal(sensed_foot_forces(model, data), sensed)  # every foot, in the model's order
     weight = model.body_subtreemass[model.body("torso").id] * -model.opt.gravity[2]
     assert sensed.sum() == pytest.approx(weight, rel=0.01)
