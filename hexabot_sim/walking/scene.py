@@ -8,6 +8,7 @@ import mujoco
 import numpy as np
 
 from hexabot_sim import models
+from hexabot_sim.control.compliance import AdmittanceSettings
 from hexabot_sim.control.gait import GaitPlanner
 from hexabot_sim.control.resolved_rate import ResolvedRateGains
 from hexabot_sim.control.walker import GroundController, GroundSettings, WalkingController, WalkSettings
@@ -16,6 +17,7 @@ from hexabot_sim.terrain import Ground
 from hexabot_sim.walking.parameters import (
     ACCELERATION_HEADROOM,
     ACCELERATION_LIMIT,
+    REFLEX_LIFT,
     SCENE_EXTENT,
     SETTLE_TIME,
     SLOPE_CAMERA_DISTANCE,
@@ -121,7 +123,7 @@ def make_controller(p: WalkParams, model: mujoco.MjModel, data: mujoco.MjData) -
     planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), p.timestep, start_time=SETTLE_TIME)
     settings = WalkSettings(
         p.command(), settle_time=SETTLE_TIME, ramp_time=p.period, heading_hold=p.heading_hold == "on",
-        trims=tuple(trims.tolist()),
+        trims=tuple(trims.tolist()), admittance=AdmittanceSettings() if p.load_sharing == "admittance" else None,
     )  # fmt: skip
     gains = ResolvedRateGains(p.task_gain, 0.01, 0.01, p.max_joint_speed, acceleration_limit(p))
     q0 = model.key("home").qpos[7:].reshape(-1, 3)
@@ -129,6 +131,6 @@ def make_controller(p: WalkParams, model: mujoco.MjModel, data: mujoco.MjData) -
         return WalkingController(model, data, p.ROBOT.layout, planner, gains, settings, q0)
     ground = GroundSettings(
         sensed=p.touchdown == "sensed", level=p.level_body == "on", stand_height=p.stand_height,
-        depth_range=depth_range(p),
+        depth_range=depth_range(p), reflex_lift=p.step_height * REFLEX_LIFT if p.reflex == "on" else 0.0,
     )  # fmt: skip
     return GroundController(model, data, p.ROBOT.layout, planner, gains, settings, q0, ground)
