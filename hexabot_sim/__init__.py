@@ -1,7 +1,8 @@
 """hexabot-sim: robotics-course kinematics and dynamics exercises on MuJoCo.
 
 Python API (see the README): `scenarios()` lists the scenarios and their parameters, `run(name, **params)`
-runs one and returns a `Result` (params, metrics, columns, to_pandas(), figures(), save(dir), video(path)).
+runs one and returns a `Result` (params, metrics, columns, to_pandas(), figures(), save(dir), video(path));
+`export(robot, mjcf=..., urdf=...)` writes a robot's (or robot file's) MJCF and URDF.
 Importing the package imports neither MuJoCo nor matplotlib's pyplot and never picks a matplotlib backend.
 """
 
@@ -16,7 +17,7 @@ _os.environ.setdefault("MUJOCO_GL", "egl")
 
 # The API lives in hexabot_sim.api and is imported on first use, so `import hexabot_sim` stays cheap
 # and MuJoCo is not imported before the CLI has chosen its OpenGL backend.
-_API = ("run", "scenarios", "Result", "ScenarioInfo", "Parameter", "Columns", "Metric")
+_API = ("run", "scenarios", "export", "Result", "ScenarioInfo", "Parameter", "Columns", "Metric")
 __all__ = ["__version__", *_API]
 
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import errno
 import os
 import time
 import warnings
@@ -18,10 +17,11 @@ from hexabot_sim import folders, gl, output, registry
 from hexabot_sim import params as params_mod
 from hexabot_sim import video as video_options
 from hexabot_sim.errors import HexabotError, OutputError, UsageError
+from hexabot_sim.exporting import export
 from hexabot_sim.result import Metric
 from hexabot_sim.scenario import Scenario
 
-__all__ = ["Columns", "Metric", "Parameter", "Result", "ScenarioInfo", "run", "scenarios"]
+__all__ = ["Columns", "Metric", "Parameter", "Result", "ScenarioInfo", "export", "run", "scenarios"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -381,17 +381,17 @@ class Result:
             raise UsageError(f"the folder {str(folder)!r} for the video does not exist")
         if not os.access(folder, os.W_OK | os.X_OK):
             raise OutputError(f"the folder {str(folder)!r} for the video cannot be written")
-        _check_replace(path, force)
+        folders.check_replace(path, force)
         staging = path.with_name(f".{path.name}.partial-{os.getpid()}.mp4")
         try:
             record, _ = output.write_video(folder, self.raw, settings, backend, progress, name=staging.name)
             if not record["written"]:
                 raise OutputError(f"no video: {record['reason']}")
-            _check_replace(path, force)  # again: the file may have appeared while the video rendered
+            folders.check_replace(path, force)  # again: the file may have appeared while the video rendered
             if force:
                 os.replace(staging, path)
             else:
-                _publish_new(staging, path)
+                folders.publish_new(staging, path)
         except OSError as e:
             raise OutputError(f"writing the video {str(path)!r} failed: {e.strerror or e}") from None
         finally:
@@ -405,28 +405,6 @@ def _argument_words(text: str) -> str:
     for flag, argument in (("add --force", "pass force=True"), ("--force", "force=True"), ("--out", "out")):
         text = text.replace(flag, argument)
     return text
-
-
-def _check_replace(path: Path, force: bool) -> None:
-    """An existing `path` is replaced only with force, and only if it is a file (or a link, itself replaced)."""
-    if not os.path.lexists(path):
-        return
-    if not force:
-        raise UsageError(f"video path {str(path)!r} exists; pass force=True to replace it, or choose another name")
-    if not (path.is_symlink() or path.is_file()):
-        raise UsageError(f"video path {str(path)!r} exists and is not a regular file; it is never replaced")
-
-
-def _publish_new(staging: Path, path: Path) -> None:
-    """Renames `staging` to `path` only if `path` does not exist (a hard link never replaces; rename would)."""
-    try:
-        os.link(staging, path)
-    except FileExistsError:
-        raise UsageError(f"video path {str(path)!r} appeared while the video rendered; it was left alone") from None
-    except OSError as e:
-        if e.errno not in (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EMLINK):
-            raise
-        os.replace(staging, path)  # a file system without hard links: checked just before
 
 
 def _short(metric: Metric) -> str:

@@ -27,9 +27,11 @@ STAGING_SUFFIX = ".partial"
 
 _OLD_PREFIX = ".hexabot-sim-replaced-"
 
+
 def default_out(scenario: str, root: Path = Path("runs")) -> Path:
     """The default run folder name, runs/<scenario>-YYYYmmdd-HHMMSS (a -N suffix is added at publish if taken)."""
     return root / f"{scenario}-{_dt.datetime.now().strftime('%Y%m%d-%H%M%S')}"
+
 
 def check_out(out: str | os.PathLike[str], force: bool = False) -> None:
     """Refuses, before anything runs, an --out that could destroy or hide something.
@@ -50,6 +52,7 @@ def check_out(out: str | os.PathLike[str], force: bool = False) -> None:
     except OSError as e:
         raise UsageError(f"output folder {text!r} cannot be used: {e.strerror or e}") from None
 
+
 def check_not_input(out: str | os.PathLike[str], inputs: list[str]) -> None:
     """Refuses an --out that is, contains or lies inside one of a command's inputs (with or without --force).
 
@@ -67,6 +70,7 @@ def check_not_input(out: str | os.PathLike[str], inputs: list[str]) -> None:
                 f"output folder {display_path(Path(out))!r} is, contains or lies inside the input "
                 f"{display_path(Path(item))!r}; a command never writes over what it reads: choose another --out"
             )
+
 
 def _check_existing(out: Path, text: str, force: bool) -> None:
     if out.is_symlink():
@@ -105,6 +109,7 @@ def _check_existing(out: Path, text: str, force: bool) -> None:
     if not os.access(ancestor, os.W_OK | os.X_OK):
         raise UsageError(f"output folder {text!r} cannot be written: no write permission in {str(ancestor)!r}")
 
+
 def _make_parents(folder: Path) -> list[Path]:
     """Creates the missing folders down to `folder`; returns those it created, deepest first."""
     missing = []
@@ -120,6 +125,7 @@ def _make_parents(folder: Path) -> list[Path]:
         created.append(path)
     return created[::-1]
 
+
 def _remove_created(created: list[Path]) -> None:
     """Removes folders this run created, deepest first, as long as they are still empty."""
     for path in created:
@@ -128,12 +134,14 @@ def _remove_created(created: list[Path]) -> None:
         except OSError:
             break
 
+
 class RunFolder:
     """Where one run is written: `.path` while it runs (staging), `.final` once published."""
 
     def __init__(self, path: Path) -> None:
         self.path = path
         self.final: Path | None = None
+
 
 def _snapshot(folder: Path) -> tuple | None:
     """What a folder holds (every entry's path, kind, size and modification time), None if it does not exist."""
@@ -153,7 +161,9 @@ def _snapshot(folder: Path) -> tuple | None:
             entries.append((os.path.relpath(path, folder), st.st_mode, st.st_size, st.st_mtime_ns, st.st_ino))
     return (top.st_ino, top.st_dev, tuple(sorted(entries)))
 
+
 _TAKEN = (errno.EEXIST, errno.ENOTEMPTY, errno.ENOTDIR, errno.EISDIR)
+
 
 def _mkdir_unique(parent_fd: int, prefix: str, suffix: str = "") -> str:
     """Creates a new folder named prefix<random>suffix in the folder `parent_fd`; mode from the umask."""
@@ -165,6 +175,7 @@ def _mkdir_unique(parent_fd: int, prefix: str, suffix: str = "") -> str:
         except FileExistsError:
             continue
     raise OSError(errno.EEXIST, "no free staging folder name")
+
 
 def _publish(parent_fd: int, staging: str, out: Path, auto_name: bool, force: bool, before: tuple | None) -> Path:
     """Renames the finished staging folder (in `parent_fd`) to `out` (or the next free `out-N`); returns where."""
@@ -188,6 +199,7 @@ def _publish(parent_fd: int, staging: str, out: Path, auto_name: bool, force: bo
         shutil.rmtree(old, ignore_errors=True, dir_fd=parent_fd)
     return out
 
+
 @contextmanager
 def _publishing(parent_fd: int) -> Iterator[None]:
     """One publisher at a time in a folder (an advisory lock on it): two --force runs to the same `out` cannot
@@ -202,6 +214,7 @@ def _publishing(parent_fd: int) -> Iterator[None]:
         yield
     finally:
         fcntl.flock(parent_fd, fcntl.LOCK_UN)
+
 
 def _replace(parent_fd: int, staging: str, out: Path, force: bool, before: tuple | None, rename) -> str | None:
     """_publish's rename into an explicit `out`: only over nothing, an empty folder, or (force) what was there.
@@ -235,6 +248,7 @@ def _replace(parent_fd: int, staging: str, out: Path, force: bool, before: tuple
             ) from None
         raise
     return old
+
 
 @contextmanager
 def run_folder(out: str | os.PathLike[str] | None, scenario: str = "run", force: bool = False) -> Iterator[RunFolder]:
@@ -297,6 +311,7 @@ def run_folder(out: str | os.PathLike[str] | None, scenario: str = "run", force:
         if parent_fd >= 0:
             os.close(parent_fd)
 
+
 def _moved(folder: Path, fd: int) -> bool:
     """True if `folder` is no longer the folder open as `fd` (renamed, removed or replaced)."""
     try:
@@ -305,9 +320,11 @@ def _moved(folder: Path, fd: int) -> bool:
         return True
     return (here.st_ino, here.st_dev) != (there.st_ino, there.st_dev)
 
+
 CELL_PREFIX = "hexabot-sim-cell-"  # a sweep worker's kept-run folder in the temporary folder: <prefix><pid>-...
 
 DISK_FULL_BYTES = 1 << 20  # [B] a folder with less free space than this is out of disk
+
 
 def disk_full(folder: Path) -> bool:
     """True if the file system of `folder` has less than DISK_FULL_BYTES free (for this user)."""
@@ -317,17 +334,30 @@ def disk_full(folder: Path) -> bool:
         return False
     return st.f_bavail * st.f_frsize < DISK_FULL_BYTES
 
+
 def stale_cells() -> list[Path]:
     """Sweep workers' kept-run folders in the system's temporary folder whose process is gone."""
     return [path for path in sorted(Path(tempfile.gettempdir()).glob(f"{CELL_PREFIX}*")) if _stale(path, _CELL_NAME)]
+
 
 def stale_staging(root: Path) -> list[Path]:
     """Staging folders in `root` and its sub-folders left by runs whose process no longer exists."""
     found = []
     for prefix, name in ((STAGING_PREFIX, _STAGING_NAME), (_OLD_PREFIX, _OLD_NAME)):
-        for pattern in (f"{prefix}*", f"*/{prefix}*"):
-            found += [path for path in sorted(root.glob(pattern)) if _stale(path, name)]
+        top = _entries(root)
+        below = [entry for folder in top if _is_folder(folder) for entry in _entries(folder)]
+        found += [path for path in sorted(top) + sorted(below) if path.name.startswith(prefix) and _stale(path, name)]
     return found
+
+
+def _entries(folder: Path) -> list[Path]:
+    """The entries of `folder`; none when it vanished while we looked (another clean at the same time)."""
+    try:
+        with os.scandir(folder) as entries:
+            return [folder / entry.name for entry in entries]
+    except (FileNotFoundError, NotADirectoryError, PermissionError):  # as glob did: what we cannot read is not ours
+        return []
+
 
 # The exact names our runs create (_mkdir_unique: <prefix><pid>-<8 hex digits><suffix>; a sweep cell's
 # tempfile.TemporaryDirectory: <prefix><pid>-<8 of [a-z0-9_]>). A name that merely starts like one is a user's.
@@ -337,6 +367,7 @@ _OLD_NAME = re.compile(re.escape(_OLD_PREFIX) + r"([1-9][0-9]{0,9})-[0-9a-f]{8}"
 
 _CELL_NAME = re.compile(re.escape(CELL_PREFIX) + r"([1-9][0-9]{0,9})-[a-z0-9_]{8}")
 
+
 def _stale(path: Path, name: re.Pattern[str]) -> bool:
     """True only for a real folder (not a link) named exactly as a run of ours names it, whose process is gone."""
     match = name.fullmatch(path.name)
@@ -344,10 +375,13 @@ def _stale(path: Path, name: re.Pattern[str]) -> bool:
         return False  # a process id no system gives out is not one of ours either
     return not _alive(int(match.group(1)))
 
+
 _PID_MAX = 1 << 22  # Linux's largest pid_max
+
 
 def _is_folder(path: Path) -> bool:
     return path.is_dir() and not path.is_symlink()
+
 
 def _alive(pid: int) -> bool:
     try:
@@ -358,9 +392,32 @@ def _alive(pid: int) -> bool:
         return True
     return True
 
+
 def display_path(path: Path) -> str:
     """`path` relative to the working directory when it is below it; bytes that are not UTF-8 shown as \\xNN."""
     try:
         return printable(os.path.relpath(path) if Path(path).resolve().is_relative_to(Path.cwd()) else str(path))
     except (OSError, ValueError):  # OSError: a name too long to resolve
         return printable(str(path))
+
+
+def check_replace(path: Path, force: bool, what: str = "video path", how: str = "pass force=True") -> None:
+    """An existing `path` is replaced only with force, and only if it is a file (or a link, itself replaced)."""
+    if not os.path.lexists(path):
+        return
+    if not force:
+        raise UsageError(f"{what} {str(path)!r} exists; {how} to replace it, or choose another name")
+    if not (path.is_symlink() or path.is_file()):
+        raise UsageError(f"{what} {str(path)!r} exists and is not a regular file; it is never replaced")
+
+
+def publish_new(staging: Path, path: Path, what: str = "video path", meanwhile: str = "the video rendered") -> None:
+    """Renames `staging` to `path` only if `path` does not exist (a hard link never replaces; rename would)."""
+    try:
+        os.link(staging, path)
+    except FileExistsError:
+        raise UsageError(f"{what} {str(path)!r} appeared while {meanwhile}; it was left alone") from None
+    except OSError as e:
+        if e.errno not in (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EMLINK):
+            raise
+        os.replace(staging, path)  # a file system without hard links: checked just before

@@ -1,8 +1,10 @@
-"""What `hexabot-sim kin ROBOT` reports: DH table, T0n, J, det or manipulability, singular flags, IK branches."""
+"""What `hexabot-sim kin ROBOT|FILE` reports: DH table, T0n, J, det or manipulability, singular flags, IK."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import os
 import re
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Any
@@ -10,8 +12,9 @@ from typing import Any
 import numpy as np
 
 from hexabot_sim.errors import HexabotError, UsageError
-from hexabot_sim.kinematics import inverse, robots
+from hexabot_sim.kinematics import inverse, numeric_ik, robots
 from hexabot_sim.kinematics.chain import SerialChain
+from hexabot_sim.kinematics.robot_file import RobotSpec
 from hexabot_sim.params import apart
 
 # Input ranges of `kin` beyond the link lengths (robots.LENGTH_MIN..LENGTH_MAX): wide enough for anything a
@@ -41,24 +44,42 @@ def parse_numbers(text: str, what: str) -> list[float]:
     return values
 
 
-def parse_lengths(robot: str, assignments: Mapping[str, str]) -> dict[str, float]:
-    """--set name=value strings -> lengths in [m], each checked against the robot's allowed range."""
-    spec = robots.get(robot)
+@dataclasses.dataclass(frozen=True)
+class Robot:
+    """A robot resolved once for one `kin` call: its spec (package robot or file), the lengths set, its chain."""
+
+    spec: RobotSpec
+    lengths: Mapping[str, float]
+    chain: SerialChain
+
+    @property
+    def name(self) -> str:
+        return self.spec.name
+
+    @property
+    def closed_form(self) -> bool:
+        """One of the package's robots: closed-form IK, named singular sets, det in closed form."""
+        return self.spec.builtin
+
+
+def resolve(robot: str | os.PathLike[str] | RobotSpec, assignments: Mapping[str, str]) -> Robot:
+    """The robot by name or file, with --set name=value strings as lengths in [m] (each checked)."""
+    spec = robots.resolve(robot)
     lengths = {}
     for name, raw in assignments.items():
         if name not in spec.lengths:
-            raise UsageError(f"unknown length '{name}' for {robot}; known: {', '.join(spec.lengths)}")
+            known = ", ".join(spec.lengths) or "none (the robot file has no [lengths])"
+            raise UsageError(f"unknown length '{name}' for {spec.name}; known: {known}")
         values = parse_numbers(raw, f"length '{name}'")
         if len(values) != 1:
             raise UsageError(f"length '{name}' takes one number in [m]; got {raw!r}")
         lengths[name] = values[0]
-    spec.chain(lengths)  # validates every length against its range
-    return lengths
+    return Robot(spec, lengths, spec.chain(lengths))  # chain() validates every length against its range
 
 
-def _units(robot: str, degrees: bool) -> list[str]:
+def _units(robot: Robot, degrees: bool) -> list[str]:
     """Joint units as the user reads and types them: 'deg' or 'rad' for revolute joints, 'm' for prismatic ones."""
-    return ["deg" if degrees and u == "rad" else u for u in robots.get(robot).joint_units]
+    return ["deg" if degrees and u == "rad" else u for u in robot.spec.joint_units]
 
 
 def _show(values: Iterable[float], units: Iterable[str]) -> list[float]:
@@ -78,13 +99,13 @@ def _beyond(value: float, unit: str, limit: float) -> str:
     return f"{'-' * (value < 0)}{shown} {unit} is outside the allowed {allowed}"
 
 
-def _joint_values(robot: str, values: Sequence[float], degrees: bool) -> np.ndarray:
+def _joint_values(robot: Robot, values: Sequence[float], degrees: bool) -> np.ndarray:
     """Typed joint values (user units) -> q in [rad] or [m]; a UsageError for a wrong count or a value out of range."""
-    chain = robots.get(robot).chain()
+    chain = robot.chain
     units = _units(robot, degrees)
     if len(values) != chain.n:
         names = ", ".join(f"{j.name} [{u}]" for j, u in zip(chain.joints, units, strict=True))
-        raise UsageError(f"{robot} has {chain.n} joints ({names}); got {len(values)} values")
+        raise UsageError(f"{robot.name} has {chain.n} joints ({names}); got {len(values)} values")
     q = []
     for joint, unit, value in zip(chain.joints, units, values, strict=True):
         if unit == "m":
@@ -109,7 +130,7 @@ def _outside(value: float, lo: float, hi: float) -> tuple[str, str, str]:
     return text, lo_text, f"{hi:.6g}"
 
 
-def _range_warnings(robot: str, chain: SerialChain, q: np.ndarray, degrees: bool) -> list[str]:
+def _range_warnings(robot: Robot, chain: SerialChain, q: np.ndarray, degrees: bool) -> list[str]:
     """One line per joint value outside its range (or, without a range and without --deg, beyond a full turn)."""
     units = _units(robot, degrees)
     out = []
@@ -128,80 +149,94 @@ def _range_warnings(robot: str, chain: SerialChain, q: np.ndarray, degrees: bool
     return out
 
 
-def describe(robot: str, lengths: Mapping[str, float], degrees: bool = False) -> dict[str, Any]:
-    """The robot's DH table, lengths and singular sets; with `degrees`, angles and revolute ranges in [deg]."""
-    spec = robots.get(robot)
-    chain = spec.chain(lengths)
+def describe(robot: Robot, degrees: bool = False) -> dict[str, Any]:
+    """The robot's DH table (its fixed rows too), lengths and singular sets; with `degrees`, angles in [deg]."""
+    spec, chain = robot.spec, robot.chain
     angle = math.degrees if degrees else float
     rows = []
-    for joint, unit in zip(chain.joints, _units(robot, degrees), strict=True):
+    units: list[str | None] = [*_units(robot, degrees), *[None] * len(spec.fixed_rows(robot.lengths))]
+    for joint, unit in zip((*chain.joints, *spec.fixed_rows(robot.lengths)), units, strict=True):
         limit = float if joint.prismatic else angle
         rows.append(
-            {"joint": joint.name, "kind": joint.kind, "unit": unit, "theta": angle(joint.theta), "d": joint.d,
-             "a": joint.a, "alpha": angle(joint.alpha),
+            {"joint": joint.name, "kind": "fixed" if unit is None else joint.kind, "unit": unit,
+             "theta": angle(joint.theta), "d": joint.d, "a": joint.a, "alpha": angle(joint.alpha),
              "lower": None if joint.lower is None else limit(joint.lower),
              "upper": None if joint.upper is None else limit(joint.upper)}
         )  # fmt: skip
-    return {
-        "robot": robot,
+    out = {
+        "robot": spec.name,
         "summary": spec.summary,
         "convention": chain.convention,
         "angle_unit": "deg" if degrees else "rad",
-        "lengths": _lengths(spec, lengths),
+        "lengths": spec.values(robot.lengths),
         "dh": rows,
         "tool": chain.tool.tolist(),
-        "singular_sets": inverse.SINGULAR_SETS[robot],
+        "singular_sets": inverse.SINGULAR_SETS[spec.name] if robot.closed_form else _generic_sets(chain),
     }
+    if not robot.closed_form:
+        out["file"] = spec.source
+        out["base"] = chain.base.tolist()
+    return out
 
 
-def _lengths(spec: robots.RobotSpec, overrides: Mapping[str, float]) -> dict[str, float]:
-    return {name: float(overrides.get(name, length.default)) for name, length in spec.lengths.items()}
+def _generic_sets(chain: SerialChain) -> list[str]:
+    rows = numeric_ik.task_rows(chain)
+    what = "the 6 x n J" if len(rows) == 6 else "the position rows Jv (3 x n) of J"
+    return [
+        f"sigma_min of {what} = 0 (rank_deficient): found numerically at a configuration (--q, and each IK "
+        f"solution), flagged when sigma_min <= {numeric_ik.NEAR_SINGULAR:g} sigma_max; no closed form for a file"
+    ]
 
 
-def at_configuration(
-    robot: str, q: Sequence[float], lengths: Mapping[str, float], degrees: bool = False
-) -> dict[str, Any]:
+def at_configuration(robot: Robot, q: Sequence[float], degrees: bool = False) -> dict[str, Any]:
     """T0n, the 6xn Jacobian, det or manipulability, and which singular conditions hold at q.
 
     Args:
-        robot: Robot name.
+        robot: The resolved robot.
         q: Joint values as typed: [rad] (or [deg] with `degrees`) for revolute joints, [m] for prismatic ones.
-        lengths: Link lengths in [m] by name.
         degrees: Revolute values in and out in [deg]; T0n is in [m], J per [rad] or [m] either way.
 
     Returns:
-        q (as typed), T0n, J, det (or manipulability), singular flags, is_singular and the range warnings.
+        q (as typed), T0n, J, det (or manipulability), singular flags, is_singular and the range warnings; for a
+        robot file also sigma_min (of the task Jacobian: all 6 rows for 6 or more joints, else the position rows).
     """
-    chain = robots.get(robot).chain(lengths)
+    chain = robot.chain
     qa = _joint_values(robot, q, degrees)  # (n,) in [rad] or [m]
-    kind, value = inverse.det_or_manipulability(robot, qa, lengths)
-    flags = inverse.singularities(robot, qa, lengths)
-    return {
+    out: dict[str, Any] = {
         "q": [float(v) for v in q],  # as typed, so 30 deg stays 30 and not 29.999999999999996
         "T0n": chain.fk(qa).tolist(),
         "J": chain.jacobian(qa).tolist(),
-        kind: value,
-        "singular": flags,
-        "is_singular": any(flags.values()),
-        "warnings": _range_warnings(robot, chain, qa, degrees),
     }
+    if robot.closed_form:
+        kind, value = inverse.det_or_manipulability(robot.name, qa, robot.lengths, chain)
+        flags = inverse.singularities(robot.name, qa, robot.lengths, chain)
+        out |= {kind: value}
+    else:
+        kind, value, sigma_min = numeric_ik.det_or_manipulability(chain, qa)
+        sigma = np.linalg.svd(chain.jacobian(qa)[list(numeric_ik.task_rows(chain))], compute_uv=False)
+        flags = {"rank_deficient": bool(sigma[-1] <= numeric_ik.NEAR_SINGULAR * sigma[0])}
+        out |= {kind: value, "sigma_min": sigma_min}
+    return out | {"singular": flags, "is_singular": any(flags.values()),
+                  "warnings": _range_warnings(robot, chain, qa, degrees)}  # fmt: skip
 
 
-def _target(robot: str, target: Sequence[float], degrees: bool) -> np.ndarray:
-    """Typed target (positions [m], angles [rad] or [deg]) -> inverse.ik's goal: a position or a 4x4 pose."""
-    if robot == "stanford":
+def _target(robot: Robot, target: Sequence[float], degrees: bool) -> np.ndarray:
+    """Typed target (positions [m], angles [rad] or [deg]) -> the IK goal: a position (scara: with yaw) or a pose."""
+    name, unit = robot.name, "deg" if degrees else "rad"
+    pose_target = name == "stanford" if robot.closed_form else robot.chain.n >= 6
+    if pose_target:
         if len(target) != 6:
-            unit = "deg" if degrees else "rad"
             raise UsageError(
-                f"stanford needs --target x,y,z,roll,pitch,yaw (m, {unit}: R = Rz Ry Rx); got {len(target)} values"
+                f"{name} needs --target x,y,z,roll,pitch,yaw (m, {unit}: R = Rz Ry Rx); got {len(target)} values"
             )
     else:
-        allowed = (3, 4) if robot == "scara" else (3,)
+        scara = robot.closed_form and name == "scara"
+        allowed = (3, 4) if scara else (3,)
         if len(target) not in allowed:
-            form = "x,y,z[,yaw]" if robot == "scara" else "x,y,z"
-            unit = "m, deg" if degrees and robot == "scara" else "m, rad" if robot == "scara" else "m"
-            raise UsageError(f"{robot} needs --target {form} ({unit}); got {len(target)} values")
-    unit = "deg" if degrees else "rad"
+            form = "x,y,z[,yaw]" if scara else "x,y,z"
+            unit = "m, deg" if degrees and scara else "m, rad" if scara else "m"
+            below = "" if robot.closed_form else " (a chain of fewer than 6 joints gets position targets)"
+            raise UsageError(f"{name} needs --target {form} ({unit}){below}; got {len(target)} values")
     values = []
     for i, value in enumerate(target):
         if i < 3:
@@ -213,29 +248,45 @@ def _target(robot: str, target: Sequence[float], degrees: bool) -> np.ndarray:
             if abs(rad) > ANGLE_MAX:
                 raise UsageError(f"--target: angle {_beyond(value, unit, ANGLE_MAX)}")
             values.append(rad)
-    return _pose(values) if robot == "stanford" else np.array(values)
+    return _pose(values) if pose_target else np.array(values)
 
 
-def solve(robot: str, target: Sequence[float], lengths: Mapping[str, float], degrees: bool = False) -> dict[str, Any]:
-    """Every closed-form IK branch for `target`, each with its FK residual, and the branches the ranges dropped.
+def _orientation_residual(robot: Robot, q: np.ndarray, goal: np.ndarray) -> float | None:
+    """The angle [rad] between the tool's orientation at q and the target's, for a target with an orientation."""
+    tool = robot.chain.fk(q)
+    if goal.shape == (4, 4):
+        delta = tool[:3, :3] @ goal[:3, :3].T
+        axial = np.array([delta[2, 1] - delta[1, 2], delta[0, 2] - delta[2, 0], delta[1, 0] - delta[0, 1]])
+        return float(math.atan2(np.linalg.norm(axial) / 2, (np.trace(delta) - 1) / 2))
+    if goal.shape == (4,):  # scara: the yaw atan2(R[1, 0], R[0, 0])
+        yaw = math.atan2(tool[1, 0], tool[0, 0])
+        return abs(math.remainder(yaw - float(goal[3]), 2 * math.pi))
+    return None
+
+
+def solve(robot: Robot, target: Sequence[float], degrees: bool = False) -> dict[str, Any]:
+    """Every IK solution for `target`, each with its FK residuals: closed-form branches (and the branches the
+    ranges dropped) for the package's robots, numeric ones (numeric_ik) for a robot file.
 
     Args:
-        robot: Robot name.
-        target: As typed: x, y, z in [m] (stanford: then roll, pitch, yaw; scara: optionally yaw) with angles in
-            [rad] (or [deg] with `degrees`).
-        lengths: Link lengths in [m] by name.
+        robot: The resolved robot.
+        target: As typed: x, y, z in [m] (stanford, or a file of 6+ joints: then roll, pitch, yaw; scara:
+            optionally yaw) with angles in [rad] (or [deg] with `degrees`).
         degrees: Angles of the target and of the solutions in [deg].
 
     Returns:
-        target (as typed), solutions (q, position_residual [m]), dropped (q, outside) and warnings.
+        target (as typed), solutions (q, position_residual [m], orientation_residual [rad] for a target with an
+        orientation, and for a file sigma_min), dropped (q, outside) and warnings.
 
     Raises:
         UsageError: Malformed target; IKError (a UsageError) when unreachable, not isolated, or when every branch
             is outside the joint ranges.
     """
-    chain = robots.get(robot).chain(lengths)
+    if not robot.closed_form:
+        return _solve_numeric(robot, target, degrees)
+    chain, name = robot.chain, robot.name
     goal = _target(robot, target, degrees)
-    branches, dropped = inverse.ik_branches(robot, goal, lengths)
+    branches, dropped = inverse.ik_branches(name, goal, robot.lengths, chain)
     units = _units(robot, degrees)
     position = goal[:3, 3] if goal.ndim == 2 else goal[:3]
     dropped_text = [
@@ -245,13 +296,15 @@ def solve(robot: str, target: Sequence[float], lengths: Mapping[str, float], deg
     total = len(branches) + len(dropped)
     if not branches:
         raise inverse.IKError(
-            f"{robot} target ({_tuple(position)}) m: all {total} IK branch(es) are outside the joint ranges: "
+            f"{name} target ({_tuple(position)}) m: all {total} IK branch(es) are outside the joint ranges: "
             + "; ".join(dropped_text)
         )
     out = []
     for q in branches:
         residual = np.linalg.norm(chain.fk(q)[:3, 3] - position)
-        out.append({"q": _show(q, units), "position_residual": float(residual)})
+        solution = {"q": _show(q, units), "position_residual": float(residual)}
+        orientation = _orientation_residual(robot, q, goal)
+        out.append(solution if orientation is None else solution | {"orientation_residual": orientation})
     warnings = []
     if dropped:
         warnings.append(
@@ -265,7 +318,35 @@ def solve(robot: str, target: Sequence[float], lengths: Mapping[str, float], deg
     }
 
 
-def _violation(robot: str, chain: SerialChain, q: np.ndarray, degrees: bool) -> str:
+def _solve_numeric(robot: Robot, target: Sequence[float], degrees: bool) -> dict[str, Any]:
+    """solve() for a robot file: numeric_ik from many seeds; redundant chains and near-singular solutions warned."""
+    goal = _target(robot, target, degrees)
+    units = _units(robot, degrees)
+    where = f"{robot.name} ({robot.spec.source}) target ({_tuple(goal[:3, 3] if goal.ndim == 2 else goal)}) m"
+    solutions = numeric_ik.solve(robot.chain, goal, where)
+    out, warnings = [], []
+    for k, sol in enumerate(solutions, start=1):
+        entry = {"q": _show(sol.q, units), "position_residual": sol.position_residual}
+        if sol.orientation_residual is not None:
+            entry["orientation_residual"] = sol.orientation_residual
+        out.append(entry | {"sigma_min": sol.sigma_min})
+        if sol.near_singular:
+            warnings.append(f"IK: solution {k} is at a singular configuration (sigma_min = {sol.sigma_min:.3g})")
+    constrained = len(numeric_ik.task_rows(robot.chain))
+    if robot.chain.n > constrained:
+        warnings.append(
+            f"IK: {robot.name} has {robot.chain.n} joints for {constrained} task coordinates: its solutions form a "
+            f"family of dimension {robot.chain.n - constrained}; these {len(out)} are samples of it"
+        )
+    method = (
+        f"numeric: Levenberg-Marquardt from {numeric_ik.SEEDS_PER_ROUND} seeds in the joint ranges, "
+        f"residuals <= {numeric_ik.RESIDUAL_TOL:g}, duplicates within {numeric_ik.DEDUP_TOL:g} merged"
+    )
+    return {"target": [float(v) for v in target], "ik_method": method, "solutions": out, "dropped": [],
+            "warnings": warnings}  # fmt: skip
+
+
+def _violation(robot: Robot, chain: SerialChain, q: np.ndarray, degrees: bool) -> str:
     """The joints of q outside their ranges, as text in the user's units."""
     units = _units(robot, degrees)
     parts = []
@@ -300,20 +381,22 @@ def _pose(values: Sequence[float]) -> np.ndarray:
     return pose
 
 
-def symbolic_forms(robot: str) -> dict[str, str]:
-    """T0n and J derived with sympy, as text with c1/s23 abbreviations and as LaTeX; a UsageError without sympy."""
+def symbolic_forms(robot: Robot) -> dict[str, str]:
+    """T0n and J derived with sympy, as text with c1/s23 abbreviations and as LaTeX; a UsageError without sympy.
+
+    The robot's named lengths are symbols (a robot file without [lengths] keeps its numbers)."""
     try:
         from hexabot_sim.kinematics import symbolic
     except ImportError:
         raise UsageError(SYMBOLIC_HINT) from None
-    chain = symbolic.symbolic_chain(robot)
+    chain = symbolic.symbolic_chain(robot.spec)
     pose, jac = symbolic.transforms(chain)[-1], symbolic.jacobian(chain)
     return {"T0n": symbolic.pretty(pose), "J": symbolic.pretty(jac), "T0n_latex": symbolic.latex(pose),
             "J_latex": symbolic.latex(jac)}  # fmt: skip
 
 
 def report(
-    robot: str,
+    robot: str | os.PathLike[str] | RobotSpec,
     assignments: Mapping[str, str],
     q: str | None = None,
     target: str | None = None,
@@ -322,21 +405,23 @@ def report(
 ) -> dict[str, Any]:
     """Everything `hexabot-sim kin` prints, from the command line's strings; `warnings` lists what looked wrong.
 
+    `robot` is a package robot's name, the path of a robot file, or a spec; it is resolved once, here.
+
     Raises:
         UsageError: Any bad input, as one line naming what is allowed.
         HexabotError: A non-finite number in the result (a bug: inputs in range never produce one).
     """
-    lengths = parse_lengths(robot, assignments)
-    out = describe(robot, lengths, degrees)
+    resolved = resolve(robot, assignments)
+    out = describe(resolved, degrees)
     warnings: list[str] = []
     if q is not None:
-        out |= at_configuration(robot, parse_numbers(q, "--q"), lengths, degrees)
+        out |= at_configuration(resolved, parse_numbers(q, "--q"), degrees)
         warnings += out.pop("warnings")
     if target is not None:
-        out |= solve(robot, parse_numbers(target, "--target"), lengths, degrees)
+        out |= solve(resolved, parse_numbers(target, "--target"), degrees)
         warnings += out.pop("warnings")
     if symbolic:
-        out["symbolic"] = symbolic_forms(robot)
+        out["symbolic"] = symbolic_forms(resolved)
     out["warnings"] = warnings
     for where, value in _numbers(out):
         if not math.isfinite(value):
@@ -364,8 +449,11 @@ def format_matrix(m: Sequence[Sequence[float]], indent: str = "  ") -> str:
 def text(report: dict[str, Any]) -> str:
     """Human-readable form of `report` (or of describe/at_configuration/solve output merged into one dict)."""
     unit = report.get("angle_unit", "rad")
-    lines = [f"{report['robot']}: {report['summary']}", f"  {report['convention']} DH, lengths [m]: "
-             + ", ".join(f"{k} = {v:g}" for k, v in report["lengths"].items())]  # fmt: skip
+    head = f"{report['robot']}: {report['summary']}"
+    if "file" in report:  # a robot file: where it came from; its [lengths] may be empty
+        head = f"{report['robot']}: {report['summary'] or 'robot file'} ({report['file']})"
+    lengths = ", ".join(f"{k} = {v:g}" for k, v in report["lengths"].items())
+    lines = [head, f"  {report['convention']} DH" + (f", lengths [m]: {lengths}" if lengths else "")]
     if unit == "deg":
         lines.append("  joint      kind       theta [deg]  d [m]        a [m]        alpha [deg]")
     else:
@@ -379,7 +467,7 @@ def text(report: dict[str, Any]) -> str:
         )
     lines.append("  singular sets:")
     lines += [f"    - {s}" for s in report["singular_sets"]]
-    units = [row["unit"] for row in report["dh"]]
+    units = [row["unit"] for row in report["dh"] if row["kind"] != "fixed"]
     in_units = f" {_unit_list(units)}" if unit == "deg" else ""
     if "T0n" in report:
         lines.append(f"q = {report['q']}{in_units}")
@@ -387,16 +475,22 @@ def text(report: dict[str, Any]) -> str:
         lines.append(format_matrix(report["T0n"]))
         lines.append("J (6 x n, rows vx vy vz wx wy wz, base frame):")
         lines.append(format_matrix(report["J"]))
-        for key in ("det", "manipulability"):
+        for key in ("det", "manipulability", "sigma_min"):
             if key in report:
                 lines.append(f"{key} = {report[key]:.6g}")
         flagged = [name for name, on in report["singular"].items() if on]
         lines.append(f"singular: {', '.join(flagged) if flagged else 'no'}")
     if "solutions" in report:
         lines.append(f"IK for target {report['target']}: {len(report['solutions'])} solution(s){in_units}")
+        if "ik_method" in report:
+            lines.append(f"  ({report['ik_method']})")
         for i, sol in enumerate(report["solutions"], start=1):
             qs = ", ".join(f"{v:.9g}" for v in sol["q"])
-            lines.append(f"  {i}: q = ({qs})   |FK(q) - target| = {sol['position_residual']:.1e} m")
+            residual = f"{sol['position_residual']:.1e} m"
+            if "orientation_residual" in sol:
+                residual += f", {sol['orientation_residual']:.1e} rad"
+            sigma = f", sigma_min = {sol['sigma_min']:.3g}" if "sigma_min" in sol else ""
+            lines.append(f"  {i}: q = ({qs})   |FK(q) - target| = {residual}{sigma}")
     if "symbolic" in report:
         sym = report["symbolic"]
         lines += ["symbolic T0n:", sym["T0n"], "symbolic J:", sym["J"]]

@@ -413,3 +413,35 @@ def render_video(
             if not watchdog.fired:  # closing the pipe of the encoder we stopped fails too; that is reported above
                 raise
     return len(indices)
+
+
+class Frames:
+    """Single frames of a live simulation (a Gymnasium environment's render()): render_video's preset and field of
+    view on a copy of the model, no encoder.
+
+    Args:
+        model: The simulated model, copied as it is now (its heightfields: make another Frames after changing one).
+        width, height: Frame size in [px].
+        camera: The camera's name.
+    """
+
+    def __init__(self, model: mujoco.MjModel, width: int, height: int, camera: str, quality: str = "preview") -> None:
+        preset = QUALITY[quality]
+        model = copy.copy(model)  # the preset edits visual options only on this copy
+        model.vis.quality.offsamples = preset.offsamples
+        model.vis.quality.shadowsize = preset.shadowsize
+        model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
+        model.vis.global_.offheight = max(model.vis.global_.offheight, height)
+        self.camera = model.camera(camera).id
+        model.cam_fovy[self.camera] = _fovy_for(float(model.cam_fovy[self.camera]), width / height)
+        self.renderer = mujoco.Renderer(model, height, width)
+        if preset.shadowsize == 0:
+            self.renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
+
+    def __call__(self, data: mujoco.MjData) -> np.ndarray:
+        """The frame (height, width, 3) uint8 of the state in `data` (a new array)."""
+        self.renderer.update_scene(data, camera=self.camera)
+        return self.renderer.render()
+
+    def close(self) -> None:
+        self.renderer.close()

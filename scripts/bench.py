@@ -25,6 +25,8 @@ Usage: python scripts/bench.py [--repeat N] [--check] [--only LINE ...]
   sweep      a 64-cell pendulum sweep on 2 local workers vs 1 (pool start included) target >= 1.7x
              and the per-cell overhead of the Dask path (LocalCluster) vs the local pool
   list       wall time of `hexabot-sim list` (python -m hexabot_sim list)        target <= 0.5 s
+  env        the Gymnasium environments (scripts/bench_env.py): steps/s, and env step / its bare physics
+             (frame_skip x mj_step, the same controls replayed), beside Ant-v5's   target <= Ant-v5's
 
 Timings alternate between the two sides of a ratio and keep each side's best (least disturbed)
 repeat, because these machines are shared and noisy. `--check` exits 1 if a target is missed.
@@ -63,8 +65,11 @@ from pathlib import Path
 os.environ.setdefault("MUJOCO_GL", "egl")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this tree's hexabot_sim, not an installed one
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # bench_env beside this file (also when run by path)
+
 import mujoco
 import numpy as np
+from bench_env import bench_env, fmt_env
 
 from hexabot_sim import gl, params, registry, render
 from hexabot_sim.result import at_home
@@ -476,6 +481,7 @@ LINES: dict[str, tuple] = {
     ),
     "sweep": (lambda repeat: bench_sweep(max(1, repeat // 2)), fmt_sweep, ("speedup",), ("dask_ms_per_cell",)),
     "list": (bench_list, fmt_list, ("list_s",), ()),
+    "env": (lambda repeat: bench_env(max(1, repeat // 2)), fmt_env, (), ()),
 }
 
 

@@ -1,7 +1,7 @@
 """Regenerates the figures and the video frame shown in README.md and the pages in docs/ (docs/*.png).
 
-Usage: python scripts/make_docs_figures.py [--hexabot | --terrain | --commands]
-       (only the walking hexabot's / the terrain's / the changing commands')
+Usage: python scripts/make_docs_figures.py [--hexabot | --terrain | --forces | --commands]
+       (only the walking hexabot's / the terrain's / the foot forces' / the changing commands' figures)
 """
 
 from __future__ import annotations
@@ -59,6 +59,7 @@ def main_() -> int:
     hexabot_figures()
     command_figures()
     terrain_figures()
+    force_figures()
     print(f"wrote figures to {DOCS}")
     return 0
 
@@ -102,7 +103,23 @@ def terrain_figures() -> None:
         (DOCS / f"terrain_slope_level_off{suffix}.png").write_bytes((off / f"{name}.png").read_bytes())
 
 
+def force_figures() -> None:
+    """The feet's forces against the gait plan (issue 19): each gait at the issue's speed with stiff stance legs
+    (the default) and with the admittance (load_sharing=admittance), and the stairs."""
+    for gait, vx in (("tripod", "0.1"), ("ripple", "0.1"), ("wave", "0.05")):
+        for mode in ("off", "admittance"):
+            folder = run("hexabot-walk", "--set", f"gait={gait}", "--set", f"vx={vx}", "--set", "duration=8",
+                         "--set", f"load_sharing={mode}")  # fmt: skip
+            (DOCS / f"forces_{gait}_{mode}.png").write_bytes((folder / "foot_forces.png").read_bytes())
+    stairs = run("hexabot-stairs", "--video")
+    (DOCS / "terrain_stairs.png").write_bytes((stairs / "terrain.png").read_bytes())
+    save_frame(stairs / "video.mp4", 270, DOCS / "terrain_stairs_frame.png")  # t = 9 s, on the second step
+
+
 if __name__ == "__main__":
+    if "--forces" in sys.argv[1:]:
+        force_figures()
+        sys.exit(0)
     if "--hexabot" in sys.argv[1:]:
         hexabot_figures()
         sys.exit(0)

@@ -18,7 +18,8 @@ are compared file by file, byte for byte, except:
   report.html  the metrics-table row of real_time_factor is removed;
 and in every text file the tree's own path, if it occurs, reads <TREE>.
 Also compared: the output of `hexabot-sim list`, and of `hexabot-sim kin ROBOT --json` (alone, with --q and
-with --target; stdout and stderr) for every robot.
+with --target; stdout and stderr) and of `kin ROBOT --q .. --target ..` and `kin ROBOT --deg --q ..` (text) for
+every robot; --kin-only compares only these (seconds).
 
 Prints one line per scenario ("same", or "DIFFERENT" with the files and, for text files, the first differing
 line and column) and exits 1 on any difference, 2 on a usage error. About 130 s of CPU time: 1-2 minutes on 2
@@ -306,6 +307,7 @@ def main() -> int:
     parser.add_argument("--scenario", action="append", default=[], metavar="NAME", help="only this scenario")
     parser.add_argument("--keep", type=Path, metavar="DIR", help="keep the run folders in DIR/old and DIR/new")
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--kin-only", action="store_true", help="only `list` and the `kin` commands (seconds)")
     args = parser.parse_args()
     if args.keep is not None and args.keep.exists() and any(args.keep.iterdir()):
         parser.error(f"--keep {args.keep}: not empty")
@@ -354,6 +356,8 @@ def compare_trees(args, old_tree: Path, new_tree: Path, scratch: Path) -> int:
             print(f"same_outputs: unknown scenario(s): {', '.join(unknown)}", file=sys.stderr)
             return 2
         names = [n for n in names if n in args.scenario]
+    if args.kin_only:
+        names = []
 
     checks: list[str] = []  # in the order the lines are printed
     jobs: list[Job] = []
@@ -371,6 +375,12 @@ def compare_trees(args, old_tree: Path, new_tree: Path, scratch: Path) -> int:
         ):
             checks.append(what)
             jobs += [job(what, side, ["kin", robot, "--json", *extra]) for side in trees]
+        for what, extra in (  # the text output too, and degrees
+            (f"kin {robot} text", ["--q", q, f"--target={target}"]),
+            (f"kin {robot} --deg", ["--deg", "--q", q]),
+        ):
+            checks.append(what)
+            jobs += [job(what, side, ["kin", robot, *extra]) for side in trees]
     # Longest first, so the two cores stay busy to the end (both sides of a check next to each other).
     order = sorted(range(len(checks)), key=lambda i: -_cost(checks[i]))
     jobs = [j for i in order for j in jobs[2 * i : 2 * i + 2]]

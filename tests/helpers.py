@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import mujoco
@@ -73,3 +74,44 @@ def foot_and_jacobian_errors(scene: str, layout: Any, samples: int) -> tuple[flo
             local = hip.xmat.reshape(3, 3).T @ (data.site(f"{leg}_foot").xpos - hip.xpos)
             worst_p = max(worst_p, np.abs(local - leg_kin.fk(q[i])).max())
     return worst_p, worst_j
+
+
+# Random DH tables as robot files (tests/kinematics: FK, J and IK of files; the MJCF and URDF exports).
+
+
+def random_table(rng: np.random.Generator, n: int, convention: str, angles: str) -> dict:
+    unit = 180 / math.pi if angles == "deg" else 1.0
+    joints = []
+    for i in range(n):
+        kind = "prismatic" if rng.random() < 0.3 else "revolute"
+        row = {"name": f"j{i + 1}", "type": kind, "a": float(rng.uniform(-0.5, 0.5)),
+               "d": float(rng.uniform(-0.5, 0.5)), "theta": float(rng.uniform(-math.pi, math.pi) * unit),
+               "alpha": float(rng.uniform(-math.pi, math.pi) * unit)}  # fmt: skip
+        if kind == "prismatic":
+            row["lower"], row["upper"] = -0.3, 0.4
+        else:
+            row["lower"], row["upper"] = -0.9 * math.pi * unit, 0.9 * math.pi * unit
+        joints.append(row)
+
+    def frame() -> dict:
+        return {"xyz": rng.uniform(-0.3, 0.3, 3).tolist(), "rpy": (rng.uniform(-math.pi, math.pi, 3) * unit).tolist()}
+
+    return {"name": "random", "convention": convention, "angles": angles, "joints": joints, "tool": frame(),
+            "base": frame()}  # fmt: skip
+
+
+def to_toml(table: dict) -> str:
+    lines = [f'name = "{table["name"]}"', f'convention = "{table["convention"]}"', f'angles = "{table["angles"]}"']
+    for row in table["joints"]:
+        lines.append("[[joints]]")
+        lines += [f"{k} = {v!r}" if not isinstance(v, str) else f'{k} = "{v}"' for k, v in row.items()]
+    for key in ("tool", "base"):
+        lines += [f"[{key}]", f"xyz = {table[key]['xyz']!r}", f"rpy = {table[key]['rpy']!r}"]
+    return "\n".join(lines) + "\n"
+
+
+def random_q(table: dict, rng: np.random.Generator) -> np.ndarray:
+    scale = math.pi / 180 if table["angles"] == "deg" else 1.0
+    return np.array([
+        rng.uniform(r["lower"], r["upper"]) * (1.0 if r["type"] == "prismatic" else scale) for r in table["joints"]
+    ])  # fmt: skip

@@ -18,13 +18,13 @@ STEMS: dict[str, tuple[str, ...]] = {
     "step": ("foot_position", "foot_velocity", "joints", "foot_orientation", "singularity", "workspace"),
     "step_sweep": ("sweep", "workspace"),
     "velocity": ("velocity",),
-    "walk": ("path", "gait_diagram", "velocity", "body", "slip"),
+    "walk": ("path", "gait_diagram", "foot_forces", "velocity", "body", "slip"),
 }
 # Scenarios with more figures than their module's smoke run: the terrain presets (any robot's) draw the ground too.
 EXTRA_STEMS: dict[str, tuple[str, ...]] = {
     name: ("terrain",)
     for name, scenario in registry.SCENARIOS.items()
-    if any(scenario.defaults.get(key) for key in ("slope_deg", "roughness", "kerb_height"))
+    if any(scenario.defaults.get(key) for key in ("slope_deg", "roughness", "kerb_height", "stairs_rise"))
 }
 
 

@@ -1,4 +1,4 @@
-"""Command line: `hexabot-sim list | run | view | sweep | compare | check | kin | clean`; the only place errors
+"""Command line: `hexabot-sim list | run | view | sweep | compare | check | kin | export | clean`; the only place errors
 become exit codes (a shell over the Python API)."""
 
 from __future__ import annotations
@@ -107,6 +107,7 @@ def _main(argv: list[str]) -> int:
             return commands.cmd_check()
         command = {
             "kin": commands.cmd_kin,
+            "export": commands.cmd_export,
             "clean": commands.cmd_clean,
             "sweep": study.cmd_sweep,
             "compare": study.cmd_compare,

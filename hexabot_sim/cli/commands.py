@@ -1,4 +1,4 @@
-"""The commands that run one thing: list, check, kin, run, clean, view (a shell over the Python API)."""
+"""The commands that run one thing: list, check, kin, export, run, clean, view (a shell over the Python API)."""
 
 from __future__ import annotations
 
@@ -79,6 +79,15 @@ def cmd_kin(args: argparse.Namespace) -> int:
     for warning in report["warnings"]:
         eprint(f"{PROG}: warning: {warning}")
     print(json.dumps(report, indent=2, allow_nan=False) if args.json else kinreport.text(report))
+    return 0
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    from hexabot_sim import api, kinreport
+
+    robot = kinreport.resolve(args.robot, params_mod.parse_assignments(args.sets))  # --set checked as kin does
+    for path in api.export(robot.spec, mjcf=args.mjcf, urdf=args.urdf, force=args.force, lengths=robot.lengths):
+        print(f"wrote {printable(str(path))}")
     return 0
 
 

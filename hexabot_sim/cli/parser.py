@@ -46,7 +46,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--debug", action="store_true", help="show the Python traceback of an internal error (or HEXABOT_SIM_DEBUG=1)"
     )
     sub = parser.add_subparsers(
-        dest="command", required=True, parser_class=_Parser, metavar="{list,run,view,sweep,compare,check,kin,clean}"
+        dest="command",
+        required=True,
+        parser_class=_Parser,
+        metavar="{list,run,view,sweep,compare,check,kin,export,clean}",
     )
     sub.add_parser("list", help="scenarios and their parameters with defaults and units")
     run = sub.add_parser("run", help="run a scenario and write a run folder")
@@ -74,9 +77,11 @@ def build_parser() -> argparse.ArgumentParser:
     clean.add_argument("--dry-run", action="store_true", help="only list what would be removed")
     kin = sub.add_parser(
         "kin",
-        help="kinematics of a robot: T0n, J, singularities, IK branches",
+        help="kinematics of a robot or a robot file: T0n, J, singularities, IK",
         description="DH table and singular sets; with --q also T0n, J, det and the singular conditions that hold; "
-        "with --target every IK branch and its FK residual. Units: m; revolute joints and target angles in rad "
+        "with --target every IK branch and its FK residual (a robot file: numeric IK from many seeds, x,y,z for "
+        "fewer than 6 joints, x,y,z,roll,pitch,yaw for 6 or more; sigma_min reported). Units: m; revolute joints "
+        "and target angles in rad "
         "(or deg with --deg). Negative values are typed as they are: --q -1,0.5,0.2. Allowed: link lengths "
         "0.001 to 10 m (the offsets elbow d, stanford d2 and d6, scara d4 may be 0); |revolute q| and |angle| "
         "<= 1000 rad; |prismatic q| <= 100 m; |x|, |y|, |z| of a target <= 1000 m. Warnings (stderr, and "
@@ -85,7 +90,7 @@ def build_parser() -> argparse.ArgumentParser:
     import re  # kin only: `--q -1,0.5,0.2` is a value, not an option (argparse accepts only a lone -1 or -.5)
 
     kin._negative_number_matcher = re.compile(r"^-(?:\d|\.\d|inf|nan)", re.IGNORECASE)  # kinreport.NUMBER_LIST
-    kin.add_argument("robot", help="rrp, elbow, stanford, scara or leg")
+    kin.add_argument("robot", metavar="ROBOT|FILE", help="rrp, elbow, stanford, scara, leg, or a robot file (.toml)")
     kin.add_argument(
         "--q", metavar="Q1,Q2,...", help="joint values: rad (deg with --deg) for revolute joints, m for prismatic"
     )
@@ -108,6 +113,18 @@ def build_parser() -> argparse.ArgumentParser:
         help="also derive T0n and J with sympy, printed with c1/s23 abbreviations and as LaTeX "
         "(needs sympy, the extra 'symbolic': pip install \".[symbolic]\" in the hexabot-sim folder)",
     )
+    export = sub.add_parser(
+        "export",
+        help="a robot's MJCF (qpos = DH q) and URDF, from its name or robot file",
+        description="Writes the MJCF whose body frames are the DH frames (MuJoCo's qpos is the DH q; sites base, "
+        "frame1..frameN, tool) and/or a URDF with the same link frames and inertials. An existing file is replaced "
+        "only with --force; each file is written under a temporary name and renamed into place.",
+    )
+    export.add_argument("robot", metavar="ROBOT|FILE", help="rrp, elbow, stanford, scara, leg, or a robot file (.toml)")
+    export.add_argument("--mjcf", metavar="OUT.xml", help="the MJCF file to write")
+    export.add_argument("--urdf", metavar="OUT.urdf", help="the URDF file to write")
+    export.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE", help="link length [m]")
+    export.add_argument("--force", action="store_true", help="replace the files if they exist")
     view = sub.add_parser(
         "view",
         help="MuJoCo's interactive viewer: a scenario driven live, or a run folder replayed",

@@ -19,8 +19,10 @@ NUMBA_DISABLE_JIT=1 runs them as plain Python, for debugging.
 State of the ground-finding legs (GroundController), one row per leg:
 - `legs` float (n, NLEG): stance height z [m] (body/hip frame z of the foot target), its value at
   lift-off, the lift-off time [s], the horizontal target offset (x, y) [m] in the hip frame, the
-  offset at lift-off, the landing point (x, y) of the swing under way in the body frame, and the
-  planner's landing point of the next swing (set with each chunk's plan);
+  offset at lift-off, the landing point (x, y) of the swing under way in the body frame, the
+  planner's landing point of the next swing (set with each chunk's plan), the elevator reflex's
+  trigger time [s] and the horizontal target (x, y) [m] (hip frame) it holds while lifting, and the
+  stance height's change per step [m] until the next plane update;
 - `flags` int (n, 3): swing mode (STANCE, SWING, EARLY, SEEKING), planned stance at the last step, grounded.
 """
 
@@ -51,8 +53,8 @@ feed = jit(resolved_rate.feed)
 # Swing state machine, per leg.
 STANCE, SWING, EARLY, SEEKING = 0, 1, 2, 3
 # Columns of `legs`.
-Z, Z_LIFT, T_LIFT, OFFSET, OFFSET_LIFT, LANDING, NEXT_LANDING = 0, 1, 2, 3, 5, 7, 9
-NLEG = 11
+Z, Z_LIFT, T_LIFT, OFFSET, OFFSET_LIFT, LANDING, NEXT_LANDING, T_REFLEX, HOLD, Z_STEP = 0, 1, 2, 3, 5, 7, 9, 11, 12, 14
+NLEG = 15
 # Columns of `flags`.
 MODE, WAS_STANCE, GROUNDED = 0, 1, 2
 # Per-leg constants `geo` (n, NGEO): cos and sin of the hip yaw, hip position (x, y) in the body frame, the
@@ -61,8 +63,10 @@ COS, SIN, HIP_X, HIP_Y, NEUTRAL_Z, TOUCH_ADR = 0, 1, 2, 3, 4, 5
 NGEO = 6
 # Scalars `par`: GroundSettings, the gait's timing and the command's ramp.
 (SENSED, LEVEL, STAND_HEIGHT, DEPTH_MIN, DEPTH_MAX, ATTITUDE_GAIN, HEIGHT_GAIN, TOUCH_THRESHOLD, UPDATE_EVERY,
- SWING_TIME, SEEK_SPEED, DT, SETTLE_TIME, RAMP_TIME, QUAT_ADR) = range(15)  # fmt: skip
-NPAR = 15
+ SWING_TIME, SEEK_SPEED, DT, SETTLE_TIME, RAMP_TIME, QUAT_ADR,
+ REFLEX_LIFT, REFLEX_UNTIL, REFLEX_RISE) = range(18)  # fmt: skip
+NPAR = 18
+REFLEX_FROM: float = 0.2  # a touch earlier in the swing is the foot leaving the ground, not an obstacle
 # Counters `counts`: control steps so far, plane updates, updates whose heights were clipped to the workspace.
 STEPS, UPDATES, CLIPPED = 0, 1, 2
 
@@ -116,11 +120,13 @@ def plane_fit(x, y, z, n, out):
 
 @jit
 def update_plane(par, geo, legs, flags, plane, counts, row, sensordata):
-    """Refits the stance plane and moves every grounded stance target by the levelling/height correction.
+    """Refits the stance plane and sets how every grounded stance target moves by the levelling/height correction.
 
     The plane z = a + b x + c y (body frame) through the stance feet's targets; a is driven to
     -stand_height, (b, c) to zero: from the IMU's roll and pitch (level) or the plane's own slope.
-    Heights are clipped to the legs' workspace depths.
+    Heights are clipped to the legs' workspace depths. The correction is spread over the steps until
+    the next update (Z_STEP, applied by ground_step): moved at once, every UPDATE_EVERY steps, the
+    targets' steps rang through the stance feet (force spikes every 10 ms, 130 % of a foot's share).
     """
     n_legs = legs.shape[0]
     xs, ys, zs = np.empty(n_legs), np.empty(n_legs), np.empty(n_legs)
@@ -151,12 +157,14 @@ def update_plane(par, geo, legs, flags, plane, counts, row, sensordata):
         db, dc = -gain * fit[1] * step, -gain * fit[2] * step
     lo, hi = -par[DEPTH_MAX], -par[DEPTH_MIN]
     clipped = False
+    for i in range(n_legs):
+        legs[i, Z_STEP] = 0.0  # a foot that lands before the next update keeps its height until then
     for m in range(n):
         i = idx[m]
         z = legs[i, Z] + da + db * xs[m] + dc * ys[m]
         if not lo <= z <= hi:
             z, clipped = min(hi, max(lo, z)), True
-        legs[i, Z] = z
+        legs[i, Z_STEP] = (z - legs[i, Z]) / par[UPDATE_EVERY]
     counts[UPDATES] += 1
     counts[CLIPPED] += clipped
     plane[0], plane[1], plane[2] = fit[0] + da, fit[1] + db, fit[2] + dc
@@ -166,6 +174,24 @@ def update_plane(par, geo, legs, flags, plane, counts, row, sensordata):
 def _event(events, n, leg, planned, touched):
     events[n, 0], events[n, 1], events[n, 2] = leg, planned, touched
     return n + 1
+
+
+@jit
+def _smoothstep(x):
+    x = min(1.0, max(0.0, x))
+    return x * x * (3 - 2 * x)
+
+
+@jit
+def reflex(par, legs, i, t, s, z):
+    """The elevator reflex of leg i since its trigger: the swing's height z raised by REFLEX_LIFT over REFLEX_RISE
+    [s], the raise fading over the last 30 % of the swing; the horizontal target (hip frame) held where it was at
+    the touch while lifting, then let go to the plan's by 90 % of the swing. Returns (z, the hold's weight)."""
+    since = t - legs[i, T_REFLEX]
+    z += par[REFLEX_LIFT] * _smoothstep(since / par[REFLEX_RISE]) * (1.0 - _smoothstep((s - 0.7) / 0.3))
+    release = legs[i, T_LIFT] + 0.9 * par[SWING_TIME] - legs[i, T_REFLEX] - par[REFLEX_RISE]  # [s] to let go in
+    hold = 1.0 - _smoothstep((since - par[REFLEX_RISE]) / max(release, par[DT]))
+    return z, hold
 
 
 @jit
@@ -221,7 +247,17 @@ def targets(par, geo, legs, flags, plane, cmd, row, stance, t, row_prev, sensord
                 legs[i, OFFSET + 1] = legs[i, OFFSET_LIFT + 1] * fade
             else:
                 legs[i, OFFSET] = legs[i, OFFSET + 1] = 0.0
-            if sensed and s >= 0.5 and touching:
+            # Elevator reflex: a touch before REFLEX_UNTIL of the swing is an obstacle in the way, not the ground.
+            blocked = sensed and touching and REFLEX_FROM < s < par[REFLEX_UNTIL] and par[REFLEX_LIFT] > 0.0
+            if blocked and legs[i, T_REFLEX] < legs[i, T_LIFT]:  # the first touch of this swing: hold and lift
+                legs[i, T_REFLEX] = t
+                legs[i, HOLD] = out[j] + legs[i, OFFSET]
+                legs[i, HOLD + 1] = out[j + 1] + legs[i, OFFSET + 1]
+            if legs[i, T_REFLEX] >= legs[i, T_LIFT]:
+                z, hold = reflex(par, legs, i, t, s, z)
+                legs[i, OFFSET] = (legs[i, HOLD] - out[j]) * hold
+                legs[i, OFFSET + 1] = (legs[i, HOLD + 1] - out[j + 1]) * hold
+            if sensed and s >= 0.5 and touching and not blocked:
                 n_events = _event(events, n_events, i, legs[i, T_LIFT] + swing_time, t)
                 legs[i, Z] = z
                 mode = STANCE if planned else EARLY
@@ -278,22 +314,28 @@ def ramp(par, t):
 
 @jit
 def ground_step(par, geo, k, legs, flags, plane, counts, cmd, rows, stance, r, t, row_prev, q_cmd, dq, trims,
-                qpos, sensordata, ctrl, events):  # fmt: skip
+                qpos, sensordata, ctrl, events, extra):  # fmt: skip
     """One control step of GroundController from t to t + dt (row r of the chunk's rows is time t).
 
     Updates the stance plane every UPDATE_EVERY steps, sets the targets at t + dt, and advances the
-    servos by one resolved-rate step from row_prev (the targets at t) to them. Returns the number of
+    servos by one resolved-rate step from row_prev (the targets at t) to them, its feed plus `extra`
+    (3 n,) (the legs' admittance, control/compliance.py; zeros without). Returns the number of
     swings that ended (written to events).
     """
     dt = par[DT]
     if counts[STEPS] % int(par[UPDATE_EVERY]) == 0:
         update_plane(par, geo, legs, flags, plane, counts, row_prev, sensordata)
     counts[STEPS] += 1
+    for i in range(legs.shape[0]):  # the plane update's correction, a step's share of it
+        mode = flags[i, MODE]
+        if (mode == STANCE or mode == EARLY) and flags[i, GROUNDED]:
+            legs[i, Z] += legs[i, Z_STEP]
     row1 = np.empty(row_prev.shape[0])
     n_events = targets(par, geo, legs, flags, plane, cmd, rows[r + 1], stance[r + 1], t + dt, rows[r], sensordata,
                        row1, events)  # fmt: skip
     rate = np.empty(row_prev.shape[0])
     feed(k[3], row_prev, row1, dt, rate)
+    rate += extra
     row_prev[:] = row1
     servo(k, qpos, trims, q_cmd, dq, rate, dt, ctrl)
     return n_events
@@ -317,7 +359,7 @@ def warm_up() -> None:
         _compile_all()
     except Exception as error:  # retried without the cache; if that fails too, the first error stands
         where = getattr(getattr(ground_step, "_cache", None), "cache_path", "?")
-        for kernel in _KERNELS:
+        for kernel in _all_kernels():
             kernel._cache = NullCache()  # numba's own "no caching" (the dispatcher attribute cache=True sets)
         try:
             _compile_all()
@@ -332,9 +374,19 @@ def warm_up() -> None:
     _WARM[0] = True
 
 
+def _all_kernels() -> tuple:
+    """Every compiled kernel of the walking controllers: these and the legs' admittance (compliance_kernels.py)."""
+    from hexabot_sim.control import compliance_kernels
+
+    return _KERNELS + compliance_kernels.KERNELS
+
+
 def _compile_all() -> None:
     """Calls each kernel the controllers call from Python once, on arrays of the types they pass (for six
     legs; the types, hence the compiled code, are the same for any leg count)."""
+    from hexabot_sim.control import compliance_kernels
+
+    compliance_kernels.compile_all()
     par = np.zeros(NPAR)
     par[UPDATE_EVERY], par[DT], par[SWING_TIME] = 1.0, 0.002, 1.0
     gains = resolved_rate.ResolvedRateGains(max_joint_acceleration=200.0)
@@ -350,7 +402,7 @@ def _compile_all() -> None:
     servo(k, qpos, trims, q_cmd, dq, rows[0], 0.002, ctrl)
     targets(par, geo, legs, flags, plane, cmd, rows[0], stance[0], 0.0, rows[0], sensordata, row, events)
     ground_step(par, geo, k, legs, flags, plane, counts, cmd, rows, stance, 0, 0.0, row, q_cmd, dq, trims, qpos,
-                sensordata, ctrl, events)  # fmt: skip
+                sensordata, ctrl, events, np.zeros(nq))  # fmt: skip
 
 
-_KERNELS = (rate_steps, feed, servo, plane_fit, update_plane, _event, targets, ramp, ground_step)
+_KERNELS = (rate_steps, feed, servo, plane_fit, update_plane, _event, _smoothstep, reflex, targets, ramp, ground_step)

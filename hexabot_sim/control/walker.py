@@ -32,6 +32,7 @@ import mujoco
 import numpy as np
 
 from hexabot_sim.control.commands import CommandSource
+from hexabot_sim.control.compliance import Admittance, AdmittanceSettings
 from hexabot_sim.control.gait import Command, GaitPlanner, gaits_for
 from hexabot_sim.control.resolved_rate import ResolvedRateGains, step_constants
 from hexabot_sim.kinematics import legged
@@ -63,6 +64,8 @@ class WalkSettings:
         heading_gain: Yaw-rate correction per radian of heading error [1/s].
         trims: Servo zero errors (3 n_legs,) [rad], leg by leg: each servo holds q_cmd + trim while its encoder
             reads q - trim; empty: none.
+        admittance: The legs' admittance around the position servos, driven by the touch sensors
+            (control/compliance.py); None: stiff position-controlled legs.
     """
 
     command: Command
@@ -71,6 +74,7 @@ class WalkSettings:
     heading_hold: bool = False
     heading_gain: float = 2.0
     trims: tuple[float, ...] = ()
+    admittance: AdmittanceSettings | None = None
 
 
 def yaw_of(quat: np.ndarray) -> float:
@@ -147,6 +151,12 @@ class WalkingController:
         self._qpos = data.qpos
         self._ctrl = data.ctrl
         self._sensordata = data.sensordata
+        self.admittance = None if settings.admittance is None else Admittance(
+            model, layout.legs, self.hips, layout.yaws, gains.task_gain, self.dt, planner.stance_time,
+            settings.admittance,
+        )  # fmt: skip
+        self._no_extra = np.zeros(nq)  # the feed correction without an admittance
+        self._feed_row = np.zeros(nq)
 
     def scale(self, t: np.ndarray | float) -> np.ndarray | float:
         """Fraction of the command in force at t (vectorised): 0 while settling, then a linear ramp to 1."""
@@ -231,6 +241,7 @@ class WalkingController:
         rates = np.empty(rows[1:].size)
         self.kernels.feed(self.consts[3], rows[:-1].ravel(), rows[1:].ravel(), self.dt, rates)
         self._feed = rates.reshape(rows.shape[0] - 1, rows.shape[1])
+        self._rows, self._stance = rows, stance
 
     def _rolling_offsets(self, hip: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
         """Offsets (n + 1, legs, 3) of the foot-centre targets for feet that roll without slipping.
@@ -284,7 +295,11 @@ class WalkingController:
         if k >= self._chunk:
             self._replan(data.time)
             k = 0
-        self.kernels.servo(self.consts, self._qpos, self.trims, self.q_cmd, self.dq, self._feed[k], self.dt, self._ctrl)
+        feed = self._feed[k]
+        if self.admittance is not None:
+            extra = self.admittance.update(self._sensordata, self._rows[k], self._stance[k])
+            feed = np.add(feed, extra, out=self._feed_row)
+        self.kernels.servo(self.consts, self._qpos, self.trims, self.q_cmd, self.dq, feed, self.dt, self._ctrl)
         self._k = k + 1
 
 
@@ -312,6 +327,12 @@ class GroundSettings:
         height_gain: Rate at which body-height errors are removed [1/s].
         touch_threshold: Touch-sensor force that counts as contact [N].
         update_every: Control steps between updates of the ground plane and the levelling.
+        reflex_lift: The elevator reflex (sensed touchdown): a swing foot that touches something before
+            `reflex_until` of its swing holds its horizontal target and lifts this much higher [m] over
+            `reflex_rise` [s], then reaches on to its landing point; 0: no reflex (such a touch is ignored
+            in the first half of the swing and is an early touchdown in the second).
+        reflex_until: Swing fraction before which a touch triggers the reflex instead of a touchdown.
+        reflex_rise: Time the reflex takes to lift [s].
     """
 
     sensed: bool = True
@@ -322,6 +343,9 @@ class GroundSettings:
     height_gain: float = 5.0
     touch_threshold: float = 0.3
     update_every: int = 5
+    reflex_lift: float = 0.0
+    reflex_until: float = 0.75
+    reflex_rise: float = 0.1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -385,6 +409,9 @@ class GroundController(WalkingController):
         self._swing_time(planner)
         self.par[[K.DT, K.SETTLE_TIME, K.RAMP_TIME]] = self.dt, settings.settle_time, settings.ramp_time
         self.par[K.QUAT_ADR] = self.quat_adr
+        self.par[[K.REFLEX_LIFT, K.REFLEX_UNTIL]] = ground.reflex_lift, ground.reflex_until
+        self.par[K.REFLEX_RISE] = ground.reflex_rise
+        self.legs[:, K.T_REFLEX] = -math.inf
         self.events: list[Touchdown] = []
         self._new_swing_time_at = math.inf  # [s] after a gait switch: when the kernel takes the new gait's swing time
         self._events = np.zeros((n, 3))  # swings that ended in one step (kernels.targets): one a leg at most
@@ -466,9 +493,12 @@ class GroundController(WalkingController):
                           rows[k], self._sensordata, self._row_prev, self._events)  # fmt: skip
             self._record(n)
             self._started = True
+        extra = self._no_extra
+        if self.admittance is not None:
+            extra = self.admittance.update(self._sensordata, self._row_prev, stance[k])
         n = K.ground_step(self.par, self.geo, self.consts, self.legs, self.flags, self.plane, self.counts, self.cmd,
                           rows, stance, k, t, self._row_prev, self.q_cmd, self.dq, self.trims, self._qpos,
-                          self._sensordata, self._ctrl, self._events)  # fmt: skip
+                          self._sensordata, self._ctrl, self._events, extra)  # fmt: skip
         if n:
             self._record(n)
         self._k = k + 1

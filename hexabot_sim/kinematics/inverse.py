@@ -99,10 +99,13 @@ def _wrap(angle: float) -> float:
     return math.pi - (math.pi - angle) % _TWO_PI
 
 
-def _setup(robot: str, lengths: Mapping[str, float] | None) -> tuple[robots.RobotSpec, SerialChain, dict[str, float]]:
-    """The robot's spec, its chain (validates `lengths`) and every length by name in [m]."""
+def _setup(
+    robot: str, lengths: Mapping[str, float] | None, chain: SerialChain | None = None
+) -> tuple[robots.RobotSpec, SerialChain, dict[str, float]]:
+    """The robot's spec, its chain (validates `lengths`; `chain`: the caller's, already built from them) and every
+    length by name in [m]."""
     spec = robots.get(robot)
-    chain = spec.chain(lengths)
+    chain = spec.chain(lengths) if chain is None else chain
     values = {name: float((lengths or {}).get(name, length.default)) for name, length in spec.lengths.items()}
     return spec, chain, values
 
@@ -307,7 +310,7 @@ def _in_range(spec: robots.RobotSpec, chain: SerialChain, q: np.ndarray) -> str 
 
 
 def ik_branches(
-    robot: str, target: ArrayLike, lengths: Mapping[str, float] | None = None
+    robot: str, target: ArrayLike, lengths: Mapping[str, float] | None = None, chain: SerialChain | None = None
 ) -> tuple[list[np.ndarray], list[tuple[np.ndarray, str]]]:
     """Like `ik`, but also returns the branches the joint ranges dropped, and never raises for that alone.
 
@@ -318,7 +321,7 @@ def ik_branches(
     Raises:
         IKError, UsageError: As `ik`, except when every branch is outside the joint ranges.
     """
-    spec, chain, p = _setup(robot, lengths)
+    spec, chain, p = _setup(robot, lengths, chain)
     size = _size(chain)
     if robot == "stanford":
         candidates = _ik_stanford(target, p, size, chain)
@@ -386,7 +389,9 @@ def _same(q: np.ndarray, other: np.ndarray, revolute: np.ndarray) -> bool:
     return bool(np.max(np.abs(diff)) <= IK_DEDUP_TOL)
 
 
-def singularities(robot: str, q: ArrayLike, lengths: Mapping[str, float] | None = None) -> dict[str, bool]:
+def singularities(
+    robot: str, q: ArrayLike, lengths: Mapping[str, float] | None = None, chain: SerialChain | None = None
+) -> dict[str, bool]:
     """Which of the robot's singular conditions (SINGULAR_SETS) hold at q; each one drops the task Jacobian's rank.
 
     A sine or cosine counts as zero when |value| <= SINGULAR_TOL; a length (a2 + d3, the elbow's horizontal
@@ -403,7 +408,7 @@ def singularities(robot: str, q: ArrayLike, lengths: Mapping[str, float] | None 
         wrist_centre_on_offset_cylinder; scara: arm_stretched_or_folded; stanford: wrist_sin_theta5_zero,
         arm_sin_theta2_zero, d3_zero; leg: knee, coxa_axis.
     """
-    _, chain, p = _setup(robot, lengths)
+    _, chain, p = _setup(robot, lengths, chain)
     q = [float(v) for v in _joint_values(chain, q)]  # Python floats: the flags are plain bools (JSON-ready)
     small = SINGULAR_TOL * _size(chain)
     if robot == "rrp":
@@ -428,7 +433,9 @@ def singularities(robot: str, q: ArrayLike, lengths: Mapping[str, float] | None 
     return {name: bool(flag) for name, flag in families.items()}
 
 
-def det_or_manipulability(robot: str, q: ArrayLike, lengths: Mapping[str, float] | None = None) -> tuple[str, float]:
+def det_or_manipulability(
+    robot: str, q: ArrayLike, lengths: Mapping[str, float] | None = None, chain: SerialChain | None = None
+) -> tuple[str, float]:
     """Determinant of the robot's square task Jacobian (rows TASK_ROWS[robot] of chain.jacobian) in closed form.
 
     Every robot here has a square task Jacobian, so the kind is always "det" ("manipulability", sqrt(det(J Jᵀ)),
@@ -448,7 +455,7 @@ def det_or_manipulability(robot: str, q: ArrayLike, lengths: Mapping[str, float]
     Returns:
         ("det", value).
     """
-    _, chain, p = _setup(robot, lengths)
+    _, chain, p = _setup(robot, lengths, chain)
     q = _joint_values(chain, q)
     if robot == "rrp":
         value = (p["a2"] + q[2]) ** 2 * math.cos(q[1])

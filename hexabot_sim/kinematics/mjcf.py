@@ -5,11 +5,15 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics.chain import Joint, SerialChain
+from hexabot_sim.kinematics.xml_text import num as _num
+from hexabot_sim.kinematics.xml_text import nums as _nums
+from hexabot_sim.kinematics.xml_text import quat as _quat
 
 ALUMINIUM_DENSITY = 2700.0  # [kg/m^3] density of the links' material (aluminium alloy, handbook value)
 SERVO_BANDWIDTH = 5.0  # [Hz] natural frequency f_n of each position servo on its own joint inertia at home
@@ -65,6 +69,7 @@ def to_mjcf(
     comment: str = "",
     link_radius: float = 0.02,
     density: float = ALUMINIUM_DENSITY,
+    masses: Sequence[float | None] = (),
 ) -> str:
     """The MJCF of a serial chain whose body frames are the frames its joints act in (qpos == q).
 
@@ -80,14 +85,14 @@ def to_mjcf(
         comment: Text for the header comment (e.g. the report the table comes from); must not contain "--".
         link_radius: Radius of the link capsules in [m]; joint housings are HOUSING_SCALE times larger.
         density: Density of the solid cylinders that give each link its mass and inertia in [kg/m^3].
+        masses: Each link's mass in [kg] (a robot file's `mass`), or None for the cylinders' own: the inertia
+            scales with it, the centre of mass stays.
 
     Returns:
         The MJCF text (one robot, no floor or lights: a scene file includes it).
     """
     _validate(chain, comment, link_radius, density)
-    bodies, base_solids, base_sites = _bodies(chain, link_radius)
-    for body in bodies:
-        body.mass, body.com, body.inertia = _cylinders_inertia(body.solids, density)
+    bodies, base_solids, base_sites = link_bodies(chain, link_radius, density, masses)
     q_home = home_pose(chain)
     kp = _mass_diagonal(chain, bodies, q_home) * (2 * math.pi * SERVO_BANDWIDTH) ** 2  # (n,) [N m/rad or N/m]
     return _write(chain, bodies, base_solids, base_sites, q_home, kp, comment, link_radius, density)
@@ -139,6 +144,19 @@ def _placement(a: float, alpha: float, theta: float, d: float) -> np.ndarray:
     t[:3, :3] = [[ct, -st, 0.0], [ca * st, ca * ct, -sa], [sa * st, sa * ct, ca]]
     t[:3, 3] = (a, -sa * d, ca * d)
     return t
+
+
+def link_bodies(
+    chain: SerialChain, radius: float, density: float, masses: Sequence[float | None] = ()
+) -> tuple[list[_Body], list[_Solid], list[_Site]]:
+    """The bodies (frames, solids, sites, mass, centre of mass, inertia) of the MJCF, also used by the URDF writer."""
+    bodies, base_solids, base_sites = _bodies(chain, radius)
+    for k, body in enumerate(bodies):
+        body.mass, body.com, body.inertia = _cylinders_inertia(body.solids, density)
+        mass = masses[k] if k < len(masses) else None
+        if mass is not None:  # a given mass: the same shape, scaled in density
+            body.inertia, body.mass = body.inertia * (mass / body.mass), float(mass)
+    return bodies, base_solids, base_sites
 
 
 def _bodies(chain: SerialChain, radius: float) -> tuple[list[_Body], list[_Solid], list[_Site]]:
@@ -274,36 +292,6 @@ def _mass_diagonal(chain: SerialChain, bodies: list[_Body], q: np.ndarray) -> np
                 v = np.cross(z, centre - o)
                 diagonal[j] += bodies[k].mass * v @ v + z @ rot @ bodies[k].inertia @ rot.T @ z
     return diagonal
-
-
-def _quat(rot: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method: the largest pivot), (4,)."""
-    trace = np.trace(rot)
-    pivots = [trace, rot[0, 0], rot[1, 1], rot[2, 2]]
-    i = int(np.argmax(pivots))
-    if i == 0:
-        w = math.sqrt(1 + trace) / 2
-        q = [w, (rot[2, 1] - rot[1, 2]) / (4 * w), (rot[0, 2] - rot[2, 0]) / (4 * w), (rot[1, 0] - rot[0, 1]) / (4 * w)]
-    elif i == 1:
-        x = math.sqrt(1 + rot[0, 0] - rot[1, 1] - rot[2, 2]) / 2
-        q = [(rot[2, 1] - rot[1, 2]) / (4 * x), x, (rot[0, 1] + rot[1, 0]) / (4 * x), (rot[0, 2] + rot[2, 0]) / (4 * x)]
-    elif i == 2:
-        y = math.sqrt(1 - rot[0, 0] + rot[1, 1] - rot[2, 2]) / 2
-        q = [(rot[0, 2] - rot[2, 0]) / (4 * y), (rot[0, 1] + rot[1, 0]) / (4 * y), y, (rot[1, 2] + rot[2, 1]) / (4 * y)]
-    else:
-        z = math.sqrt(1 - rot[0, 0] - rot[1, 1] + rot[2, 2]) / 2
-        q = [(rot[1, 0] - rot[0, 1]) / (4 * z), (rot[0, 2] + rot[2, 0]) / (4 * z), (rot[1, 2] + rot[2, 1]) / (4 * z), z]
-    quat = np.array(q)  # (4,)
-    return quat if quat[0] >= 0 else -quat
-
-
-def _num(value: float) -> str:
-    """Full precision (repr round-trips exactly); -0.0 written as 0.0."""
-    return repr(float(value) + 0.0)
-
-
-def _nums(values: np.ndarray | list[float] | tuple[float, ...]) -> str:
-    return " ".join(_num(v) for v in values)
 
 
 def _pose_attributes(t: np.ndarray, euler: tuple[float, float] | None = None) -> str:

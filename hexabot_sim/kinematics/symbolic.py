@@ -76,16 +76,18 @@ class SymbolicChain:
         return tuple(self.defaults[name] for name in self.lengths)
 
 
-def symbolic_chain(robot: str) -> SymbolicChain:
-    """The symbolic chain of one of the robots in `robots.ROBOTS`, with its link lengths as symbols.
+def symbolic_chain(robot: str | robots.RobotSpec) -> SymbolicChain:
+    """The symbolic chain of a robot (a name in `robots.ROBOTS`, or any RobotSpec, e.g. a robot file's), with its
+    named link lengths as symbols.
 
     The robot's own `build` makes the numeric chain with a distinct marker value for each length; every DH
     entry, base and tool entry equal to ± a marker becomes ± that length's symbol, so the symbolic chain is
     the numeric one by construction. Twists become exact multiples of sympy.pi. An entry that is none of
-    these (a length entering through a formula) raises rather than freezing a marker into the result.
+    these (a length entering through a formula) raises rather than freezing a marker into the result, for a spec
+    built in Python; a robot file can only name a length as an entry (± name), so its other numbers stay numbers.
 
     Args:
-        robot: Robot name, e.g. "rrp", "elbow", "stanford", "scara", "leg".
+        robot: Robot name, e.g. "rrp", "elbow", "stanford", "scara", "leg", or a RobotSpec.
 
     Returns:
         The symbolic chain; `defaults` holds the robot's default lengths.
@@ -94,7 +96,7 @@ def symbolic_chain(robot: str) -> SymbolicChain:
         UsageError: Unknown robot.
         HexabotError: The robot's table uses a length in a way this module cannot recognise.
     """
-    spec = robots.get(robot)
+    spec = robot if isinstance(robot, robots.RobotSpec) else robots.get(robot)
     # Markers: distinct, irrational-looking, > 0, and unlike 0, 1 or any multiple of π.
     primes = _primes(len(spec.lengths))
     markers = {name: math.sqrt(prime) / 7 for name, prime in zip(spec.lengths, primes, strict=True)}
@@ -102,7 +104,7 @@ def symbolic_chain(robot: str) -> SymbolicChain:
         name: ({"nonnegative": True} if length.allow_zero else {"positive": True})
         for name, length in spec.lengths.items()
     }
-    sc = _from_chain(spec.chain(markers), markers, assumptions, strict=True)
+    sc = _from_chain(spec.chain(markers), markers, assumptions, strict=spec.source is None)
     return dataclasses.replace(sc, defaults={name: length.default for name, length in spec.lengths.items()})
 
 

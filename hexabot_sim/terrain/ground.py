@@ -1,4 +1,4 @@
-"""The ground of a run: a slope carrying a rough patch and obstacles (a kerb), composed, as MJCF and heights."""
+"""The ground of a run: a slope carrying a rough patch and obstacles (a kerb, stairs), composed, as MJCF and heights."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ from hexabot_sim.terrain.heightfield import RoughPatch
 from hexabot_sim.terrain.kerb import Kerb
 from hexabot_sim.terrain.limits import Limits, apart
 from hexabot_sim.terrain.slope import Slope
+from hexabot_sim.terrain.stairs import Stairs
 
 # Checker drawn on every terrain geom, so the video shows the ground's shape: the squares' edges bend
 # over the bumps. MuJoCo maps a 2d texture onto a heightfield or box by the geom's x and y (object-linear
@@ -39,7 +40,7 @@ class Ground:
 
     slope: Slope = dataclasses.field(default_factory=Slope)
     rough: RoughPatch | None = None
-    obstacles: tuple[Kerb, ...] = ()
+    obstacles: tuple[Kerb | Stairs, ...] = ()
 
     def __post_init__(self) -> None:
         # An obstacle on rough ground stands on its valleys: a kerb's box from z = 0 up left a gap under its

@@ -35,23 +35,10 @@ class Kerb:
     def highest_on_line(self, origin: np.ndarray, direction: np.ndarray) -> np.ndarray:
         """The largest t [m] with origin + t * direction inside the kerb's box (ground frame), -inf where the line
         misses it: `origin` (..., 3) points, `direction` (3,) the world's vertical in the ground frame."""
-        ax, ay = self.along
-        rows = (  # (ground-frame coordinate as a linear function of t, its lower and upper bound)
-            ((ax, ay, 0.0), self.distance, self.distance + self.length),
-            ((-ay, ax, 0.0), -self.width / 2, self.width / 2),
-            ((0.0, 0.0, 1.0), -self.depth, self.height),
-        )
-        lo = np.full(origin.shape[:-1], -np.inf)
-        hi = np.full(origin.shape[:-1], np.inf)
-        for axis, low, high in rows:
-            start, rate = origin @ np.array(axis), float(np.dot(direction, axis))
-            if rate == 0:
-                outside = (start < low) | (start > high)
-                hi = np.where(outside, -np.inf, hi)
-                continue
-            a, b = (low - start) / rate, (high - start) / rate
-            lo, hi = np.maximum(lo, np.minimum(a, b)), np.minimum(hi, np.maximum(a, b))
-        return np.where(lo <= hi, hi, -np.inf)
+        return box_highest_on_line(
+            origin, direction, self.along, (self.distance, self.distance + self.length), self.width, self.depth,
+            self.height,
+        )  # fmt: skip
 
     def mjcf(self) -> tuple[list[str], list[str]]:
         """(asset elements, ground elements) as MJCF text, in the ground frame."""
@@ -87,3 +74,35 @@ class Kerb:
 
     def label(self) -> str:
         return f"{self.height * 1000:g} mm kerb at {self.distance:g} m"
+
+
+def box_highest_on_line(
+    origin: np.ndarray,
+    direction: np.ndarray,
+    along: tuple[float, float],
+    ahead: tuple[float, float],
+    width: float,
+    depth: float,
+    height: float,
+) -> np.ndarray:
+    """The largest t [m] with origin + t * direction inside a box of the ground frame, -inf where the line misses
+    it: the box spans `ahead` (from, to) [m] along the horizontal unit vector `along`, `width` [m] across it
+    (centred on the origin) and -depth to height [m] along the ground's normal; `origin` (..., 3) points,
+    `direction` (3,) the world's vertical in the ground frame."""
+    ax, ay = along
+    rows = (  # (ground-frame coordinate as a linear function of t, its lower and upper bound)
+        ((ax, ay, 0.0), ahead[0], ahead[1]),
+        ((-ay, ax, 0.0), -width / 2, width / 2),
+        ((0.0, 0.0, 1.0), -depth, height),
+    )
+    lo = np.full(origin.shape[:-1], -np.inf)
+    hi = np.full(origin.shape[:-1], np.inf)
+    for axis, low, high in rows:
+        start, rate = origin @ np.array(axis), float(np.dot(direction, axis))
+        if rate == 0:
+            outside = (start < low) | (start > high)
+            hi = np.where(outside, -np.inf, hi)
+            continue
+        a, b = (low - start) / rate, (high - start) / rate
+        lo, hi = np.maximum(lo, np.minimum(a, b)), np.minimum(hi, np.maximum(a, b))
+    return np.where(lo <= hi, hi, -np.inf)

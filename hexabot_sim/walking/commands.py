@@ -22,7 +22,7 @@ from hexabot_sim.control.follower import PathFollower
 from hexabot_sim.control.gait import Command, GaitPlanner
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import legged
-from hexabot_sim.params import read_bounded
+from hexabot_sim.params import _show, read_bounded
 
 # Rows of a table. Each schedule row's check plans its cycle (~6 ms for a new twist: 200 distinct rows took 1.2 s),
 # so a schedule is kept to what a few seconds check; a waypoint costs nothing to check.
@@ -30,6 +30,7 @@ MAX_ROWS: dict[str, int] = {"schedule": 1000, "waypoints": 10_000}
 MAX_TABLE_BYTES: int = 1 << 20  # a table file of more than 1 MiB is not a schedule
 MAX_TIME: float = 3600.0  # [s] latest schedule time (the longest walk)
 MAX_DISTANCE: float = 1000.0  # [m] farthest waypoint from the start
+MAX_SHOWN_PATH: int = 300  # characters of a file name quoted whole in a refusal (longer: cut short)
 
 SCHEDULE_COLUMNS = ("t", "vx", "vy", "yaw_rate", "gait", "step_height", "stand_height")
 SCHEDULE_REQUIRED = 4
@@ -56,7 +57,10 @@ def _rows(name: str, raw: Any, columns: tuple[str, ...], required: int) -> list[
         if raw.strip() == "":
             return []
         shown = repr(raw)
-        data = read_bounded(Path(raw), f"{name} file", MAX_TABLE_BYTES, f"a {name} table is at most {limit} rows")
+        try:
+            data = read_bounded(Path(raw), f"{name} file", MAX_TABLE_BYTES, f"a {name} table is at most {limit} rows")
+        except UsageError as e:  # a name of thousands of characters is not quoted whole
+            raise UsageError(str(e).replace(shown, _show(raw))) if len(shown) > MAX_SHOWN_PATH else e from None
         try:
             text = data.decode("utf-8").removeprefix("\ufeff")
         except UnicodeDecodeError:

@@ -89,6 +89,10 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
         fig = _gait_diagram(result, loaded, when - 2 * p.period, when + 3 * p.period, text)
         fig.axes[0].axvline(when, color="k", ls="--", lw=1.0)
         out[f"gait_switch_{k + 1}"] = fig
+    show = (t >= start) & (t <= start + 4 * p.period)  # the foot forces over the gait diagram's cycles
+    if not show.any():
+        show = t >= 0
+    out["foot_forces"] = _forces_figure(result, show)
 
     # Commanded vs achieved body velocity (body frame), raw and averaged over one gait period.
     fig, axes = plots.figure(3, 1, figsize=(9, 8), sharex=True)
@@ -176,6 +180,46 @@ def _gait_diagram(result: ScenarioResult, loaded: np.ndarray, start: float, end:
     ax.set_xlim(t[show][0], t[show][-1])
     plots.legend_above(ax, ncol=2)
     fig.suptitle(_title(result, f"{text} (bars: measured stance; black: plan)"), fontsize=plots.TITLE_FONTSIZE)
+    return fig
+
+
+def _forces_figure(result: ScenarioResult, show: np.ndarray) -> Any:
+    """Each foot's normal and tangential contact force over the rows `show` (four cycles of the steady walk), over
+    its planned stance (shaded) and its static share of the weight."""
+    from hexabot_sim import plots
+
+    p, c, m = result.params, result.columns, result.metrics
+    legs = p.ROBOT.layout.legs
+    planned = result.extras["planned_stance"]
+    t = c["t"][show]
+    share = float(result.model.body_subtreemass[result.model.body("torso").id]) * 9.81 / len(legs)
+    top = max(float(max(c[f"force_{leg}"][show].max() for leg in legs)), 2 * share) * 1.05
+    fig, axes = plots.figure(len(legs), 1, figsize=(9, 1.5 * len(legs) + 1.5), sharex=True)
+    for i, leg in enumerate(legs):
+        ax = axes[i]
+        ax.fill_between(t, 0, top, where=planned[show, i], step="post", color="0.88",
+                        label="planned stance" if i == 0 else None)  # fmt: skip
+        ax.plot(t, c[f"force_{leg}"][show], color=LEG_COLOURS.get(leg, "k"), lw=1.0,
+                label="normal force" if i == 0 else None)  # fmt: skip
+        ax.plot(t, c[f"force_t_{leg}"][show], color="0.35", lw=0.7, ls="--",
+                label="tangential force" if i == 0 else None)  # fmt: skip
+        ax.axhline(share, color="k", lw=0.6, ls=":", label="weight / legs" if i == 0 else None)
+        ax.set_ylim(0, top)
+        ax.set_ylabel(f"{leg} [N]")
+    axes[-1].set_xlabel("t [s]")
+    axes[-1].set_xlim(t[0], t[-1])
+    plots.legend_above(axes[0], ncol=4)
+
+    def fmt(name: str, spec: str) -> str:
+        value = m[name].value
+        return "-" if value is None else format(value, spec)
+
+    text = (
+        f"foot forces: {fmt('foot_bounces', 'd')} bounces, impact ratio {fmt('touchdown_impact_ratio', '.2f')}, "
+        f"ripple {fmt('stance_force_ripple', '.1%')} of W/{len(legs)}, "
+        f"loaded {fmt('stance_loaded_fraction', '.1%')} of the planned stance"
+    )
+    fig.suptitle(_title(result, text), fontsize=plots.TITLE_FONTSIZE)
     return fig
 
 

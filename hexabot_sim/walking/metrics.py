@@ -34,7 +34,8 @@ def rpy_from_quat(quat: np.ndarray) -> np.ndarray:
 class Contacts:
     """Per recorded row: foot loads, contact-point slip, joint torques, body-ground contact."""
 
-    load: np.ndarray  # (n, n_legs) normal force of each foot [N]
+    load: np.ndarray  # (n, n_legs) normal force of each foot [N]: mj_contactForce's normal, summed over its contacts
+    tangential: np.ndarray  # (n, n_legs) tangential (friction) force of each foot [N]: |f_t| summed over its contacts
     slip: np.ndarray  # (n, n_legs) horizontal speed of the foot's material point at its contact [m/s]
     point: np.ndarray  # (n, n_legs, 3) contact point [m] (NaN where the foot is off the ground)
     torque: np.ndarray  # (n, 3 n_legs) joint actuator torque [N m]
@@ -62,6 +63,7 @@ def replay_contacts(
     torso_geom = model.geom("torso").id
     m = len(legs)
     load = np.zeros((n, m))
+    tangential = np.zeros((n, m))
     slip = np.zeros((n, m))
     point = np.full((n, m, 3), np.nan)
     torque = np.empty((n, 3 * m))
@@ -82,12 +84,13 @@ def replay_contacts(
                 continue
             mujoco.mj_contactForce(model, data, c, force)
             load[k, leg] += force[0]
+            tangential[k, leg] += math.hypot(force[1], force[2])
             # Velocity of the foot's material point at the contact: the tibia body's Jacobian at that point.
             mujoco.mj_jac(model, data, jacp, None, contact.pos, tibia[leg])
             v = jacp @ data.qvel
             slip[k, leg] = math.hypot(v[0], v[1])
             point[k, leg] = contact.pos
-    return Contacts(load=load, slip=slip, point=point, torque=torque, body_contact=body_contact)
+    return Contacts(load=load, tangential=tangential, slip=slip, point=point, torque=torque, body_contact=body_contact)
 
 
 def steady_window(p: WalkParams, t: np.ndarray) -> np.ndarray:
@@ -243,11 +246,9 @@ def terrain_metrics(
     t: np.ndarray,
     qpos: np.ndarray,
     controller: WalkingController,
-    bearing: np.ndarray,
-    planned: np.ndarray,
 ) -> dict[str, Metric]:
-    """Attitude relative to gravity, height above the local ground, progress, touchdowns, levelling limits, and how
-    often the feet the plan has in stance (`planned`, (n, n_legs)) carry load (`bearing`: loaded and planned)."""
+    """Attitude relative to gravity, height above the local ground, progress, touchdowns and levelling limits (how
+    often the stance feet carry load is a foot-force metric of every walk: walking/forces.py)."""
     window = steady_window(p, t)
     rpy = np.degrees(rpy_from_quat(qpos[window, 3:7]))  # z-y-x angles: roll and pitch are relative to gravity
     roll, pitch = rpy[:, 0], rpy[:, 1]
@@ -261,8 +262,6 @@ def terrain_metrics(
     events = [e for e in getattr(controller, "events", []) if e.planned > SETTLE_TIME]
     touched = np.array([e.touched - e.planned for e in events if math.isfinite(e.touched)])
     updates = getattr(controller, "updates", 0)
-    bearing, planned = bearing[window], planned[window]
-    per_leg = bearing.sum(axis=0) / np.maximum(planned.sum(axis=0), 1)
     return {
         "roll_peak": Metric(float(np.abs(roll).max()), "deg", "largest |body roll| relative to gravity (steady walk)"),
         "pitch_peak": Metric(float(np.abs(pitch).max()), "deg", "largest |body pitch| relative to gravity"),
@@ -299,15 +298,6 @@ def terrain_metrics(
         ),
         "feet_without_ground": Metric(
             len(events) - int(touched.size), "1", "swings that found no ground by the end of the leg's reach"
-        ),
-        "stance_loaded_fraction": Metric(
-            float(bearing.sum() / max(planned.sum(), 1)),
-            "1",
-            f"share of the planned stance time in which the feet carry load (> {LOADED_FRACTION:g} of a sixth of "
-            "the weight), all feet",
-        ),
-        "stance_loaded_fraction_min": Metric(
-            float(per_leg.min()), "1", "stance_loaded_fraction of the foot that carries load least often"
         ),
         "level_clipped_fraction": Metric(
             controller.clipped_updates / updates if updates else 0.0,

@@ -13,7 +13,7 @@ from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.kinematics import legged
 from hexabot_sim.params import allowed, apart, check_run_cost, param
 from hexabot_sim.simulate import step_count
-from hexabot_sim.terrain import Ground, Kerb, Limits, RoughPatch, Slope
+from hexabot_sim.terrain import Ground, Kerb, Limits, RoughPatch, Slope, Stairs
 from hexabot_sim.terrain.heightfield import CELL as HFIELD_CELL
 from hexabot_sim.terrain.heightfield import MARGIN as HFIELD_MARGIN
 from hexabot_sim.terrain.heightfield import MAX_POINTS as HFIELD_MAX_POINTS
@@ -30,7 +30,7 @@ SPEED_MARGIN: float = 0.9  # planned joint speeds must stay below this fraction 
 LOADED_FRACTION: float = 0.05  # a foot counts as loaded above this fraction of the robot's weight
 
 
-CSV_FIXED_COLUMNS: int = 13  # columns of timeseries.csv besides the legs' (4 each: contact, 3 joints)
+CSV_FIXED_COLUMNS: int = 13  # columns of timeseries.csv besides the legs' (6 each: contact, 2 forces, 3 joints)
 
 # Cost of a run for params.check_run_cost, measured on the 2-core development machine (10 s vs 60 s
 # walks): seconds per physics step (controller + mj_step: 25 us in bench.py, with a margin for a loaded
@@ -70,6 +70,8 @@ SLOPE_CAMERA_HEIGHT: float = 0.08  # [m] above the body's centre of mass (low: t
 # pitch on 1 cm rough ground (-2.0..-3.6 %, <= 1.2 deg unclipped; measured). A servo's 1.5 N*m gives a swinging leg
 # 336, 414 and 479 rad/s^2 (coxa, femur, tibia: torque over the mass-matrix diagonal, armature included).
 ACCELERATION_LIMIT: float = 200.0  # [rad/s^2] the limit, unless the planned cycle needs more
+
+REFLEX_LIFT: float = 1.0  # the elevator reflex lifts a blocked swing foot this many step heights higher
 
 ACCELERATION_HEADROOM: float = 1.2  # the limit is at least this times the planned cycle's peak joint acceleration
 
@@ -137,12 +139,26 @@ class WalkParams:
         0.0, "m", "a step up across the path (0: none)", ge=0.0, le=0.1, typo=("mm", 1e-3)
     )  # fmt: skip
     kerb_distance: float = param(0.5, "m", "distance of the kerb's edge ahead of the start", ge=0.3, le=100.0)
+    stairs_rise: float = param(
+        0.0, "m", "stairs across the path: the rise of each step (0: none)", ge=0.0, le=0.1, typo=("mm", 1e-3)
+    )
+    stairs_run: float = param(0.25, "m", "depth of each stair step along the path", ge=0.05, le=2.0)
+    stairs_count: int = param(3, "1", "steps up before the landing", ge=1, le=50)
+    stairs_distance: float = param(0.5, "m", "distance of the first step's edge ahead of the start", ge=0.3, le=100.0)
     touchdown: str = param(
         "planned", "", "swing ends at the planned phase, or when the foot's touch sensor fires (sensed)",
         choices=("planned", "sensed"),
     )  # fmt: skip
     level_body: str = param("off", "", "keep the body level from the IMU (on) or follow the ground (off)",
                             choices=("off", "on"))  # fmt: skip
+    reflex: str = param(
+        "on", "", "with sensed touchdown, a swing foot that meets an obstacle early lifts higher and reaches again "
+        "(elevator reflex)", choices=("on", "off"),
+    )  # fmt: skip
+    load_sharing: str = param(
+        "off", "", "stance legs yield to their touch sensors' force error, sharing the load (admittance), or hold "
+        "their planned height (off)", choices=("admittance", "off"),
+    )  # fmt: skip
     schedule: tuple = param(
         (), "", "commands in time: from each row's t [s] on, its twist (ramped in over a period), gait and heights "
         "(vx, vy, yaw_rate are then ignored)", table=(commands.SCHEDULE_ALLOWED, commands.read_schedule),
@@ -171,7 +187,7 @@ class WalkParams:
             )
         n = step_count(self.duration, self.timestep)
         step_s, row_s, row_bytes = RUN_COST
-        if self.on_ground() or self.slope_deg or self.roughness or self.kerb_height:
+        if self.on_ground() or self.slope_deg or self.roughness or self.kerb_height or self.stairs_rise:
             step_s = TERRAIN_STEP_SECONDS
         check_run_cost(
             n, n + 1, csv_columns(self.ROBOT), step_s, row_s, row_bytes, "lower 'duration' or raise 'timestep'"
@@ -329,10 +345,18 @@ def terrain(p: WalkParams) -> Ground:
     # stepped down off its end at 20.5 m, where the terrain's heights still had the kerb).
     reach = speed * p.duration / math.cos(math.radians(p.slope_deg)) + HFIELD_MARGIN
     kerb_length, kerb_width = max(KERB_LENGTH, reach - p.kerb_distance), max(KERB_WIDTH, 2 * reach)
+    obstacles: tuple[Kerb | Stairs, ...] = ()
+    if p.kerb_height:
+        obstacles += (Kerb(p.kerb_height, p.kerb_distance, along_xy, kerb_length, kerb_width),)
+    if p.stairs_rise:
+        landing = max(KERB_LENGTH, reach - p.stairs_distance - (p.stairs_count - 1) * p.stairs_run)
+        obstacles += (
+            Stairs(p.stairs_rise, p.stairs_run, p.stairs_count, p.stairs_distance, along_xy, landing, kerb_width),
+        )
     return Ground(
         slope=Slope(p.slope_deg, (float(uphill[0]), float(uphill[1])), p.slope_heading),
         rough=RoughPatch(p.roughness, p.seed, extent) if p.roughness else None,
-        obstacles=(Kerb(p.kerb_height, p.kerb_distance, along_xy, kerb_length, kerb_width),) if p.kerb_height else (),
+        obstacles=obstacles,
     )
 
 
@@ -363,18 +387,25 @@ def depth_range(p: WalkParams) -> tuple[float, float]:
 def largest_climbable_kerb(p: WalkParams) -> float:
     """Highest kerb [m] the walk can climb: a swing clears it and the legs can hold the cycle raised by it.
 
-    Clearing: the foot lifts step_height above the ground it left, and its centre must pass the kerb's
+    Clearing: the foot lifts step_height above the ground it left (with sensed touchdown and the elevator
+    reflex, a blocked foot lifts REFLEX_LIFT step heights more), and its centre must pass the kerb's
     edge at least a foot radius above it (measured: a 30 mm kerb with step_height 0.03 m made the
     robot stumble, 15 deg of roll; with 0.04 m it walked up cleanly). Holding: the whole planned cycle
     raised by the kerb height stays inside the reach and the joint ranges (depth_range).
     """
-    return min(p.step_height - p.ROBOT.layout.foot_radius, p.stand_height - depth_range(p)[0])
+    lift = p.step_height * (1.0 + REFLEX_LIFT) if reflex_on(p) else p.step_height
+    return min(lift - p.ROBOT.layout.foot_radius, p.stand_height - depth_range(p)[0])
+
+
+def reflex_on(p: WalkParams) -> bool:
+    """The walk's swing feet have the elevator reflex (it needs the touch sensors: sensed touchdown)."""
+    return p.touchdown == "sensed" and p.reflex == "on"
 
 
 def _climb_hint(p: WalkParams) -> str:
     """What raises the largest climbable kerb: the lift while the swing limits it, else the legs' reach above the
     stance (a deeper stance: it said "raise 'step_height'" where that could not help)."""
-    swing = p.step_height - p.ROBOT.layout.foot_radius
+    swing = p.step_height * (1.0 + REFLEX_LIFT if reflex_on(p) else 1.0) - p.ROBOT.layout.foot_radius
     return "raise 'step_height'" if swing <= p.stand_height - depth_range(p)[0] else "raise 'stand_height'"
 
 
@@ -388,7 +419,9 @@ def terrain_problem(p: WalkParams) -> str:
         friction=p.friction,
         climbable=largest_climbable_kerb(p) if ground.obstacles else math.inf,
         climbable_why=(
-            f"the foot lifts step_height = {p.step_height:g} m, less a foot radius of clearance; the legs reach "
+            f"the foot lifts step_height = {p.step_height:g} m"
+            + (f" and its reflex {REFLEX_LIFT:g} x more" if reflex_on(p) else "")
+            + ", less a foot radius of clearance; the legs reach "
             f"{(p.stand_height - depth_range(p)[0]) * 1000:.0f} mm above the stance"
         ) if ground.obstacles else "",
         climbable_hint=_climb_hint(p) + (" or lower 'roughness'" if p.roughness else "") if ground.obstacles else "",
@@ -488,4 +521,4 @@ def start_problem(p: WalkParams, ground: Ground) -> str:
 
 def csv_columns(robot: WalkingRobot) -> int:
     """Columns of a walk's timeseries.csv (the run-cost estimate counts them)."""
-    return CSV_FIXED_COLUMNS + 4 * robot.layout.n_legs
+    return CSV_FIXED_COLUMNS + 6 * robot.layout.n_legs

@@ -10,6 +10,7 @@ import numpy as np
 
 from hexabot_sim import models
 from hexabot_sim.control.commands import CommandSource
+from hexabot_sim.control.compliance import AdmittanceSettings
 from hexabot_sim.control.gait import GaitPlanner
 from hexabot_sim.control.resolved_rate import ResolvedRateGains
 from hexabot_sim.control.walker import GroundController, GroundSettings, WalkingController, WalkSettings
@@ -19,6 +20,7 @@ from hexabot_sim.walking import commands
 from hexabot_sim.walking.parameters import (
     ACCELERATION_HEADROOM,
     ACCELERATION_LIMIT,
+    REFLEX_LIFT,
     SCENE_EXTENT,
     SETTLE_TIME,
     SLOPE_CAMERA_DISTANCE,
@@ -44,8 +46,11 @@ def _perturbations(p: WalkParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return trims, com, friction
 
 
-def build_xml(p: WalkParams) -> str:
-    """The robot's scene with the run's options, stance, friction, perturbations and ground written in."""
+def build_xml(p: WalkParams, ground: Ground | None = None) -> str:
+    """The robot's scene with the run's options, stance, friction, perturbations and ground written in.
+
+    `ground`: another ground than the run's `terrain(p)` (a Gymnasium environment's patch, hexabot_sim/envs).
+    """
     layout = p.ROBOT.layout
     root = models.load_tree(p.ROBOT.scene)
     models.find(root, "option").attrib.update(timestep=models.fmt(p.timestep), integrator=p.integrator)
@@ -56,7 +61,7 @@ def build_xml(p: WalkParams) -> str:
     q0, _ = legged.ik_hip_batch(layout, legged.body_to_hip(layout, feet))
     z0 = p.stand_height + layout.foot_radius
     pose = [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0]
-    ground = terrain(p)
+    ground = terrain(p) if ground is None else ground
     if not ground.flat:
         pose, q0 = _add_terrain(root, p, ground)
     torso.set("pos", models.fmt(pose[:3]))
@@ -140,6 +145,7 @@ def make_controller(
     settings = WalkSettings(
         p.command(), settle_time=SETTLE_TIME, ramp_time=p.period if source is None else 0.0,
         heading_hold=p.heading_hold == "on", trims=tuple(trims.tolist()),
+        admittance=AdmittanceSettings() if p.load_sharing == "admittance" else None,
     )  # fmt: skip
     gains = ResolvedRateGains(p.task_gain, 0.01, 0.01, p.max_joint_speed, acceleration_limit(p))
     q0 = model.key("home").qpos[7:].reshape(-1, 3)
@@ -147,6 +153,6 @@ def make_controller(
         return WalkingController(model, data, p.ROBOT.layout, planner, gains, settings, q0, source)
     ground = GroundSettings(
         sensed=p.touchdown == "sensed", level=p.level_body == "on", stand_height=p.stand_height,
-        depth_range=depth_range(p),
+        depth_range=depth_range(p), reflex_lift=p.step_height * REFLEX_LIFT if p.reflex == "on" else 0.0,
     )  # fmt: skip
     return GroundController(model, data, p.ROBOT.layout, planner, gains, settings, q0, ground, source)

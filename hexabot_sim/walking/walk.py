@@ -16,6 +16,7 @@ from hexabot_sim.result import Live, Metric, Progress, ScenarioResult, at_home
 from hexabot_sim.simulate import simulate, step_count
 from hexabot_sim.walking import course
 from hexabot_sim.walking.figures import _moving_mean, figures
+from hexabot_sim.walking.forces import force_metrics
 from hexabot_sim.walking.metrics import (
     replay_contacts,
     rpy_from_quat,
@@ -59,7 +60,10 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     loaded = contacts.loaded(total_mass)
     planned = controller.planned_stance(t)  # (n, n_legs)
     if not ground.flat or p.on_ground():  # flat runs with the planned controller keep their metrics as they were
-        metrics |= terrain_metrics(p, ground, t, qpos, controller, loaded & planned, planned)
+        metrics |= terrain_metrics(p, ground, t, qpos, controller)
+    window = steady_window(p, t)
+    weight = total_mass * 9.81
+    metrics |= force_metrics(contacts.load[window], loaded[window], planned[window], p.timestep, weight, legs)
     extras = course_results(p, t, qpos, qvel, contacts, controller, total_mass, metrics)
     rpy = rpy_from_quat(qpos[:, 3:7])
     # Command in force at every row: the chunk's command (re-planned every chunk) times the ramp's factor.
@@ -76,11 +80,16 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     for i, leg in enumerate(legs):
         columns[f"contact_{leg}"] = loaded[:, i].astype(float)
     for i, leg in enumerate(legs):
+        columns[f"force_{leg}"] = contacts.load[:, i]
+    for i, leg in enumerate(legs):
+        columns[f"force_t_{leg}"] = contacts.tangential[:, i]
+    for i, leg in enumerate(legs):
         for j, joint in enumerate(legged.JOINTS):
             columns[f"q_{leg}_{joint}"] = qpos[:, 7 + 3 * i + j]
     units = {"t": "s", "x": "m", "y": "m", "z": "m", "roll": "rad", "pitch": "rad", "yaw": "rad"}
     units |= {"vx_body": "m/s", "vy_body": "m/s", "yaw_rate": "rad/s", "cmd_vx": "m/s", "cmd_vy": "m/s"}
     units |= {"cmd_yaw_rate": "rad/s"}
+    units |= {k: "N" for k in columns if k.startswith("force_")}
     units |= {k: ("1" if k.startswith("contact_") else "rad") for k in columns if k not in units}
     if p.schedule:  # each row's steady twist (needs the columns)
         more, table = course.schedule_metrics(p, t, columns, SETTLE_TIME)
@@ -110,7 +119,7 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
         extras={
             "contacts": contacts,
             "planned_stance": planned,
-            "window": steady_window(p, t),
+            "window": window,
             "terrain": ground,
             "touchdowns": getattr(controller, "events", []),
         }

@@ -582,16 +582,36 @@ def test_a_stop_request_during_the_publish_does_not_deny_the_published_run(tmp_p
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no staging or replaced folder left
 
 
+def _our_handlers_in(proc: subprocess.Popen, timeout: float = 60.0) -> bool:
+    """Waits until the child has installed hexabot-sim's stop handlers (its SIGTERM handler: Python itself catches
+    only SIGINT) and says whether MuJoCo was already loaded then.
+
+    The signal is sent a set time after this, not after the spawn: before it lies the interpreter's own start-up,
+    where no program can act, and on a loaded machine that start-up alone took over 0.12 s (a traceback from
+    importing runpy, seen under pytest -n 2).
+    """
+    status, maps = Path(f"/proc/{proc.pid}/status"), Path(f"/proc/{proc.pid}/maps")
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        assert proc.poll() is None, proc.communicate()
+        caught = int(re.search(r"SigCgt:\s*([0-9a-f]+)", status.read_text()).group(1), 16)
+        if caught & (1 << (signal.SIGTERM - 1)):
+            return "mujoco" in maps.read_text()
+        time.sleep(0.001)
+    raise AssertionError("the child never installed its stop handlers")
+
+
 def test_ctrl_c_while_loading_ends_in_one_line(tmp_path):
     """Ctrl-C while numpy and MuJoCo are still being imported: no traceback, exit 130, nothing written.
 
     (The interpreter's own start-up, the first ~30 ms, is before any code of ours can act.)
     """
     script = [sys.executable, "-c", "import sys; from hexabot_sim._entry import console; sys.argv[0] = 'x'; console()"]
-    for n, delay in enumerate((0.12, 0.18, 0.25, 0.32, 0.4)):
+    for n, delay in enumerate((0.0, 0.05, 0.1, 0.2, 0.3)):
         out = tmp_path / f"r{n}"
         argv = [*script, "run", "pendulum", "--set", "duration=30", "--no-plots", "--out", str(out)]
         proc = subprocess.Popen(argv, cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        assert not _our_handlers_in(proc), "the handlers came after MuJoCo was loaded"
         time.sleep(delay)
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=60)
@@ -604,12 +624,13 @@ def test_ctrl_c_while_loading_ends_in_one_line(tmp_path):
 def test_python_m_stopped_while_loading_ends_in_one_line(tmp_path, sig, code):
     """`python -m hexabot_sim` stopped while numpy and MuJoCo are still being imported: one line, exit 130 / 143
     (its __main__ imported the command line before any handler: a traceback, or a silent death by SIGTERM)."""
-    for n, delay in enumerate((0.12, 0.2, 0.28)):
+    for n, delay in enumerate((0.0, 0.08, 0.16)):
         out = tmp_path / f"r{n}"
         argv = [sys.executable, "-m", "hexabot_sim", "run", "pendulum", "--set", "duration=30", "--no-plots"]
         proc = subprocess.Popen(
             [*argv, "--out", str(out)], cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
         )
+        assert not _our_handlers_in(proc), "the handlers came after MuJoCo was loaded"
         time.sleep(delay)
         proc.send_signal(sig)
         _, err = proc.communicate(timeout=60)

@@ -137,3 +137,59 @@ def test_an_unusable_numba_cache_does_not_stop_a_walk(tmp_path):
     done = _warm_up_in_a_new_process(tmp_path / "empty", full_disk)
     assert done.returncode == 0 and done.stdout.split() == ["warm"], done.stderr
     assert "could not be used (OSError: [Errno 28] No space left on device)" in done.stderr
+
+
+def test_admittance_reference_is_the_least_norm_force_distribution():
+    """The stance feet's reference forces carry the total with no moment about the origin, and of all such
+    forces have the least weighted norm sum F_i^2 / w_i: numpy's least-squares solution of the same equations in
+    G = F / sqrt(w) (the pseudo-inverse of A sqrt(W))."""
+    from hexabot_sim.control import compliance_kernels
+
+    rng = np.random.default_rng(3)
+    for n in (3, 4, 5, 6):
+        x, y = rng.uniform(-0.2, 0.2, n), rng.uniform(-0.2, 0.2, n)
+        for w in (np.ones(n), rng.uniform(0.05, 1.0, n)):
+            out = np.empty(n)
+            compliance_kernels.reference(x, y, w, 17.0, out)
+            a = np.vstack([np.ones(n), x, y])  # (3, n): total force, moments about y and x
+            g = np.linalg.lstsq(a * np.sqrt(w), np.array([17.0, 0.0, 0.0]), rcond=None)[0]
+            np.testing.assert_allclose(out, np.sqrt(w) * g, rtol=1e-9, atol=1e-12)
+    out = np.empty(3)
+    line = np.array([0.0, 0.1, 0.2])
+    compliance_kernels.reference(line, line, np.ones(3), 9.0, out)  # collinear feet: equal shares
+    np.testing.assert_allclose(out, 3.0)
+
+
+def test_admittance_yields_to_an_overloaded_foot_and_springs_back():
+    """A constant force error e on a stance foot settles its offset at e / K (D dz/dt + K dz = e); in swing, with
+    no force, the offset returns to zero; the feed correction is K_task dz + dz/dt on the foot's z only."""
+    import mujoco
+
+    from hexabot_sim import models
+    from hexabot_sim.control import compliance_kernels
+    from hexabot_sim.control.compliance import Admittance, AdmittanceSettings
+    from hexabot_sim.robots.hexabot.walk import HEXABOT
+
+    layout = HEXABOT.layout
+    model = mujoco.MjModel.from_xml_path(str(models.model_path("hexabot_scene")))
+    settings = AdmittanceSettings(damping=600.0, stiffness=2000.0)
+    adm = Admittance(model, layout.legs, layout.hip_positions(), layout.yaws, 50.0, 0.002, 10.0, settings)
+    sensors = np.zeros(model.nsensordata)
+    adr = [model.sensor_adr[model.sensor(f"{leg}_touch").id] for leg in layout.legs]
+    row = layout.neutral_feet_hip().ravel()
+    stance = np.ones(6, dtype=bool)
+    sensors[adr] = 3.0
+    sensors[adr[0]] = 9.0  # lf carries 6 N more than the others
+    for _ in range(3000):  # 6 s: 20 times D / K = 0.3 s
+        extra = adm.update(sensors, row, stance)
+    ref = np.empty(6)
+    feet = layout.neutral_feet_body()
+    compliance_kernels.reference(feet[:, 0].copy(), feet[:, 1].copy(), np.ones(6), sensors[adr].sum(), ref)
+    np.testing.assert_allclose(adm.offsets, (sensors[adr] - ref) / 2000.0, atol=1e-8)
+    assert adm.offsets[0] > 0.002  # lifted: the overloaded foot yields
+    np.testing.assert_allclose(extra[2::3], 50.0 * adm.offsets, atol=1e-6)
+    assert not extra[0::3].any() and not extra[1::3].any()
+    sensors[adr] = 0.0
+    for _ in range(1000):
+        adm.update(sensors, row, np.zeros(6, dtype=bool))
+    np.testing.assert_allclose(adm.offsets, 0.0, atol=1e-9)

@@ -1,4 +1,4 @@
-"""Report 000"s Hexabot: six DH legs on a free body, walking on flat ground, slopes, rough ground, a kerb."""
+"""Report 000"s Hexabot: six DH legs on a free body, walking on flat ground, slopes, rough ground, a kerb, stairs."""
 
 from hexabot_sim.scenario import Scenario
 
@@ -55,6 +55,15 @@ SCENARIOS = (
             "level_body": "on",
             "duration": 14.0,
         },
+        smoke={"duration": 1.6},
+    ),
+    Scenario(
+        "hexabot-stairs",
+        "the hexabot climbs 3 stairs of 4 cm x 25 cm at 0.1 m/s with its default 3 cm step height: a foot that meets "
+        "a step's face lifts higher (elevator reflex; sensed touchdown, level body)",
+        "hexabot_sim.robots.hexabot.walk",
+        "HexabotParams",
+        defaults={"stairs_rise": 0.04, "touchdown": "sensed", "level_body": "on", "duration": 18.0},
         smoke={"duration": 1.6},
     ),
 )

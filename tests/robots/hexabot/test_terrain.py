@@ -1,6 +1,7 @@
 """The hexabot on real ground: the terrain itself, feet that find the ground, a levelled body, refusals."""
 
 import concurrent.futures
+import dataclasses
 import math
 import multiprocessing
 
@@ -83,8 +84,23 @@ def test_slope_normal_is_what_was_asked(heading, uphill):
         {"roughness": 0.01, "kerb_height": 0.02, "step_height": 0.04},
         {"slope_deg": 6.0, "kerb_height": 0.02},
         {"slope_deg": 6.0, "roughness": 0.005, "kerb_height": 0.02, "step_height": 0.04, "slope_heading": "downhill"},
+        {"stairs_rise": 0.02, "stairs_run": 0.2, "stairs_distance": 0.4},
+        {"stairs_rise": 0.02, "roughness": 0.005, "step_height": 0.04, "vy": 0.05, "seed": 2},
+        {"stairs_rise": 0.03, "stairs_count": 4, "slope_deg": 6.0, "step_height": 0.05, "slope_heading": "across"},
     ],
-    ids=["rough", "slope", "kerb", "rough-slope", "rough-slope-across", "kerb-on-rough", "kerb-on-slope", "all"],
+    ids=[
+        "rough",
+        "slope",
+        "kerb",
+        "rough-slope",
+        "rough-slope-across",
+        "kerb-on-rough",
+        "kerb-on-slope",
+        "all",
+        "stairs",
+        "stairs-on-rough-diagonal",
+        "stairs-on-slope",
+    ],
 )
 def test_ground_height_agrees_with_mujoco_ray_casting(overrides):
     """The height function every metric and figure uses is the ground MuJoCo collides (its own ray casting)."""
@@ -431,7 +447,44 @@ def test_a_3_cm_kerb_is_climbed():
     assert c["x"][-1] > 0.5 + 0.4  # the whole robot is past the kerb's edge
     above = c["z"][-1] - r.extras["terrain"].height(c["x"][-1], c["y"][-1])
     assert above == pytest.approx(0.098, abs=0.003)  # back at its height, now above the pavement
-    assert value(r, "largest_climbable_kerb") == pytest.approx(0.032)
+    # The reflex lifts a blocked foot one more step height: the lift is 2 x 40 mm less the foot radius.
+    assert value(r, "largest_climbable_kerb") == pytest.approx(0.072)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("reflex", ["on", "off"])
+def test_the_elevator_reflex_climbs_a_5_cm_kerb_with_the_default_step_height(reflex):
+    """Feet lifted 3 cm meet the 5 cm kerb's face: with the reflex they lift higher and climb it; without it the
+    robot stays at the kerb (its feet stub the face), and such a kerb is refused as above the largest climbable."""
+    overrides = {"kerb_height": 0.05, "touchdown": "sensed", "level_body": "on", "duration": 14.0, "reflex": reflex}
+    if reflex == "off":
+        with pytest.raises(UsageError, match="largest climbable, 22 mm"):
+            resolve(**overrides)
+        from hexabot_sim.walking import walk as walking
+
+        p = hexabot_parameters.WalkParams.__new__(scenario.HexabotParams)  # past the refusal: what would happen
+        for field in dataclasses.fields(scenario.HexabotParams):
+            object.__setattr__(p, field.name, overrides.get(field.name, field.default))
+        r = walking.run("hexabot-walk", p)
+        assert r.columns["x"][-1] < 0.5  # stuck in front of the kerb
+        return
+    r = walk(**overrides)
+    c = r.columns
+    assert not value(r, "fell")  # no plate contact, no tilt beyond 45 deg
+    assert c["x"][-1] > 0.5 + 0.4
+    above = c["z"][-1] - r.extras["terrain"].height(c["x"][-1], c["y"][-1])
+    assert above == pytest.approx(0.098, abs=0.003)
+
+
+@pytest.mark.slow
+def test_hexabot_stairs_climbs_three_steps():
+    r = scenario.run("hexabot-stairs", resolve(**registry.get("hexabot-stairs").defaults))
+    c = r.columns
+    assert not value(r, "fell")
+    assert c["x"][-1] > 0.5 + 2 * 0.25 + 0.4  # past the last step's edge, on the landing
+    above = c["z"][-1] - r.extras["terrain"].height(c["x"][-1], c["y"][-1])
+    assert r.extras["terrain"].height(c["x"][-1], c["y"][-1]) == pytest.approx(0.12)
+    assert above == pytest.approx(0.098, abs=0.003)
 
 
 @pytest.mark.parametrize("overrides", [{"roughness": 0.01}, {"kerb_height": 0.02}, {"slope_deg": 10.0}])
@@ -452,3 +505,24 @@ def test_a_rough_slope_is_walked():
     assert abs(value(r, "vx_error")) <= 0.04
     assert value(r, "roll_ptp") <= 2.0 and value(r, "pitch_ptp") <= 2.0
     assert r.extras["terrain"].label() == "8 deg slope (uphill), roughness 10 mm, seed 0"
+
+
+def test_stairs_heights_geoms_and_refusals():
+    """Stairs: step k's top is (k + 1) rise over [distance + k run, distance + (k + 1) run), then the landing; one
+    box per step in the model; a rise above the largest climbable step is refused with what to change."""
+    from hexabot_sim.terrain import Stairs
+
+    stairs = Stairs(0.02, 0.25, 3, distance=0.5, landing=2.0, width=1.0)
+    u = np.array([0.49, 0.51, 0.74, 0.76, 0.99, 1.01, 2.99, 3.01])
+    expected = [-np.inf, 0.02, 0.02, 0.04, 0.04, 0.06, 0.06, -np.inf]
+    assert stairs.surface(u, np.zeros(u.size)).tolist() == expected
+    assert stairs.surface(np.array([0.6]), np.array([0.51]))[0] == -np.inf  # beyond its width
+    p = resolve(stairs_rise=0.02, stairs_count=3, stairs_run=0.25)
+    model, _ = compiled(p)
+    tops = [model.geom(f"stairs_{k}").pos[2] + model.geom(f"stairs_{k}").size[2] for k in range(3)]
+    assert tops == pytest.approx([0.02, 0.04, 0.06], abs=1e-12)
+    assert hexabot_parameters.terrain(p).label() == "3 stairs of 20 mm x 250 mm at 0.5 m"
+    with pytest.raises(UsageError, match=r"stair rise is above the largest climbable step.*raise 'step_height'"):
+        resolve(stairs_rise=0.04)
+    with pytest.raises(UsageError, match="stair rise would hit the plate"):
+        resolve(stairs_rise=0.06, step_height=0.08, stand_height=0.05, vx=0.05)

@@ -1,0 +1,139 @@
+"""Twist-level control: the policy steers the verified gait controller (HexabotCommand-v0)."""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+
+import mujoco
+import numpy as np
+from gymnasium import spaces
+
+from hexabot_sim.control.gait import Command
+from hexabot_sim.control.walker import WalkingController
+from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward
+from hexabot_sim.envs.scene import check_range, robot_params
+from hexabot_sim.walking.parameters import SETTLE_TIME
+from hexabot_sim.walking.scene import acceleration_limit, make_controller
+
+TWIST_RANGE: tuple[tuple[float, float], ...] = ((-0.15, 0.15), (-0.1, 0.1), (-0.4, 0.4))  # vx, vy [m/s], yaw rate
+STEP_HEIGHT_RANGE: tuple[float, float] = (0.015, 0.045)  # [m] foot lift at mid-swing
+
+
+class LeggedCommandEnv(LeggedEnv):
+    """A legged robot walking with its gait controller (control/walker.py), the policy choosing the body twist and step
+    height the controller is given every control period (0.1 s): navigation and high-level learning on a gait that
+    is verified (docs/hexabot.md).
+
+    Action: Box(-1, 1, (4,)), float32: the twist (vx, vy [m/s], yaw rate [rad/s]) and the step height [m], each
+    mapped affinely from [-1, 1] onto its range (`twist_range`, `step_height_range`; a at 0 is mid-range). The
+    controller plans the next period with it (each foot continues from where it is; a swing keeps the landing
+    point chosen at its lift-off). Out-of-range actions are clipped; a wrong shape or a NaN is a ValueError.
+
+    Observation, reward, command and termination: as LeggedJointsEnv's (base.LeggedEnv). The controller is the
+    walk scenarios' (walking/scene.make_controller): planned touchdown on flat ground; on a slope or rough ground
+    the ground-finding one with sensed touchdown (and on a slope a level body), as hexabot-slope and hexabot-rough.
+    Every corner of the twist and step-height ranges must be a command the legs can deliver (checked as a walk's
+    parameters are: walking/parameters.feasibility). Registered with 200 steps of 0.1 s (20 s).
+
+    Args:
+        robot, terrain, slope_deg, roughness, command_range, reward, randomize_*, render_mode, width, height,
+            camera: as LeggedJointsEnv's.
+        frame_skip: Physics steps (2 ms each, the controller running at each) per action.
+        twist_range: (low, high) of the controller's vx, vy [m/s] and yaw rate [rad/s].
+        step_height_range: (low, high) of the step height [m].
+    """
+
+    def __init__(
+        self,
+        robot: str = "hexabot",
+        frame_skip: int = 50,
+        terrain: str = "flat",
+        slope_deg: float = 10.0,
+        roughness: float = 0.01,
+        command_range=COMMAND_RANGE,
+        twist_range=TWIST_RANGE,
+        step_height_range=STEP_HEIGHT_RANGE,
+        reward: Reward | dict | None = None,
+        randomize_friction: tuple[float, float] | None = None,
+        randomize_mass: tuple[float, float] | None = None,
+        randomize_servo_gain: tuple[float, float] | None = None,
+        render_mode: str | None = None,
+        width: int = 640,
+        height: int = 480,
+        camera: str = "track",
+    ) -> None:
+        try:
+            rows = [tuple(r) for r in twist_range]
+        except TypeError:
+            rows = []
+        if len(rows) != 3:
+            raise ValueError(f"twist_range must be three (low, high) pairs: vx, vy, yaw rate; got {twist_range!r}")
+        names = ("vx", "vy", "yaw rate")
+        ranges = [check_range(f"twist_range {n}", r, -1.0, 1.0) for n, r in zip(names, rows, strict=True)]
+        ranges.append(check_range("step_height_range", step_height_range, 0.002, 0.1))
+        self.ranges = np.array(ranges)  # (4, 2)
+        ground = {"flat": {}, "slope": {"touchdown": "sensed", "level_body": "on"}, "rough": {"touchdown": "sensed"}}
+        base = robot_params(robot, **ground.get(terrain, {}))
+        self.p_controller = self._controller_params(base)
+        super().__init__(
+            self.p_controller, frame_skip, terrain, slope_deg, roughness, command_range, reward, randomize_friction,
+            randomize_mass, randomize_servo_gain, render_mode, width, height, camera,
+        )  # fmt: skip
+        self.robot = robot
+        self.action_space = spaces.Box(-1.0, 1.0, (4,), np.float32)
+        self._action = np.zeros(4)
+        # Settle on the home stance up to the gait clock's start, in whole control periods.
+        self._settle_steps = math.ceil(round(SETTLE_TIME / self.p_controller.timestep) / self.frame_skip) * frame_skip
+        self.controller: WalkingController | None = None
+
+    def _controller_params(self, base):
+        """The walk parameters the controller is made with: every corner of the ranges checked for feasibility,
+        the one needing the largest joint-acceleration limit kept (the limit then covers them all)."""
+        best, best_limit = None, -1.0
+        for vx, vy, w, h in itertools.product(*self.ranges):
+            try:
+                p = dataclasses.replace(base, vx=float(vx), vy=float(vy), yaw_rate=float(w), step_height=float(h))
+            except ValueError as e:
+                raise ValueError(
+                    f"twist_range and step_height_range must hold commands the legs can deliver; at vx {vx:g}, "
+                    f"vy {vy:g}, yaw rate {w:g}, step height {h:g}: {e}"
+                ) from None
+            limit = acceleration_limit(p)
+            if limit > best_limit:
+                best, best_limit = p, limit
+        return best
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+        self._start(seed)
+        m, d = self.model, self.data
+        mujoco.mj_forward(m, d)
+        self.controller = controller = make_controller(self.p_controller, m, d)
+        # One plan per action, with the action's command, from the gait clock's start on.
+        controller.planner.max_chunk = self.frame_skip
+        controller.settings = dataclasses.replace(controller.settings, command=Command(), ramp_time=0.0)
+        for _ in range(self._settle_steps):
+            controller(m, d)
+            mujoco.mj_step(m, d)
+        self._warnings = int(self._warning.number)
+        return self._observe(), {"command": self.command.copy()}
+
+    def step(self, action) -> tuple[np.ndarray, float, bool, bool, dict]:
+        if self.controller is None:
+            raise RuntimeError("call reset() before step()")
+        a = self._check_action(action, 4)
+        np.clip(a, -1.0, 1.0, out=self._action)
+        lo, hi = self.ranges[:, 0], self.ranges[:, 1]
+        vx, vy, w, h = (lo + 0.5 * (self._action + 1.0) * (hi - lo)).tolist()
+        controller, m, d = self.controller, self.model, self.data
+        controller.settings = dataclasses.replace(controller.settings, command=Command(vx, vy, w))
+        controller.planner.step_height = h
+        for _ in range(self.frame_skip):
+            controller(m, d)
+            mujoco.mj_step(m, d)
+        obs = self._observe()
+        reward, terminated, info = self._reward(obs)
+        info["twist"] = (vx, vy, w)
+        info["step_height"] = h
+        return obs, reward, terminated, False, info

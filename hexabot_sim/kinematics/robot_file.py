@@ -1,0 +1,430 @@
+"""Robot files: a DH table in TOML (docs/robot-files.md), checked strictly, resolved into one RobotSpec."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import re
+import tomllib
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from hexabot_sim.errors import UsageError, printable
+from hexabot_sim.kinematics.chain import Joint, SerialChain
+
+# Every link length and offset named in [lengths] lies in [LENGTH_MIN, LENGTH_MAX] in [m] (those with zero = true
+# may also be 0): from a millimetre (below it an arm is a point and relative tolerances lose meaning) to ten metres
+# (no course robot is larger; products of lengths stay far from overflow and underflow).
+LENGTH_MIN: float = 1e-3
+LENGTH_MAX: float = 10.0
+MAX_FILE_BYTES: int = 1 << 20  # a robot file is a few hundred bytes; 1 MiB is far beyond any real table
+MAX_JOINTS: int = 7  # the joints (revolute or prismatic) of a chain; fixed rows do not count
+DISTANCE_MAX: float = 100.0  # |a|, |d|, |prismatic limit|, |tool and base xyz| typed as numbers, in [m]
+ANGLE_MAX_DEG: float = 360.0  # |theta|, |alpha|, |revolute limit|, |rpy| in [deg] (2π rad): beyond it, a unit slip
+MASS_MAX: float = 1000.0  # [kg] a link's optional mass
+NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_.-]{0,63}")  # robot, joint and length names: XML-, URDF- and file-safe
+
+TOP_KEYS = ("name", "summary", "convention", "angles", "lengths", "joints", "tool", "base")
+JOINT_KEYS = ("name", "type", "a", "alpha", "d", "theta", "lower", "upper", "mass")
+DH_KEYS = ("a", "alpha", "d", "theta")
+FRAME_KEYS = ("xyz", "rpy")
+LENGTH_KEYS = ("value", "doc", "zero")
+TYPES = ("revolute", "prismatic", "fixed")
+CONVENTIONS = ("standard", "modified")
+ANGLE_UNITS = ("deg", "rad")
+
+
+@dataclasses.dataclass(frozen=True)
+class Length:
+    """A named link length of a robot: `kin --set NAME=VALUE` changes it."""
+
+    default: float
+    doc: str
+    allow_zero: bool = False  # offsets may be 0; link lengths must be > 0
+
+    def allowed(self) -> str:
+        """The allowed values as text, e.g. '0 or 0.001 to 10 m'."""
+        return f"{'0 or ' if self.allow_zero else ''}{LENGTH_MIN:g} to {LENGTH_MAX:g} m"
+
+    def accepts(self, value: object) -> bool:
+        """Whether `value` is an allowed length in [m]."""
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            return False
+        return (self.allow_zero and value == 0) or LENGTH_MIN <= value <= LENGTH_MAX
+
+
+@dataclasses.dataclass(frozen=True)
+class RobotSpec:
+    """A robot, resolved once: its named lengths and the function that builds its chain from them.
+
+    Attributes:
+        name: Robot name.
+        summary: One line about it.
+        lengths: Named lengths (may be empty).
+        build: Lengths by name -> the chain.
+        joint_units: "rad" or "m" per joint.
+        fixed: Lengths by name -> the table's fixed rows after the last joint (shown by `kin`; already folded
+            into the chain's tool). None: no fixed rows.
+        masses: Each joint's link mass in [kg], or None for the model's default (solid aluminium cylinders).
+        source: The file it was read from, or None for a spec written in Python.
+        builtin: One of the package's robots (their closed-form IK and singular sets apply).
+    """
+
+    name: str
+    summary: str
+    lengths: Mapping[str, Length]
+    build: Callable[[Mapping[str, float]], SerialChain]
+    joint_units: tuple[str, ...]
+    fixed: Callable[[Mapping[str, float]], tuple[Joint, ...]] | None = None
+    masses: tuple[float | None, ...] = ()
+    source: str | None = None
+    builtin: bool = False
+
+    def values(self, overrides: Mapping[str, float] | None = None) -> dict[str, float]:
+        """Every length by name in [m]: the defaults replaced by `overrides` (validated)."""
+        values = {name: spec.default for name, spec in self.lengths.items()}
+        for name, value in (overrides or {}).items():
+            if name not in self.lengths:
+                known = ", ".join(self.lengths) or "none (the file has no [lengths])"
+                raise UsageError(f"unknown length '{name}' for {self.name}; known: {known}")
+            length = self.lengths[name]
+            if not length.accepts(value):
+                raise UsageError(f"length '{name}' of {self.name} must be {length.allowed()}; got {value!r}")
+            values[name] = float(value)
+        return values
+
+    def chain(self, overrides: Mapping[str, float] | None = None) -> SerialChain:
+        """The chain with default lengths replaced by `overrides` (validated)."""
+        return self.build(self.values(overrides))
+
+    def fixed_rows(self, overrides: Mapping[str, float] | None = None) -> tuple[Joint, ...]:
+        """The fixed rows after the last joint (e.g. the leg's foot), () if none."""
+        return () if self.fixed is None else self.fixed(self.values(overrides))
+
+
+# ---------------------------------------------------------------------------------------------------- reading
+
+
+def read(path: str | os.PathLike[str], *, builtin: bool = False) -> RobotSpec:
+    """The robot in a TOML robot file, checked: any problem is one UsageError line naming the file and the field.
+
+    Args:
+        path: The file.
+        builtin: True for the package's own robots (enables their closed forms).
+
+    Raises:
+        UsageError: Unreadable, larger than MAX_FILE_BYTES, not UTF-8 or not TOML, or any field wrong.
+    """
+    shown = printable(os.fspath(path))
+    try:
+        with open(path, "rb") as f:
+            data = f.read(MAX_FILE_BYTES + 1)
+    except IsADirectoryError:
+        raise UsageError(f"robot file {shown}: is a folder, not a file") from None
+    except OSError as e:
+        raise UsageError(f"robot file {shown}: cannot be read ({e.strerror or e})") from None
+    if len(data) > MAX_FILE_BYTES:
+        raise UsageError(f"robot file {shown}: larger than {MAX_FILE_BYTES // 1024} KiB; a robot file is a DH table")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise UsageError(f"robot file {shown}: not UTF-8 text (byte {e.start})") from None
+    return parse(text, shown, builtin=builtin)
+
+
+def parse(text: str, source: str = "<robot file>", *, builtin: bool = False) -> RobotSpec:
+    """The robot described by TOML `text`; `source` names it in messages (see `read`)."""
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise UsageError(f"robot file {source}: not valid TOML: {e}") from None
+    return _Reader(source, doc).spec(builtin)
+
+
+class _Reader:
+    """Checks one parsed document; every message starts "robot file FILE: ..."."""
+
+    def __init__(self, source: str, doc: dict[str, Any]) -> None:
+        self.source = source
+        self.doc = doc
+
+    def fail(self, where: str, message: str) -> UsageError:
+        return UsageError(f"robot file {self.source}: {where}{': ' if where else ''}{message}")
+
+    def keys(self, table: Any, allowed: tuple[str, ...], where: str, required: tuple[str, ...] = ()) -> dict:
+        if not isinstance(table, dict):
+            raise self.fail(where, f"must be a table; got {type(table).__name__}")
+        for key in table:
+            if key not in allowed:
+                raise self.fail(where, f"unknown key '{printable(key)}'; allowed: {', '.join(allowed)}")
+        for key in required:
+            if key not in table:
+                raise self.fail(where, f"missing '{key}' (required: {', '.join(required)})")
+        return table
+
+    def choice(self, table: dict, key: str, options: tuple[str, ...], where: str) -> str:
+        value = table[key]
+        if value not in options:
+            raise self.fail(where, f"'{key}' must be one of {', '.join(options)}; got {_shown(value)}")
+        return value
+
+    def name(self, value: Any, where: str, what: str) -> str:
+        if not isinstance(value, str) or not NAME.fullmatch(value):
+            raise self.fail(
+                where,
+                f"{what} must be 1 to 64 letters, digits, _ . - (starting with a letter or _); got {_shown(value)}",
+            )
+        return value
+
+    def number(self, value: Any, where: str, key: str, unit: str, limit: float) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self.fail(where, f"'{key}' must be a number [{unit}]; got {_shown(value)}")
+        if not math.isfinite(value):
+            raise self.fail(where, f"'{key}' must be a finite number [{unit}]; got {value}")
+        if abs(value) > limit:
+            hint = ""
+            if unit == "rad":
+                hint = ' (the file says angles = "rad"; for degrees write angles = "deg")'
+            raise self.fail(where, f"'{key}' = {value:g} {unit} is outside the allowed ±{limit:g} {unit}{hint}")
+        return float(value)
+
+    def spec(self, builtin: bool) -> RobotSpec:
+        doc = self.keys(self.doc, TOP_KEYS, "", ("name", "convention", "angles", "joints"))
+        name = self.name(doc["name"], "", "'name'")
+        summary = doc.get("summary", "")
+        if not isinstance(summary, str) or "\n" in summary or len(summary) > 200:
+            raise self.fail("", f"'summary' must be one line of text (at most 200 characters); got {_shown(summary)}")
+        convention = self.choice(doc, "convention", CONVENTIONS, "")
+        self.unit = self.choice(doc, "angles", ANGLE_UNITS, "")
+        self.angle_max = ANGLE_MAX_DEG if self.unit == "deg" else math.radians(ANGLE_MAX_DEG)
+        self.lengths = self.named_lengths(doc.get("lengths", {}))
+        rows = doc["joints"]
+        if not isinstance(rows, list) or not rows:
+            raise self.fail("", "'joints' must be one or more [[joints]] tables")
+        joints = [self.row(i, row) for i, row in enumerate(rows, start=1)]
+        moving = [j for j in joints if j["type"] != "fixed"]
+        if not moving:
+            raise self.fail("", "no joint: a chain needs at least one revolute or prismatic joint")
+        if len(moving) > MAX_JOINTS:
+            raise self.fail("", f"{len(moving)} joints; at most {MAX_JOINTS} (fixed rows not counted)")
+        last = max(i for i, j in enumerate(joints) if j["type"] != "fixed")
+        for i, j in enumerate(joints[:last]):
+            if j["type"] == "fixed":
+                raise self.fail(self.where(i + 1, j["name"]), "a fixed row may only follow the last joint")
+        names = [j["name"] for j in joints]
+        for i, n in enumerate(names):
+            if names.index(n) != i:
+                raise self.fail(self.where(i + 1, n), f"the name '{n}' is used twice; joint names must be unique")
+            if n in self.lengths:
+                raise self.fail(self.where(i + 1, n), f"the name '{n}' is also a length; use distinct names")
+        tool = self.frame(doc.get("tool"), "[tool]")
+        base = self.frame(doc.get("base"), "[base]")
+        rows_t = tuple(joints)
+
+        def build(values: Mapping[str, float]) -> SerialChain:
+            return _build(name, convention, rows_t, tool, base, values, self.source)
+
+        def fixed(values: Mapping[str, float]) -> tuple[Joint, ...]:
+            return tuple(_joint(row, values) for row in rows_t if row["type"] == "fixed")
+
+        spec = RobotSpec(
+            name=name,
+            summary=summary,
+            lengths=dict(self.lengths),
+            build=build,
+            joint_units=tuple("m" if j["type"] == "prismatic" else "rad" for j in moving),
+            fixed=fixed if len(moving) < len(joints) else None,
+            masses=tuple(j.get("mass") for j in moving),
+            source=self.source,
+            builtin=builtin,
+        )
+        _check_not_degenerate(spec, self.source)
+        return spec
+
+    def where(self, index: int, name: Any = None) -> str:
+        return f"joint {index}" + (f" ('{name}')" if isinstance(name, str) and NAME.fullmatch(name) else "")
+
+    def named_lengths(self, table: Any) -> dict[str, Length]:
+        table = self.keys(table, tuple(table) if isinstance(table, dict) else (), "[lengths]")
+        out = {}
+        for key, entry in table.items():
+            where = f"[lengths] {self.name(key, '[lengths]', 'a length name')}"
+            if isinstance(entry, dict):
+                entry = self.keys(entry, LENGTH_KEYS, where, ("value",))
+            else:
+                entry = {"value": entry}
+            doc = entry.get("doc", "")
+            zero = entry.get("zero", False)
+            if not isinstance(doc, str) or "\n" in doc:
+                raise self.fail(where, f"'doc' must be one line of text; got {_shown(doc)}")
+            if not isinstance(zero, bool):
+                raise self.fail(where, f"'zero' must be true or false; got {_shown(zero)}")
+            value = self.number(entry["value"], where, "value", "m", LENGTH_MAX)
+            length = Length(value, doc, zero)
+            if not length.accepts(value):
+                raise self.fail(where, f"'value' must be {length.allowed()}; got {value:g}")
+            out[key] = length
+        return out
+
+    def row(self, index: int, row: Any) -> dict[str, Any]:
+        where = self.where(index, row.get("name") if isinstance(row, dict) else None)
+        row = self.keys(row, JOINT_KEYS, where, ("name", "type", *DH_KEYS))
+        name = self.name(row["name"], where, "'name'")
+        kind = self.choice(row, "type", TYPES, where)
+        out: dict[str, Any] = {"name": name, "type": kind, "where": where}
+        for key in DH_KEYS:
+            if key in ("a", "d"):
+                out[key] = self.distance(row[key], where, key)
+            else:
+                out[key] = self.angle(row[key], where, key)
+        has = [key in row for key in ("lower", "upper")]
+        if kind == "fixed" and (any(has) or "mass" in row):
+            raise self.fail(where, "a fixed row takes no 'lower', 'upper' or 'mass'")
+        if has[0] != has[1]:
+            raise self.fail(
+                where, f"give both 'lower' and 'upper', or neither; got only '{'lower' if has[0] else 'upper'}'"
+            )
+        if all(has):
+            for key in ("lower", "upper"):
+                out[key] = (
+                    self.distance(row[key], where, key) if kind == "prismatic" else self.angle(row[key], where, key)
+                )
+            lo, hi = _value(out["lower"], self.lengths), _value(out["upper"], self.lengths)
+            if not lo < hi:
+                unit = "m" if kind == "prismatic" else self.unit
+                shown_lo, shown_hi = (lo, hi) if unit != "deg" else (math.degrees(lo), math.degrees(hi))
+                raise self.fail(where, f"'lower' ({shown_lo:g} {unit}) must be less than 'upper' ({shown_hi:g} {unit})")
+        if "mass" in row:
+            mass = self.number(row["mass"], where, "mass", "kg", MASS_MAX)
+            if not mass > 0:
+                raise self.fail(where, f"'mass' must be > 0 kg; got {mass:g}")
+            out["mass"] = mass
+        return out
+
+    def distance(self, value: Any, where: str, key: str) -> float | tuple[float, str]:
+        """A number in [m], or a reference "name" / "-name" to a length: (sign, name)."""
+        if isinstance(value, str):
+            sign, ref = (-1.0, value[1:]) if value.startswith("-") else (1.0, value)
+            if ref not in self.lengths:
+                known = ", ".join(self.lengths) or "none: the file has no [lengths]"
+                raise self.fail(where, f"'{key}' names the length {_shown(ref)}, which [lengths] lacks; known: {known}")
+            return (sign, ref)
+        return self.number(value, where, key, "m", DISTANCE_MAX)
+
+    def angle(self, value: Any, where: str, key: str) -> float:
+        """A number in the file's angle unit -> [rad]."""
+        number = self.number(value, where, key, self.unit, self.angle_max)
+        return math.radians(number) if self.unit == "deg" else number
+
+    def frame(self, table: Any, where: str) -> tuple[tuple[Any, ...], np.ndarray]:
+        """[tool] or [base]: (xyz as distances, the rotation (3, 3) of rpy, R = Rz(yaw) Ry(pitch) Rx(roll))."""
+        if table is None:
+            return (0.0, 0.0, 0.0), np.eye(3)
+        table = self.keys(table, FRAME_KEYS, where)
+        xyz = table.get("xyz", [0.0, 0.0, 0.0])
+        rpy = table.get("rpy", [0.0, 0.0, 0.0])
+        for key, value in (("xyz", xyz), ("rpy", rpy)):
+            if not isinstance(value, list) or len(value) != 3:
+                raise self.fail(where, f"'{key}' must be a list of 3 numbers; got {_shown(value)}")
+        position = tuple(self.distance(v, where, f"xyz[{i}]") for i, v in enumerate(xyz))
+        angles = [self.number(v, where, f"rpy[{i}]", self.unit, self.angle_max) for i, v in enumerate(rpy)]
+        cs = [_cos_sin(v, self.unit) for v in angles]
+        return position, _rz(*cs[2]) @ _ry(*cs[1]) @ _rx(*cs[0]) + 0.0
+
+
+def _shown(value: Any) -> str:
+    """A TOML value for a message, short and on one line."""
+    text = printable(repr(value))
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _cos_sin(angle: float, unit: str) -> tuple[float, float]:
+    """cos and sin, exact at quarter turns (a tool turned by 90 deg has exact 0 and 1 entries)."""
+    quarter = angle / (90.0 if unit == "deg" else math.pi / 2)
+    if quarter == round(quarter):
+        return ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0))[round(quarter) % 4]
+    rad = math.radians(angle) if unit == "deg" else angle
+    return math.cos(rad), math.sin(rad)
+
+
+def _rx(c: float, s: float) -> np.ndarray:
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def _ry(c: float, s: float) -> np.ndarray:
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def _rz(c: float, s: float) -> np.ndarray:
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _value(field: float | tuple[float, str], values: Mapping[str, Any]) -> float:
+    """A distance field's value in [m]: a number, or ± a named length (a Length's default, or a value by name)."""
+    if isinstance(field, tuple):
+        sign, ref = field
+        value = values[ref]
+        return sign * (value.default if isinstance(value, Length) else value)
+    return field
+
+
+def _joint(row: Mapping[str, Any], values: Mapping[str, float]) -> Joint:
+    kind = "revolute" if row["type"] == "fixed" else row["type"]
+    lower = upper = None
+    if "lower" in row:
+        lower, upper = _value(row["lower"], values), _value(row["upper"], values)
+    return Joint(row["name"], kind, row["theta"], _value(row["d"], values), _value(row["a"], values), row["alpha"],
+                 lower, upper)  # fmt: skip
+
+
+def _transform(frame: tuple[tuple[Any, ...], np.ndarray], values: Mapping[str, float]) -> np.ndarray:
+    xyz, rot = frame
+    t = np.eye(4)  # (4, 4)
+    t[:3, :3] = rot
+    t[:3, 3] = [_value(v, values) for v in xyz]
+    return t + 0.0  # no -0.0 entries (they would print as -0.0 in JSON)
+
+
+def _build(
+    name: str,
+    convention: str,
+    rows: tuple[dict[str, Any], ...],
+    tool: tuple[tuple[Any, ...], np.ndarray],
+    base: tuple[tuple[Any, ...], np.ndarray],
+    values: Mapping[str, float],
+    source: str,
+) -> SerialChain:
+    """The chain: the joints' rows; fixed rows after the last joint are multiplied into the tool."""
+    joints = tuple(_joint(row, values) for row in rows if row["type"] != "fixed")
+    tool_t = _transform(tool, values)
+    fixed = [_joint(row, values).transform(0.0, convention) for row in rows if row["type"] == "fixed"]
+    if fixed:
+        tool_t = np.linalg.multi_dot([*fixed, tool_t]) if len(fixed) > 1 else fixed[0] @ tool_t
+        tool_t = tool_t + 0.0
+    return SerialChain(name, joints, convention, base=_transform(base, values), tool=tool_t)
+
+
+def _check_not_degenerate(spec: RobotSpec, source: str) -> None:
+    """A chain whose every link, offset, stroke and tool offset is zero cannot move its tool: refused."""
+    chain = spec.chain()
+    size = sum(abs(j.a) + abs(j.d) for j in chain.joints) + float(np.linalg.norm(chain.tool[:3, 3]))
+    size += sum(abs(j.upper or 0.0) + abs(j.lower or 0.0) for j in chain.joints if j.prismatic)
+    if size == 0 and not any(j.prismatic for j in chain.joints):
+        raise UsageError(
+            f"robot file {source}: every link length, offset and tool offset is 0, so the tool point never moves; "
+            "give at least one 'a', 'd' or tool 'xyz' a length"
+        )
+
+
+# --------------------------------------------------------------------------------------------- the package's
+
+ARMS_DIR = Path(__file__).resolve().parent / "arms"  # the package's robot files (they ship in the wheel)
+
+
+def builtin_files() -> dict[str, Path]:
+    """The package's robot files by name (file stem)."""
+    return {p.stem: p for p in sorted(ARMS_DIR.glob("*.toml"))}

@@ -1,0 +1,98 @@
+"""hexabot-sim export ROBOT|FILE --mjcf OUT.xml --urdf OUT.urdf: files written whole, never replaced without --force."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+from helpers import cli
+
+import hexabot_sim as hs
+from hexabot_sim import api
+from hexabot_sim.errors import UsageError
+from hexabot_sim.kinematics import robots
+
+SLIDE = """\
+name = "slide"
+convention = "standard"
+angles = "deg"
+[[joints]]
+name = "q1"
+type = "revolute"
+a = 0.3
+alpha = 0.0
+d = 0.0
+theta = 0.0
+[[joints]]
+name = "s"
+type = "prismatic"
+a = 0.0
+alpha = 0.0
+d = 0.1
+theta = 0.0
+"""
+
+
+def test_export_writes_both_models_and_they_compile(tmp_path, capsys):
+    mjcf, urdf = tmp_path / "scara.xml", tmp_path / "scara.urdf"
+    code, out, err = cli(capsys, "export", "scara", "--mjcf", str(mjcf), "--urdf", str(urdf), "--set", "a1=0.4")
+    assert code == 0, err
+    assert out.splitlines() == [f"wrote {mjcf}", f"wrote {urdf}"] and sorted(p.name for p in tmp_path.iterdir()) == [
+        "scara.urdf", "scara.xml"]  # fmt: skip
+    chain = robots.get("scara").chain({"a1": 0.4})
+    q = np.array([0.3, -0.2, 0.1, 0.5])
+    for path, frame in ((mjcf, "site"), (urdf, "body")):
+        model = mujoco.MjModel.from_xml_path(str(path))
+        data = mujoco.MjData(model)
+        data.qpos[:] = q
+        mujoco.mj_kinematics(model, data)
+        position = data.site("tool").xpos if frame == "site" else data.body("tool").xpos
+        np.testing.assert_allclose(position, chain.fk(q)[:3, 3], atol=1e-12)
+
+
+def test_an_existing_file_is_replaced_only_with_force(tmp_path, capsys):
+    mjcf = tmp_path / "arm.xml"
+    mjcf.write_text("mine")
+    code, out, err = cli(capsys, "export", "elbow", "--mjcf", str(mjcf))
+    assert code == 2 and out == "" and err.count("\n") == 1 and "exists; add --force" in err
+    assert mjcf.read_text() == "mine"
+    code, out, err = cli(capsys, "export", "elbow", "--mjcf", str(mjcf), "--force")
+    assert code == 0 and mjcf.read_text().startswith("<!--") and len(list(tmp_path.iterdir())) == 1
+
+
+def test_nothing_is_written_when_one_model_is_refused(tmp_path, capsys):
+    robot = tmp_path / "slide.toml"
+    robot.write_text(SLIDE)
+    mjcf, urdf = tmp_path / "out.xml", tmp_path / "out.urdf"
+    code, _, err = cli(capsys, "export", str(robot), "--mjcf", str(mjcf), "--urdf", str(urdf))
+    assert code == 2 and err.count("\n") == 1 and "joint 's' is prismatic without 'lower' and 'upper'" in err
+    assert not mjcf.exists() and not urdf.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["slide.toml"]
+    code, _, _ = cli(capsys, "export", str(robot), "--mjcf", str(mjcf))  # the MJCF alone needs no stroke
+    assert code == 0 and mjcf.exists()
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["export", "elbow"], "export needs an output: --mjcf FILE and/or --urdf FILE"),
+        (["export", "puma", "--mjcf", "x.xml"], "unknown robot 'puma'"),
+        (
+            ["export", "elbow", "--mjcf", "no/such/folder/x.xml"],
+            "the folder 'no/such/folder' for the MJCF file does not",
+        ),
+        (["export", "elbow", "--mjcf", "same", "--urdf", "same"], "--mjcf and --urdf name the same file 'same'"),
+        (["export", "elbow", "--mjcf", "x.xml", "--set", "a2=0"], "length 'a2' of elbow must be 0.001 to 10 m"),
+    ],
+)
+def test_bad_exports_are_one_line(tmp_path, capsys, monkeypatch, argv, message):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = cli(capsys, *argv)
+    assert code == 2 and out == "" and err.count("\n") == 1 and message in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_api_exports_a_spec_and_refuses_a_folder(tmp_path):
+    (path,) = hs.export(robots.get("leg"), urdf=tmp_path / "leg.urdf", lengths={"l3": 0.12})
+    assert path == tmp_path / "leg.urdf" and 'name="tool"' in path.read_text()
+    with pytest.raises(UsageError, match="is a folder"):
+        api.export("leg", mjcf=tmp_path)

@@ -1,0 +1,156 @@
+"""The joint-level environments against Gymnasium's checker, MuJoCo's own frames and the bounds of their spaces."""
+
+import math
+
+import numpy as np
+import pytest
+
+gymnasium = pytest.importorskip("gymnasium", reason="the Gymnasium environments need gymnasium (the rl extra)")
+
+from gymnasium.utils.env_checker import check_env  # noqa: E402
+
+import hexabot_sim.envs  # noqa: E402, F401 (registers the ids)
+from hexabot_sim.envs.joints import LeggedJointsEnv  # noqa: E402
+
+
+@pytest.mark.parametrize("robot", ["hexabot", "quadbot"])
+def test_check_env_passes_with_frames(robot, gl_backend):
+    name = f"hexabot_sim/{robot.capitalize()}Joints-v0"
+    env = gymnasium.make(name, render_mode="rgb_array", width=64, height=48).unwrapped  # with its spec
+    check_env(env)  # spaces, reset/step API, seeding determinism, render (every mode), close
+    env.reset(seed=3)
+    frame = env.render()
+    assert frame.shape == (48, 64, 3) and frame.dtype == np.uint8 and frame.std() > 0
+    env.close()
+
+
+def test_spaces_have_the_documented_sizes():
+    for robot, legs in (("hexabot", 6), ("quadbot", 4)):
+        env = LeggedJointsEnv(robot=robot)
+        assert env.action_space.shape == (3 * legs,)
+        assert env.observation_space.shape == (12 + 7 * legs,)
+        assert env.obs_slices["command"].stop == 12 + 7 * legs
+        assert env.metadata["render_fps"] == 50  # 10 steps of 2 ms
+
+
+def test_same_seed_same_episode_bit_for_bit():
+    def episode(seed):
+        env = LeggedJointsEnv(terrain="rough", randomize_friction=(0.7, 1.3), randomize_servo_gain=(0.8, 1.2))
+        env.action_space.seed(seed)
+        obs, _ = env.reset(seed=seed)
+        rows, rewards = [obs], []
+        for _ in range(20):
+            obs, reward, *_ = env.step(env.action_space.sample())
+            rows.append(obs)
+            rewards.append(reward)
+        return np.array(rows), np.array(rewards)
+
+    a, b, c = episode(7), episode(7), episode(8)
+    assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+    assert not np.array_equal(a[0], c[0])
+
+
+def test_gravity_and_joints_are_mujocos_own():
+    """The observation against MuJoCo's body frame (xmat) and state, on a slope where the body starts tilted.
+
+    The sensors are read as MuJoCo computed them in the last physics step, before its integration, as the body's
+    frame (xmat); the joint angles and speeds are the state after it.
+    """
+    env = LeggedJointsEnv(terrain="slope", slope_deg=10.0)
+    obs, _ = env.reset(seed=0)
+    obs, *_ = env.step(env.action_space.sample())
+    d = env.data
+    rot = d.xmat[env.model.body("torso").id].reshape(3, 3)
+    s = env.obs_slices
+    assert np.allclose(obs[s["gravity"]], rot.T @ [0.0, 0.0, -1.0], rtol=0, atol=1e-12)
+    assert math.degrees(math.acos(-obs[2])) == pytest.approx(10.0, abs=2.0)  # parallel to the 10 deg slope
+    assert np.array_equal(obs[s["joint_angles"]], d.qpos[7:])
+    assert np.array_equal(obs[s["joint_speeds"]], d.qvel[6:])
+    assert np.array_equal(obs[s["command"]], env.command)
+
+
+def test_standing_reads_the_weight_on_the_feet():
+    """At rest the touch sensors carry the robot's weight and the accelerometer reads +g up (specific force)."""
+    env = LeggedJointsEnv()
+    obs, _ = env.reset(seed=0)
+    m = env.model
+    weight = float(m.body_subtreemass[m.body("torso").id]) * 9.81
+    assert obs[env.obs_slices["foot_touch"]].sum() == pytest.approx(weight, rel=0.02)
+    assert obs[8] == pytest.approx(9.81, rel=0.01)
+
+
+@pytest.mark.parametrize("ground", [{"terrain": "rough", "roughness": 0.03}, {"terrain": "slope", "slope_deg": 30.0}])
+def test_action_bounds_and_the_worst_ground_stay_finite(ground):
+    """Bang-bang actions at the bounds (and beyond them: clipped) on the roughest ground and the steepest slope:
+    no NaN, ever."""
+    env = LeggedJointsEnv(**ground)
+    for seed in range(2):
+        obs, _ = env.reset(seed=seed)
+        for k in range(60):
+            action = np.full(18, 1.0 if (k // 5) % 2 else -1.0) * (3.0 if k % 7 == 0 else 1.0)
+            obs, reward, terminated, _, info = env.step(action)
+            assert np.isfinite(obs).all() and math.isfinite(reward)
+            if terminated:
+                assert info["fell"] or info["diverged"]
+                break
+
+
+def test_target_mapping_reaches_the_servo_ranges():
+    env = LeggedJointsEnv()
+    env.reset(seed=0)
+    lo, hi = env.model.actuator_ctrlrange[:18].T
+    env.step(np.full(18, -1.0))
+    assert np.array_equal(env.data.ctrl[:18], lo)
+    env.step(np.full(18, 1.0))
+    assert np.allclose(env.data.ctrl[:18], hi, rtol=0, atol=1e-12)
+    assert not env.data.ctrl[18:].any()  # the velocity servos: pure damping
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "words"),
+    [
+        ({"terrain": "stairs"}, "unknown terrain 'stairs'; known: flat, slope, rough"),
+        ({"frame_skip": -1}, "frame_skip must be an integer >= 1"),
+        ({"frame_skip": 0}, "frame_skip must be an integer >= 1"),
+        ({"robot": "octobot"}, "unknown robot 'octobot'; known: hexabot, quadbot"),
+        ({"terrain": "rough", "roughness": 0.5}, "roughness must be > 0 and <= 0.03 m"),
+        ({"randomize_mass": (1.2, 0.8)}, "randomize_mass must be (low, high)"),
+        ({"command_range": ((0, 1),)}, "command_range must be three (low, high) pairs"),
+        ({"reward": {"velocity_sigma": 0.0}}, "reward velocity_sigma must be a finite number > 0"),
+        ({"render_mode": "human"}, "unknown render_mode 'human'"),
+        ({"width": 0}, "width must be an integer from 1 to 8192 pixels"),
+    ],
+)
+def test_bad_arguments_say_what_is_allowed(kwargs, words):
+    with pytest.raises(ValueError, match=words.replace("(", r"\(").replace(")", r"\)")):
+        LeggedJointsEnv(**kwargs)
+
+
+@pytest.mark.parametrize(("action", "words"), [(np.zeros(17), r"shape \(18,\)"), (np.full(18, np.nan), "finite")])
+def test_bad_actions_say_what_is_allowed(action, words):
+    env = LeggedJointsEnv()
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=words):
+        env.step(action)
+
+
+def test_a_step_is_frame_skip_physics_steps_and_nothing_else():
+    """The step's physics replayed with bare mj_step from the same start, on a fresh MjData: the same state bit for
+    bit (the environment reads, it does not push)."""
+    import mujoco
+
+    env = LeggedJointsEnv(terrain="rough")
+    env.reset(seed=2)
+    m = env.model
+    spec = mujoco.mjtState.mjSTATE_INTEGRATION
+    start = np.empty(mujoco.mj_stateSize(m, spec))
+    mujoco.mj_getState(m, env.data, start, spec)
+    bare = mujoco.MjData(m)
+    mujoco.mj_setState(m, bare, start, spec)
+    env.action_space.seed(2)
+    for _ in range(10):
+        env.step(env.action_space.sample())
+        bare.ctrl[:] = env.data.ctrl
+        for _ in range(env.frame_skip):
+            mujoco.mj_step(m, bare)
+    assert np.array_equal(bare.qpos, env.data.qpos) and np.array_equal(bare.qvel, env.data.qvel)

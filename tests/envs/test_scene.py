@@ -1,0 +1,69 @@
+"""An environment's ground and randomisation: a fresh rough patch per reset as MuJoCo collides it, factors in range."""
+
+import mujoco
+import numpy as np
+import pytest
+
+pytest.importorskip("gymnasium", reason="the Gymnasium environments need gymnasium (the rl extra)")
+
+from hexabot_sim.envs.joints import LeggedJointsEnv
+
+
+def ray_heights(env, x, y):
+    """Ground heights under (x, y) by MuJoCo's own ray casting (the robot's geoms excluded: group 0 only)."""
+    geomgroup = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)
+    geomid = np.zeros(1, dtype=np.int32)
+    out = []
+    for xi, yi in zip(x, y, strict=True):
+        dist = mujoco.mj_ray(env.model, env.data, np.array([xi, yi, 1.0]), np.array([0.0, 0.0, -1.0]), geomgroup, 1,
+                             -1, geomid)  # fmt: skip
+        out.append(1.0 - dist)
+    return np.array(out)
+
+
+def test_every_reset_draws_a_fresh_patch_that_mujoco_collides():
+    env = LeggedJointsEnv(terrain="rough", roughness=0.02)
+    rng = np.random.default_rng(0)
+    x, y = rng.uniform(-1.0, 1.0, (2, 40))
+    patches = []
+    for seed in (0, 1):
+        env.reset(seed=seed)
+        truth = env.scene.ground.rough.surface(x, y)  # the patch's own heights (terrain/heightfield.py)
+        assert np.allclose(ray_heights(env, x, y), truth, rtol=0, atol=1e-9)
+        assert np.abs(truth).max() > 0.005
+        patches.append(truth)
+    assert not np.allclose(patches[0], patches[1])  # a new seed from the environment's RNG
+    env.reset(seed=0)
+    assert np.array_equal(env.scene.ground.rough.surface(x, y), patches[0])
+
+
+def test_robot_starts_on_the_new_patch_without_falling():
+    env = LeggedJointsEnv(terrain="rough", roughness=0.03)
+    for seed in range(3):
+        obs, _ = env.reset(seed=seed)
+        assert -obs[2] > 0.95  # nearly level after landing
+        assert obs[env.obs_slices["foot_touch"]].sum() > 5.0  # standing on its feet
+        assert env.data.sensordata[env._plate] == 0.0  # the plate clear of the bumps
+
+
+def test_randomised_factors_are_drawn_in_range_from_the_nominal_model():
+    env = LeggedJointsEnv(randomize_friction=(0.5, 1.5), randomize_mass=(0.8, 1.2), randomize_servo_gain=(0.9, 1.1))
+    nominal = LeggedJointsEnv()
+    m0, sc = nominal.model, env.scene
+    draws = []
+    for seed in range(3):
+        env.reset(seed=seed)
+        m = env.model
+        friction = m.geom_friction[sc.feet, 0] / m0.geom_friction[sc.feet, 0]
+        mass = m.body_mass[sc.torso] / m0.body_mass[sc.torso]
+        kp = m.actuator_gainprm[sc.pos_act, 0] / m0.actuator_gainprm[sc.pos_act, 0]
+        kv = m.actuator_gainprm[sc.vel_act, 0] / m0.actuator_gainprm[sc.vel_act, 0]
+        assert ((0.5 <= friction) & (friction <= 1.5)).all() and 0.8 <= mass <= 1.2
+        assert ((0.9 <= kp) & (kp <= 1.1)).all() and np.allclose(kp, kv)
+        assert np.allclose(m.actuator_biasprm[sc.pos_act, 1], -m.actuator_gainprm[sc.pos_act, 0])
+        assert np.allclose(m.body_inertia[sc.torso] / m0.body_inertia[sc.torso], mass)
+        # The subtree mass MuJoCo derives from the masses follows (mj_setConst).
+        assert m.body_subtreemass[sc.torso] == pytest.approx(m0.body_subtreemass[sc.torso] + m.body_mass[sc.torso]
+                                                             - m0.body_mass[sc.torso])  # fmt: skip
+        draws.append(mass)
+    assert len(set(draws)) == 3

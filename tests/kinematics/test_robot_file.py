@@ -1,0 +1,210 @@
+"""Robot files: the format's checks (one line naming file, joint and field) and the package's robots as files."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from helpers import cli
+
+from hexabot_sim.errors import UsageError
+from hexabot_sim.kinematics import robot_file, robots
+from hexabot_sim.kinematics.chain import SerialChain
+
+ARM = """\
+name = "textbook-arm"
+convention = "standard"
+angles = "deg"
+[[joints]]
+name = "q1"
+type = "revolute"
+a = 0.0
+alpha = 90.0
+d = 0.4
+theta = 0.0
+lower = -170.0
+upper = 170.0
+[[joints]]
+name = "q2"
+type = "revolute"
+a = 0.3
+alpha = 0.0
+d = 0.0
+theta = 0.0
+[[joints]]
+name = "q3"
+type = "prismatic"
+a = 0.0
+alpha = 0.0
+d = 0.1
+theta = 0.0
+lower = 0.0
+upper = 0.2
+[tool]
+xyz = [0.0, 0.0, 0.1]
+rpy = [0.0, 90.0, 0.0]
+"""
+
+
+def write(tmp_path: Path, text: str, name: str = "arm.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_the_example_reads_into_the_chain_it_describes(tmp_path):
+    spec = robot_file.read(write(tmp_path, ARM))
+    chain = spec.chain()
+    assert spec.name == "textbook-arm" and spec.joint_units == ("rad", "rad", "m") and not spec.builtin
+    assert chain.convention == "standard" and [j.kind for j in chain.joints] == ["revolute", "revolute", "prismatic"]
+    assert chain.joints[0].alpha == math.pi / 2 and chain.joints[0].lower == math.radians(-170.0)
+    assert chain.joints[2].upper == 0.2 and chain.joints[1].lower is None
+    # Tool: Ry(90 deg) exactly (quarter turns are exact), 0.1 m along z.
+    np.testing.assert_array_equal(chain.tool, [[0, 0, 1, 0], [0, 1, 0, 0], [-1, 0, 0, 0.1], [0, 0, 0, 1]])
+
+
+def test_radians_modified_base_masses_and_fixed_rows(tmp_path):
+    text = """\
+name = "m"
+convention = "modified"
+angles = "rad"
+[lengths]
+L = { value = 0.2, doc = "link" }
+[[joints]]
+name = "a"
+type = "revolute"
+a = 0.0
+alpha = 0.0
+d = 0.0
+theta = 0.5
+mass = 1.5
+[[joints]]
+name = "foot"
+type = "fixed"
+a = "L"
+alpha = 0.0
+d = "-L"
+theta = 0.0
+[base]
+xyz = [1.0, 2.0, 3.0]
+rpy = [0.0, 0.0, 1.5707963267948966]
+"""
+    spec = robot_file.read(write(tmp_path, text))
+    chain = spec.chain({"L": 0.3})
+    assert spec.masses == (1.5,) and [j.name for j in spec.fixed_rows()] == ["foot"]
+    np.testing.assert_array_equal(chain.base, [[0, -1, 0, 1], [1, 0, 0, 2], [0, 0, 1, 3], [0, 0, 0, 1]])
+    np.testing.assert_array_equal(chain.tool[:3, 3], [0.3, 0.0, -0.3])  # Tx(L) Tz(-L), from --set L=0.3
+    assert chain.joints[0].theta == 0.5
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        ('name = "q2"\ntype = "revolute"\na = 0.3', 'name = "q2"\ntype = "revolute"\nlenght = 1\na = 0.3',
+         "joint 2 ('q2'): unknown key 'lenght'; allowed: name, type, a, alpha, d, theta, lower, upper, mass"),
+        ('a = 0.3\nalpha = 0.0\nd = 0.0\n', "a = 0.3\nalpha = 0.0\n", "joint 2 ('q2'): missing 'd'"),
+        ("a = 0.3", 'a = "0.3"', "joint 2 ('q2'): 'a' names the length '0.3', which [lengths] lacks"),
+        ("a = 0.3", "a = true", "joint 2 ('q2'): 'a' must be a number [m]; got True"),
+        ("a = 0.3", "a = nan", "joint 2 ('q2'): 'a' must be a finite number [m]; got nan"),
+        ("a = 0.3", "a = -inf", "joint 2 ('q2'): 'a' must be a finite number [m]; got -inf"),
+        ("a = 0.3", "a = 1e9", "joint 2 ('q2'): 'a' = 1e+09 m is outside the allowed ±100 m"),
+        ('angles = "deg"', 'angles = "rad"', "joint 1 ('q1'): 'alpha' = 90 rad is outside the allowed ±6.28319 rad"),
+        ('angles = "deg"', 'angles = "grad"', "'angles' must be one of deg, rad; got 'grad'"),
+        ('convention = "standard"', 'convention = "craig"', "'convention' must be one of standard, modified"),
+        ('convention = "standard"\n', "", "missing 'convention'"),
+        ('type = "prismatic"', 'type = "slider"', "joint 3 ('q3'): 'type' must be one of revolute, prismatic, fixed"),
+        ("lower = 0.0\nupper = 0.2", "upper = 0.2", "joint 3 ('q3'): give both 'lower' and 'upper', or neither"),
+        ("lower = 0.0\nupper = 0.2", "lower = 0.3\nupper = 0.2", "joint 3 ('q3'): 'lower' (0.3 m) must be less"),
+        ('name = "q3"', 'name = "q1"', "joint 3 ('q1'): the name 'q1' is used twice"),
+        ('name = "q3"', 'name = "q 3"', "joint 3: 'name' must be 1 to 64 letters"),
+        ("xyz = [0.0, 0.0, 0.1]", "xyz = [0.0, 0.1]", "[tool]: 'xyz' must be a list of 3 numbers"),
+        ("rpy = [0.0, 90.0, 0.0]", "ypr = [0.0, 90.0, 0.0]", "[tool]: unknown key 'ypr'; allowed: xyz, rpy"),
+        ('name = "textbook-arm"', 'name = "textbook-arm"\ncolour = "red"', "unknown key 'colour'; allowed: name,"),
+        ("mass", "mass", ""),  # placeholder replaced below: keeps the table aligned
+    ],
+)  # fmt: skip
+def test_bad_fields_are_one_line_naming_file_joint_and_field(tmp_path, old, new, message):
+    if old == "mass":
+        old, new, message = "upper = 170.0", "upper = 170.0\nmass = -1.0", "joint 1 ('q1'): 'mass' must be > 0 kg"
+    assert old in ARM
+    path = write(tmp_path, ARM.replace(old, new, 1))
+    with pytest.raises(UsageError) as info:
+        robot_file.read(path)
+    text = str(info.value)
+    assert text.startswith(f"robot file {path}: ") and message in text and "\n" not in text
+
+
+def joint_block(i: int) -> str:
+    return f'[[joints]]\nname = "j{i}"\ntype = "revolute"\na = 0.1\nalpha = 0.0\nd = 0.0\ntheta = 0.0\n'
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n' + "".join(joint_block(i) for i in range(8)),
+         "8 joints; at most 7"),
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n' + joint_block(1).replace("a = 0.1", "a = 0.0"),
+         "every link length, offset and tool offset is 0"),
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\njoints = []\n', "'joints' must be one or more"),
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n' + joint_block(1).replace("revolute", "fixed"),
+         "no joint: a chain needs at least one revolute or prismatic joint"),
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n' + joint_block(1).replace("revolute", "fixed")
+         + joint_block(2), "joint 1 ('j1'): a fixed row may only follow the last joint"),
+        ("name = [", "not valid TOML"),
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n[lengths]\nL = 20.0\n' + joint_block(1),
+         "[lengths] L: 'value' = 20 m is outside the allowed ±10 m"),
+    ],
+)  # fmt: skip
+def test_bad_tables(tmp_path, text, message):
+    path = write(tmp_path, text)
+    with pytest.raises(UsageError, match=None) as info:
+        robot_file.read(path)
+    assert message in str(info.value) and str(info.value).startswith(f"robot file {path}: ")
+
+
+def test_big_binary_missing_and_folder_files(tmp_path):
+    big = write(tmp_path, "# " + "x" * robot_file.MAX_FILE_BYTES + "\n" + ARM, "big.toml")
+    binary = tmp_path / "bin.toml"
+    binary.write_bytes(b"\xff\xfe" + ARM.encode())
+    for path, message in (
+        (big, "larger than 1024 KiB"),
+        (binary, "not UTF-8 text"),
+        (tmp_path / "none.toml", "no such file"),
+        (tmp_path, "is a folder"),
+    ):
+        with pytest.raises(UsageError, match=message):
+            robots.resolve(path if path != tmp_path else str(tmp_path) + "/")
+
+
+def test_kin_on_a_bad_file_is_one_line_and_exit_2(tmp_path, capsys):
+    path = write(tmp_path, ARM.replace("d = 0.4", "d = 0.4\nd_offset = 1"))
+    code, out, err = cli(capsys, "kin", str(path))
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert f"robot file {path}: joint 1 ('q1'): unknown key 'd_offset'" in err
+
+
+def test_the_package_robots_are_files_that_ship_in_the_package():
+    files = robot_file.builtin_files()
+    assert set(files) == set(robots.ROBOTS) == {"rrp", "elbow", "stanford", "scara", "leg"}
+    for name, spec in robots.ROBOTS.items():
+        assert spec.builtin and spec.source == str(files[name]) and files[name].parent.parent.name == "kinematics"
+        assert isinstance(spec.chain(), SerialChain)
+    # The wheel ships everything inside the hexabot_sim package (pyproject: packages = ["hexabot_sim"]).
+    pyproject = (Path(__file__).resolve().parents[2] / "pyproject.toml").read_text()
+    assert 'packages = ["hexabot_sim"]' in pyproject
+
+
+def test_the_leg_file_has_report_000s_foot_row():
+    spec = robots.get("leg")
+    (foot,) = spec.fixed_rows({"l3": 0.12})
+    assert (foot.name, foot.a, foot.alpha, foot.d, foot.theta) == ("foot", 0.12, 0.0, 0.0, 0.0)
+    np.testing.assert_array_equal(spec.chain({"l3": 0.12}).tool[:3, 3], [0.12, 0.0, 0.0])
+
+
+def test_a_name_or_a_path_resolves(tmp_path):
+    assert robots.resolve("scara") is robots.ROBOTS["scara"]
+    assert robots.resolve(write(tmp_path, ARM)).name == "textbook-arm"
+    with pytest.raises(UsageError, match="unknown robot 'puma'; known: rrp, elbow, stanford, scara, leg, or the path"):
+        robots.resolve("puma")
