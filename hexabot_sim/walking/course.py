@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from hexabot_sim.result import Metric
-from hexabot_sim.walking import commands
+from hexabot_sim.walking import commands, forces
 
 LEAST_STEADY_CYCLES: int = 1  # a schedule row is measured over at least this many whole cycles of steady walk
 
@@ -126,23 +126,12 @@ def course_figure(result: Any, follower: Any, colours: dict[str, str]) -> Any:
     return fig
 
 
-BOUNCE_GAP: float = 0.06  # [s] a loaded foot unloaded for less than this, then loaded again, bounced
-
-
 def count_bounces(loaded: np.ndarray, t: np.ndarray, start: float, end: float) -> int:
-    """Bounces of the feet between start and end [s]: a loaded foot that unloads for under BOUNCE_GAP and lands
-    again (loaded: (n, legs) from mj_contactForce, Contacts.loaded). A stand-in until the load-sharing issue's
-    `foot_bounces` metric (issue 19) measures it for every walk."""
+    """Bounces of the feet between start and end [s], as the walk's `foot_bounces` counts them over the steady walk
+    (walking.forces.bounces: a loaded foot that unloads for under 60 ms and lands again); loaded: (n, legs)."""
     w = (t >= start) & (t <= end)
-    count = 0
-    for leg in range(loaded.shape[1]):
-        on = loaded[w, leg].astype(int)
-        lifts, lands = np.flatnonzero(np.diff(on) == -1), np.flatnonzero(np.diff(on) == 1)
-        for k in lifts:
-            later = lands[lands > k]
-            if later.size and t[w][later[0] + 1] - t[w][k + 1] < BOUNCE_GAP:
-                count += 1
-    return count
+    dt = float(t[1] - t[0])
+    return sum(forces.bounces(loaded[w, leg], dt) for leg in range(loaded.shape[1]))
 
 
 def speed_dip(t: np.ndarray, v: np.ndarray, command: float, period: float, start: float, end: float) -> float:
