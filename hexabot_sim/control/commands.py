@@ -187,4 +187,36 @@ class Steering:
         return h[0].reshape(f.shape), h[1].reshape(f.shape)
 
 
-__all__ = ["STAIR_TIME", "CommandSource", "Schedule", "Segment", "Setpoint", "Steering"]
+def add_heights(targets, source, heights0, times, stance, swing_s, stand: bool = True) -> np.ndarray:
+    """Adds a source's change of step height (from heights0's) to the swings' lift h sin^2(pi s) of the targets
+    (n + 1, legs, 3) at `times` (n + 1,), and with `stand` its change of stand height to every foot (a higher stand:
+    the feet deeper below the hips); returns its stand heights (n + 1,) [m]."""
+    step, stand_heights = source.heights(times)
+    lift = np.where(stance, 0.0, np.sin(np.pi * swing_s) ** 2)  # (n + 1, legs)
+    targets[..., 2] += (step - heights0[0])[:, None] * lift
+    if stand:
+        targets[..., 2] -= (stand_heights - heights0[1])[:, None]
+    return stand_heights
+
+
+class StanceLog:
+    """The stance flags a controller planned, chunk by chunk (its gait may change between chunks)."""
+
+    def __init__(self) -> None:
+        self.chunks: list[tuple[np.ndarray, np.ndarray]] = []  # (times (n + 1,), flags (n + 1, legs))
+
+    def __bool__(self) -> bool:
+        return bool(self.chunks)
+
+    def append(self, times: np.ndarray, stance: np.ndarray) -> None:
+        self.chunks.append((times, stance))
+
+    def at(self, t: np.ndarray) -> np.ndarray:
+        """The flags (n, legs) in force at the times t (n,): the last planned row at or before each."""
+        times = np.concatenate([rows for rows, _ in self.chunks])
+        flags = np.concatenate([stance for _, stance in self.chunks])
+        idx = np.searchsorted(times, np.asarray(t) + 1e-9, side="right") - 1
+        return flags[np.clip(idx, 0, len(times) - 1)]
+
+
+__all__ = ["STAIR_TIME", "CommandSource", "Schedule", "Segment", "Setpoint", "StanceLog", "Steering", "add_heights"]

@@ -31,7 +31,7 @@ import math
 import mujoco
 import numpy as np
 
-from hexabot_sim.control.commands import CommandSource
+from hexabot_sim.control.commands import CommandSource, StanceLog, add_heights
 from hexabot_sim.control.compliance import Admittance, AdmittanceSettings
 from hexabot_sim.control.gait import Command, GaitPlanner, gaits_for
 from hexabot_sim.control.resolved_rate import ResolvedRateGains, step_constants
@@ -104,7 +104,7 @@ class WalkingController:
     ) -> None:
         self.layout = layout
         self.source = source  # a command that changes (control/commands.py); None: settings.command throughout
-        self.stance_log: list[tuple[np.ndarray, np.ndarray]] = []  # with a source: (times, stance flags) per chunk
+        self.stance_log = StanceLog()  # with a source: the stance flags as planned
         # The heights the planner was built with (the source's at time 0): the source's changes are added to them.
         self._heights0 = None if source is None else [float(v[0]) for v in source.heights(np.zeros(1))]
         self.planner = planner
@@ -199,7 +199,7 @@ class WalkingController:
         swing_s = self.planner.swing_fraction(times, stance)
         if self.source is not None:
             self._heights(targets, times, stance, swing_s)
-            self.stance_log.append((times, stance))
+            self.stance_log.append(times, stance)
         # Body -> hip frame of each leg: R^T (p - hip).
         hip = np.einsum("lji,klj->kli", self.rot, targets - self.hips)  # (n + 1, legs, 3)
         hip += self._rolling_offsets(hip, stance, swing_s)
@@ -210,12 +210,7 @@ class WalkingController:
     def planned_stance(self, t: np.ndarray) -> np.ndarray:
         """The plan's stance flags (n, legs) at the times t (n,): as planned chunk by chunk with a command source
         (its gait may have changed), else the planner's clock."""
-        if not self.stance_log:
-            return self.planner.in_stance(t)
-        times = np.concatenate([rows for rows, _ in self.stance_log])
-        flags = np.concatenate([stance for _, stance in self.stance_log])
-        idx = np.searchsorted(times, np.asarray(t) + 1e-9, side="right") - 1
-        return flags[np.clip(idx, 0, len(times) - 1)]
+        return self.stance_log.at(t) if self.stance_log else self.planner.in_stance(t)
 
     def _pose(self) -> tuple[float, float, float]:
         """The body's planar pose (x, y [m], yaw [rad]) for a command source (a path follower's localisation)."""
@@ -224,17 +219,7 @@ class WalkingController:
 
     def _heights(self, targets: np.ndarray, times: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> None:
         """Adds the source's step and stand heights (rows of `times`) to the planned targets (n + 1, legs, 3)."""
-        stand = self._add_lift(targets, times, stance, swing_s)
-        assert self._heights0 is not None
-        targets[..., 2] -= (stand - self._heights0[1])[:, None]  # a higher stand: the feet deeper below the hips
-
-    def _add_lift(self, targets: np.ndarray, times: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
-        """Adds the change of the source's step height to the swings' lift; returns its stand heights (n + 1,)."""
-        assert self.source is not None and self._heights0 is not None
-        step, stand = self.source.heights(times)
-        lift = np.where(stance, 0.0, np.sin(np.pi * swing_s) ** 2)  # (n + 1, legs)
-        targets[..., 2] += (step - self._heights0[0])[:, None] * lift
-        return stand
+        add_heights(targets, self.source, self._heights0, times, stance, swing_s)
 
     def _publish(self, rows: np.ndarray, stance: np.ndarray) -> None:
         """Keeps what the steps of the chunk need from its target rows (n + 1, 3 legs) (hip frames) and stance flags."""
@@ -447,7 +432,7 @@ class GroundController(WalkingController):
 
     def _heights(self, targets: np.ndarray, times: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> None:
         """The source's step height on the swings' lift; its stand height drives the stance plane (which ramps it)."""
-        stand = self._add_lift(targets, times, stance, swing_s)
+        stand = add_heights(targets, self.source, self._heights0, times, stance, swing_s, stand=False)
         self.par[self.kernels.STAND_HEIGHT] = float(stand[-1])
 
     def _rolling_offsets(self, hip: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:

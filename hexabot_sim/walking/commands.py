@@ -37,6 +37,11 @@ SCHEDULE_REQUIRED = 4
 WAYPOINT_COLUMNS = ("x", "y", "heading")
 WAYPOINT_REQUIRED = 2
 
+SCHEDULE_DOC = (
+    "commands in time: from each row's t [s] on, its twist (ramped in over a period), gait and heights (vx, vy, "
+    "yaw_rate are then ignored)"
+)
+WAYPOINTS_DOC = "walk through these points (path follower: control/follower.py; vx, vy, yaw_rate are then ignored)"
 SCHEDULE_ALLOWED = (
     "a CSV file with the header t, vx, vy, yaw_rate[, gait, step_height, stand_height] (or, from the Python API, "
     "a list of such rows); empty: one command throughout"
@@ -166,6 +171,11 @@ def setpoints(p: Any) -> list[Setpoint]:
         gait, step, stand = g or gait, step if h is None else h, stand if s is None else s
         out.append(Setpoint(t, Command(vx, vy, w).scaled(p.schedule_scale), gait, step, stand))
     return out
+
+
+def problem(p: Any, check: Callable[[Any], str], neutral: np.ndarray, settle: float) -> str:
+    """'' if the walk's schedule or waypoints can be walked, else one line saying why not (the checks below)."""
+    return schedule_problem(p, check) or switch_problem(p, neutral, settle) or waypoints_problem(p, check, settle)
 
 
 def schedule_problem(p: Any, check: Callable[[Any], str]) -> str:

@@ -159,17 +159,11 @@ class WalkParams:
         "off", "", "stance legs yield to their touch sensors' force error, sharing the load (admittance), or hold "
         "their planned height (off)", choices=("admittance", "off"),
     )  # fmt: skip
-    schedule: tuple = param(
-        (), "", "commands in time: from each row's t [s] on, its twist (ramped in over a period), gait and heights "
-        "(vx, vy, yaw_rate are then ignored)", table=(commands.SCHEDULE_ALLOWED, commands.read_schedule),
-    )  # fmt: skip
+    schedule: tuple = param((), "", commands.SCHEDULE_DOC, table=(commands.SCHEDULE_ALLOWED, commands.read_schedule))
     waypoints: tuple = param(
-        (), "", "walk through these points (path follower: control/follower.py; vx, vy, yaw_rate are then ignored)",
-        table=(commands.WAYPOINTS_ALLOWED, commands.read_waypoints),
-    )  # fmt: skip
-    schedule_scale: float = param(
-        1.0, "1", "the schedule's vx, vy and yaw_rate times this (a sweep's axis)", ge=0.0, le=10.0
-    )  # fmt: skip
+        (), "", commands.WAYPOINTS_DOC, table=(commands.WAYPOINTS_ALLOWED, commands.read_waypoints)
+    )
+    schedule_scale: float = param(1.0, "1", "the schedule's vx, vy and yaw_rate times this", ge=0.0, le=10.0)
     path_speed: float = param(0.1, "m/s", "the path follower's walking speed (waypoints)", gt=0.0, le=1.0)
     path_yaw_rate: float = param(0.5, "rad/s", "the path follower's largest yaw rate (waypoints)", gt=0.0, le=3.0)
 
@@ -195,11 +189,7 @@ class WalkParams:
         problem = feasibility(self)
         if problem:
             raise ValueError(problem)
-        problem = (
-            commands.schedule_problem(self, feasibility)
-            or commands.switch_problem(self, neutral(self), SETTLE_TIME)
-            or commands.waypoints_problem(self, feasibility, SETTLE_TIME)
-        )
+        problem = commands.problem(self, feasibility, neutral(self), SETTLE_TIME)  # a schedule's or waypoints'
         if problem:
             raise ValueError(problem)
         problem = terrain_problem(self)
