@@ -79,8 +79,6 @@ def _connect(client_type: Any, address: str, timeout: float) -> Any:
     return box[0]
 
 
-
-
 def scheduler_address(text: str) -> str:
     """'tcp://host:port' (or 'host:port') checked: UsageError in one line for anything else."""
     match = re.fullmatch(r"(?:tcp://)?([A-Za-z0-9._-]+|\[[0-9A-Fa-f:.]+\]):([0-9]{1,5})", text)

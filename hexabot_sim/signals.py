@@ -53,7 +53,6 @@ class Interrupted(KeyboardInterrupt):
         self.signum = signum
 
 
-
 def raise_interrupted(signum: int, frame: Any) -> None:
     """Ctrl-C, SIGTERM and SIGHUP stop the run; while a publish or clean-up is held, only after it."""
     RECEIVED_SIGNALS.append(signum)

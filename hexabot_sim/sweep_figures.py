@@ -19,7 +19,6 @@ DECADES_FOR_LOG: float = 2.0  # positive values spanning this many decades get a
 CONSTANT_RTOL: float = 1e-12  # a metric that varies less than this (round-off) is not plotted
 
 
-
 def _numeric(values: Sequence[Any]) -> np.ndarray | None:
     """Floats of a metric column (None -> nan, bools -> 0/1), or None if it holds text."""
     out = []
@@ -154,5 +153,3 @@ def _heatmap(p: Plan, t: Table, name: str, values: np.ndarray, failed: np.ndarra
     ax.set_ylabel(_axis_label(rows.name, t.units.get(rows.name, "")) + (" (log-spaced)" if rows.log else ""))
     ax.set_title(_title(p, t, name), fontsize=plots.TITLE_FONTSIZE)
     return fig
-
-

@@ -52,7 +52,7 @@ def test_a_damaged_run_folder_is_one_line(runs, tmp_path, capsys, kind):
 
 def test_relative_differences_only_against_a_reference_that_is_not_near_zero():
     row = compare.Row("metric", "x", "1", (1e-9, 0.0461, 2e-9))
-    (d1, rel1), (d2, rel2) = row.differences()
+    (d1, rel1), (_, rel2) = row.differences()
     assert rel1 is None and d1 == pytest.approx(0.0461)
     assert rel2 == pytest.approx(1.0)
     assert "%" not in compare._difference((d1, rel1), False)
@@ -63,7 +63,7 @@ def test_folder_names_that_are_not_utf8_are_compared(runs, tmp_path):
     for name in (b"r\xff", b"q\xfe"):
         shutil.copytree(runs / "a", tmp_path / os.fsdecode(name))
     exe = [os.fsencode(sys.executable), b"-m", b"hexabot_sim"]
-    proc = subprocess.run(exe + [b"compare", b"r\xff", b"q\xfe", b"--out", b"c\xfd"], cwd=tmp_path,
+    proc = subprocess.run([*exe, b"compare", b"r\xff", b"q\xfe", b"--out", b"c\xfd"], cwd=tmp_path,
                           capture_output=True, env={**os.environ, "MUJOCO_GL": "egl"}, timeout=120)  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     record = json.loads((tmp_path / os.fsdecode(b"c\xfd") / "compare.json").read_text())

@@ -1,4 +1,3 @@
-
 """Headless video: real-time length, size, content; skipped with the reason where no GL works."""
 
 import io

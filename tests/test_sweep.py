@@ -261,7 +261,8 @@ def test_clean_removes_cell_folders_of_workers_that_are_gone(tmp_path, monkeypat
 
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
-    gone = tmp_path / f"{folders.CELL_PREFIX}{int(dead.stdout)}-abc_1234"  # a killed worker left it (tempfile: 8 of [a-z0-9_])
+    # a killed worker left it (tempfile: 8 of [a-z0-9_])
+    gone = tmp_path / f"{folders.CELL_PREFIX}{int(dead.stdout)}-abc_1234"
     alive = tmp_path / f"{folders.CELL_PREFIX}{os.getpid()}-def_5678"  # a worker still writing it
     for folder in (gone, alive):
         folder.mkdir()

@@ -103,7 +103,7 @@ def test_a_cluster_that_loses_its_workers_or_scheduler_mid_sweep_fails_in_bounde
     executor = type("E", (), {})()
     executor._client = _FakeClient(dict if case == "no workers" else gone)
     never = concurrent.futures.Future()
-    with pytest.raises(pool.WorkerFailed, match="no worker for|lost the Dask scheduler"):
+    with pytest.raises(pool.WorkerFailed, match=r"no worker for|lost the Dask scheduler"):
         list(pool._completed([never], 1, None, executor))
 
 

@@ -110,7 +110,9 @@ def test_checking_progress_on_the_command_line(tmp_path, capsys, monkeypatch):
 def test_the_walk_checks_a_gait_cycle_once_for_all_cells_that_share_it(monkeypatch):
     computed = []
     plan_cycle = hexabot_parameters._plan_cycle
-    monkeypatch.setattr(hexabot_parameters, "_plan_cycle", lambda p, cmd, *a: computed.append(cmd) or plan_cycle(p, cmd, *a))
+    monkeypatch.setattr(
+        hexabot_parameters, "_plan_cycle", lambda p, cmd, *a: computed.append(cmd) or plan_cycle(p, cmd, *a)
+    )
     p = sweep.plan("hexabot-walk", ["duration=3:4:10", "seed=1:10:10"], {}, {"vx": "0.0625", "period": "0.95"})
     assert len(p.cells) == 100 and len(computed) <= 2  # standing and walking, not 200
 

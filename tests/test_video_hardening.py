@@ -17,7 +17,8 @@ FAKES = {
     # reads every frame, exits 0, writes bytes that are no MP4
     "writes-garbage": "sys.stdin.buffer.read()\nopen(sys.argv[-1], 'wb').write(b'\\x00' * 5000)\n",
     # an MP4 that was never finished: 'ftyp' and then nothing
-    "unfinished": "sys.stdin.buffer.read()\nopen(sys.argv[-1], 'wb').write((24).to_bytes(4, 'big') + b'ftypisom' + bytes(12))\n",
+    "unfinished": "sys.stdin.buffer.read()\n"
+    "open(sys.argv[-1], 'wb').write((24).to_bytes(4, 'big') + b'ftypisom' + bytes(12))\n",
 }
 
 

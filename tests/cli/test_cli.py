@@ -1,4 +1,3 @@
-
 """The command line through main([...]): run folders, exit codes, one-line errors, determinism."""
 
 import json

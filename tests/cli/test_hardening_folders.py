@@ -87,7 +87,7 @@ def two_runs(tmp_path, capsys):
 
 @pytest.mark.parametrize("where", ["a", "a/", "a/inside", "a/../a", "."])
 def test_compare_never_writes_over_an_input(two_runs, capsys, monkeypatch, where):
-    a, b = two_runs
+    a, _ = two_runs
     monkeypatch.chdir(a.parent)
     before = {p: p.read_bytes() for p in a.rglob("*") if p.is_file()}
     target = where if where != "." else str(a.parent)
@@ -111,8 +111,20 @@ def test_run_and_sweep_never_write_over_their_config(tmp_path, capsys):
     config.write_text("damping = 0.01\n")
     for argv in (
         ["run", "pendulum", "--config", str(config), *FAST, "--out", str(folder), "--force"],
-        ["sweep", "pendulum", "--grid", "damping=0,0.01", "--config", str(config), "--set", "duration=0.05",
-         "--no-plots", "--out", str(folder), "--force"],
+        [
+            "sweep",
+            "pendulum",
+            "--grid",
+            "damping=0,0.01",
+            "--config",
+            str(config),
+            "--set",
+            "duration=0.05",
+            "--no-plots",
+            "--out",
+            str(folder),
+            "--force",
+        ],
     ):
         code, _, err = cli(capsys, *argv)
         assert code == 2 and "never writes over" in err, err
@@ -126,8 +138,17 @@ def test_a_folder_name_that_is_not_utf8_is_a_legal_out(tmp_path):
     exe = [os.fsencode(sys.executable), b"-m", b"hexabot_sim"]
     for argv in (
         [b"run", b"pendulum", b"--set", b"duration=0.05", b"--out", b"r\xff"],
-        [b"sweep", b"pendulum", b"--grid", b"damping=0,0.01", b"--set", b"duration=0.05", b"--no-plots",
-         b"--out", b"s\xfe"],
+        [
+            b"sweep",
+            b"pendulum",
+            b"--grid",
+            b"damping=0,0.01",
+            b"--set",
+            b"duration=0.05",
+            b"--no-plots",
+            b"--out",
+            b"s\xfe",
+        ],
     ):
         proc = subprocess.run(exe + argv, cwd=tmp_path, capture_output=True, env=env, timeout=120)
         assert proc.returncode == 0, proc.stderr

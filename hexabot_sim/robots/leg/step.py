@@ -466,6 +466,7 @@ def continuous_zyx(rot: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     roll = np.unwrap(np.arctan2(np.sin(pitch) * n0 + np.cos(pitch) * n2, n1))
     return roll, pitch, yaw
 
+
 def foot_hip(q: np.ndarray) -> np.ndarray:
     """Foot position in the hip frame for joint angles q (3,)."""
     return leg_kin.fk(q, GEOMETRY)

@@ -64,6 +64,7 @@ ENERGY_FLOOR: float = 1e-8  # energy_drift_rel needs E(0) above this fraction of
 # 1e4 times that (a start >= ~0.004 deg from rest for the default pendulum), or rounding would give the verdict.
 BARRIER_FLOOR: float = 1e-12
 
+
 def pivot_inertia(mass: float, length: float, radius: float) -> float:
     """Moment of inertia [kg m^2] of a solid cylinder about a transverse axis through one end."""
     return mass * (length**2 / 3 + radius**2 / 4)
