@@ -289,3 +289,25 @@ def det_or_manipulability(chain: SerialChain, q: ArrayLike) -> tuple[str, float,
         return "det", float(np.linalg.det(jac)), float(sigma[-1])
     gram = jac @ jac.T if n > m else jac.T @ jac
     return "manipulability", float(math.sqrt(max(np.linalg.det(gram), 0.0))), float(sigma[-1])
+
+
+def pose_and_jacobian(chain: SerialChain):
+    """A fast evaluator of one configuration, for a control loop: q (n,) -> (tool pose (4, 4), geometric J (6, n)).
+
+    The same arrays as the IK's batch (one row); about half the time of `chain.fk` plus `chain.jacobian`, which
+    check their input on every call.
+    """
+    batch = _Batch(chain)
+
+    def evaluate(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        frames = batch.frames(np.asarray(q, dtype=float)[None])
+        return frames[0, -1], batch.jacobian(frames)[0]
+
+    return evaluate
+
+
+def batch_pose_and_jacobian(chain: SerialChain, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Tool poses (S, 4, 4) and geometric Jacobians (S, 6, n) of many configurations q (S, n) at once."""
+    batch = _Batch(chain)
+    frames = batch.frames(np.asarray(q, dtype=float))
+    return frames[:, -1], batch.jacobian(frames)
