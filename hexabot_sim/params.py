@@ -26,21 +26,16 @@ MAX_PATH_CHARS: int = 4096  # longest file path a name-or-file parameter takes (
 
 @dataclasses.dataclass(frozen=True)
 class NameOrFile:
-    """A text parameter that names one of `names` or gives the path of a file (e.g. a robot: a name or a TOML file).
+    """A text parameter that names one of `names` or gives the path of a file (a robot: a name or a TOML file);
+    `check` reads the file when the parameter is resolved, so a bad one is refused (UsageError) before the run."""
 
-    Attributes:
-        names: The built-in names (matched case-insensitively; a name wins over a file of the same name).
-        what: The file's kind in messages, e.g. "robot file (.toml)".
-        check: Reads and checks a file given by its path; raises UsageError (one line) for any problem. It runs
-            when the parameter is resolved, so a bad file is refused before the run starts.
-    """
-
-    names: tuple[str, ...]
-    what: str
-    check: Callable[[str], object]
+    names: tuple[str, ...]  # matched case-insensitively; a name wins over a file of the same name
+    what: str  # the file's kind in messages, e.g. "robot file (.toml)"
+    check: Callable[[str], object]  # path -> anything; raises UsageError (one line) for any problem
 
     def allowed(self) -> str:
         return f"one of {', '.join(self.names)}, or the path of a {self.what}"
+
 
 # What one run may cost, checked before it starts (check_budget). Measured on the 2-core
 # development machine (numbers in the report of issue 8): a pendulum mj_step costs 7.5-10 us,
@@ -80,8 +75,7 @@ class ParamInfo:
     name_or_file: NameOrFile | None = None
 
     @property
-    def text(self) -> bool:
-        """A text parameter (choices or a name or file), not a number."""
+    def text(self) -> bool:  # a text parameter (choices, or a name or file), not a number
         return self.choices is not None or self.name_or_file is not None
 
     def contains(self, value: float) -> bool:

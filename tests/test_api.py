@@ -31,12 +31,14 @@ def test_scenarios_lists_every_scenario_with_its_parameters():
         assert info.summary and info.parameters
         for p in info.parameters.values():
             assert p.doc and (p.choices or p.name in p.allowed)
-            if p.choices is None:
+            if p.choices is None and p.bounds is not None:
                 low, high = p.bounds
                 values = p.default if isinstance(p.default, tuple) else (p.default,)
                 assert all(low <= v <= high for v in values), (info.name, p)
-            else:
+            elif p.choices is not None:
                 assert p.default in p.choices
+            else:  # a name or a file: the default is a name, and the names are listed
+                assert p.default in p.allowed and "path of a" in p.allowed
     amplitude = infos["leg-step"].parameters["amplitude"]
     assert (amplitude.default, amplitude.unit, amplitude.allowed) == (0.05, "m/s", "-1 <= amplitude <= 1 m/s")
     assert infos["pendulum"].defaults["stiffness"] == 0.5 and infos["pendulum-undamped"].defaults["stiffness"] == 0

@@ -141,7 +141,7 @@ def _bounds():
     for cls_name, scenario in sorted(classes.items()):
         cls = scenario.params_type
         for name, (info, default) in params.infos(cls).items():
-            if info.choices is None:
+            if not info.text:
                 yield pytest.param(scenario, name, info, type(default), id=f"{cls_name}.{name}")
 
 
@@ -192,6 +192,8 @@ def test_every_number_has_a_range_and_every_text_choices():
         for name, (info, default) in params.infos(scenario.params_type).items():
             if info.choices is not None:
                 assert default in info.choices, name
+            elif info.name_or_file is not None:
+                assert default in info.name_or_file.names, name
             else:
                 assert (info.ge is None) != (info.gt is None) and (info.le is None) != (info.lt is None), name
                 values = default if isinstance(default, tuple) else (default,)

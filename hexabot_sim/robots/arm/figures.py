@@ -32,8 +32,13 @@ def path_figure(result: ScenarioResult) -> Figure:
     ax3.plot(c["x"], c["y"], c["z"], color="tab:blue", linewidth=1.0, label="tool (MuJoCo site)")
     ax3.scatter(*(c[k][:1] for k in "xyz"), color="black", s=12, label="start")
     worst = result.extras["worst"]
-    ax3.scatter(*(c[k][worst : worst + 1] for k in "xyz"), color="tab:red", marker="x", s=30,
-                label=f"smallest σmin ({m['sigma_min'].value:.3g})")  # fmt: skip
+    ax3.scatter(
+        *(c[k][worst : worst + 1] for k in "xyz"),
+        color="tab:red",
+        marker="x",
+        s=30,
+        label=f"smallest σmin ({m['sigma_min'].value:.3g})",
+    )
     span = max(float(np.ptp(c[f"{k}_des"])) for k in "xyz") / 2 or 0.05
     for k, setter in zip("xyz", (ax3.set_xlim, ax3.set_ylim, ax3.set_zlim), strict=True):
         mid = 0.5 * (c[k].max() + c[k].min())
@@ -56,8 +61,9 @@ def path_figure(result: ScenarioResult) -> Figure:
     plots.legend_above(ax, ncol=2)
     for ax in axes[:, 1]:
         ax.grid(alpha=0.3)
-    fig.suptitle(_title(result, f"RMS error {m['tracking_error_rms'].value * 1000:.3g} mm"),
-                 fontsize=plots.TITLE_FONTSIZE)  # fmt: skip
+    fig.suptitle(
+        _title(result, f"RMS error {m['tracking_error_rms'].value * 1000:.3g} mm"), fontsize=plots.TITLE_FONTSIZE
+    )
     return fig
 
 
@@ -92,8 +98,7 @@ def joints_figure(result: ScenarioResult) -> Figure:
     for ax in axes:
         ax.grid(alpha=0.3)
         plots.plain(ax)
-    fig.suptitle(_title(result, "joints (dashed: command; dotted: a range end near)"),
-                 fontsize=plots.TITLE_FONTSIZE)  # fmt: skip
+    fig.suptitle(_title(result, "joints (dashed: command; dotted: a range end near)"), fontsize=plots.TITLE_FONTSIZE)
     return fig
 
 
@@ -101,8 +106,7 @@ def singularity_figure(result: ScenarioResult) -> Figure:
     """sigma_min of the task Jacobian along the run, the joints at a range end and |analytic J - mj_jacSite|."""
     c, m, p = result.columns, result.metrics, result.params
     t = c["t"]
-    fig, (ax1, ax2, ax3) = plots.figure(3, 1, figsize=(9, 8), sharex=True,
-                                        gridspec_kw={"height_ratios": [2, 1, 1.2]})  # fmt: skip
+    fig, (ax1, ax2, ax3) = plots.figure(3, 1, figsize=(9, 8), sharex=True, gridspec_kw={"height_ratios": [2, 1, 1.2]})
     ax1.plot(t, c["sigma_min"], color="tab:gray", label="σmin of the task Jacobian")
     ax1.axhline(p.sigma_threshold, **plots.TARGET_STYLE, label=f"DLS threshold {p.sigma_threshold:g}")
     ax1.axvline(m["sigma_min_time"].value, color="tab:red", linestyle=":", label="smallest")

@@ -21,6 +21,7 @@ RANGE_MARGIN: float = 0.15  # candidates keep this fraction of each joint range 
 SEED: int = 20  # the candidates are the same on every call: the same robot gets the same reference pose
 SAMPLES: int = 200  # points of the path checked for reach before the run (one period or the duration)
 REACH_TOL: float = 1e-6  # [m and rad] a sample the tool reaches closer than this is reached
+RANK_TOL: float = 1e-9  # sigma_min below this fraction of the largest singular value is 0 (rank deficient)
 NEWTON_STEPS: int = 200  # damped Gauss-Newton iterations to the start point; per later sample: NEWTON_STEPS // 10
 
 
@@ -108,8 +109,10 @@ def ranges(chain: SerialChain, where: str) -> tuple[np.ndarray, np.ndarray]:
     for j in chain.joints:
         if j.lower is None or j.upper is None:
             if j.prismatic:
-                raise UsageError(f"{where}: joint '{j.name}' is prismatic without 'lower' and 'upper': arm-track "
-                                 "needs a slide's stroke")  # fmt: skip
+                raise UsageError(
+                    f"{where}: joint '{j.name}' is prismatic without 'lower' and 'upper': arm-track "
+                    "needs a slide's stroke"
+                )
             lower.append(-math.inf)
             upper.append(math.inf)
         else:
@@ -118,7 +121,12 @@ def ranges(chain: SerialChain, where: str) -> tuple[np.ndarray, np.ndarray]:
     return np.array(lower), np.array(upper)
 
 
-def reference_pose(chain: SerialChain, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+def sigma_scale(jac: np.ndarray) -> float:
+    """The largest singular value over a batch of Jacobians (S, 6, n): the scale rank is judged against."""
+    return float(np.linalg.svd(jac, compute_uv=False)[:, 0].max())
+
+
+def reference_pose(chain: SerialChain, lower: np.ndarray, upper: np.ndarray, where: str) -> np.ndarray:
     """The configuration with the largest task-Jacobian sigma_min among CANDIDATES random ones (and the home pose),
     each joint at least RANGE_MARGIN of its range from the ends; tool above the base frame's origin if any is."""
     lo = np.where(np.isfinite(lower), lower, -math.pi)
@@ -129,6 +137,12 @@ def reference_pose(chain: SerialChain, lower: np.ndarray, upper: np.ndarray) -> 
     q = np.vstack([np.clip(home_pose(chain), lo + RANGE_MARGIN * span, hi - RANGE_MARGIN * span), q])
     pose, jac = batch_pose_and_jacobian(chain, q)
     sigma = np.linalg.svd(jac[:, list(task_rows(chain))], compute_uv=False)[:, -1]  # (S,)
+    if sigma.max() <= RANK_TOL * sigma_scale(jac):
+        raise UsageError(
+            f"{where}: its tool cannot move in every direction at any of {len(q)} poses (sigma_min of the task "
+            f"Jacobian is 0 at each): arm-track needs {'6 (position and orientation)' if jac.shape[2] >= 6 else '3'} "
+            "independent directions"
+        )
     above = pose[:, 2, 3] >= np.asarray(chain.base)[2, 3]
     score = np.where(above, sigma, sigma - np.inf) if above.any() else sigma
     return q[int(np.argmax(score))]
@@ -152,8 +166,16 @@ def _solve(evaluate, q, goal_p, goal_r, lower, upper, steps):
     return q, pos_res, rot_res
 
 
-def plan(chain: SerialChain, kind: str, size: float, speed: float, plane: str, offset: np.ndarray,
-         duration: float, where: str) -> Plan:  # fmt: skip
+def plan(
+    chain: SerialChain,
+    kind: str,
+    size: float,
+    speed: float,
+    plane: str,
+    offset: np.ndarray,
+    duration: float,
+    where: str,
+) -> Plan:
     """The reference pose, the path, the start pose and the path's reach along one period (or the duration).
 
     Raises:
@@ -164,7 +186,7 @@ def plan(chain: SerialChain, kind: str, size: float, speed: float, plane: str, o
         raise UsageError(f"{where}: arm-track moves the tool in 3-D and needs 3 or more joints; it has {chain.n}")
     lower, upper = ranges(chain, where)
     rows = len(task_rows(chain))
-    q_ref = reference_pose(chain, lower, upper)
+    q_ref = reference_pose(chain, lower, upper, where)
     evaluate = pose_and_jacobian(chain)
     pose_ref, _ = evaluate(q_ref)
     e1, e2 = (np.eye(3)[i] for i in PLANES[plane])
@@ -177,8 +199,9 @@ def plan(chain: SerialChain, kind: str, size: float, speed: float, plane: str, o
     sigma = np.empty(len(t))  # (k,)
     current = q_ref
     for k, point in enumerate(points):
-        current, pos_res, rot_res = _solve(evaluate, current, point, rot, lower, upper,
-                                           NEWTON_STEPS if k == 0 else NEWTON_STEPS // 10)  # fmt: skip
+        current, pos_res, rot_res = _solve(
+            evaluate, current, point, rot, lower, upper, NEWTON_STEPS if k == 0 else NEWTON_STEPS // 10
+        )
         if pos_res > REACH_TOL or rot_res > REACH_TOL:
             what = "the path's first point" if k == 0 else f"the path at t = {t[k]:.3g} s"
             held = f" with the tool orientation held ({rot_res:.3g} rad off)" if rot is not None else ""

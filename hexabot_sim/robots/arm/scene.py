@@ -25,8 +25,9 @@ def _camera_axes() -> tuple[np.ndarray, np.ndarray]:
     return right, np.cross(right, forward)
 
 
-def servo_gains(model: mujoco.MjModel, q: np.ndarray, qadr: list[int], dadr: list[int], bandwidth: float,
-                damping: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def servo_gains(
+    model: mujoco.MjModel, q: np.ndarray, qadr: list[int], dadr: list[int], bandwidth: float, damping: float
+) -> tuple[np.ndarray, np.ndarray]:
     """(kp, kv) (n,) each: kp = M_jj w^2, kv = 2 zeta M_jj w, w = 2 pi bandwidth, M_jj the diagonal of the joint-space
     inertia (mj_fullM) at q: each joint alone is a second-order system of that natural frequency and damping ratio."""
     data = mujoco.MjData(model)
@@ -39,8 +40,16 @@ def servo_gains(model: mujoco.MjModel, q: np.ndarray, qadr: list[int], dadr: lis
     return inertia * omega**2, 2 * damping * omega * inertia
 
 
-def build(chain: SerialChain, masses: tuple[float | None, ...], comment: str, q_start: np.ndarray,
-          frame_points: np.ndarray, timestep: float, bandwidth: float, damping: float) -> tuple[str, mujoco.MjModel]:  # fmt: skip
+def build(
+    chain: SerialChain,
+    masses: tuple[float | None, ...],
+    comment: str,
+    q_start: np.ndarray,
+    frame_points: np.ndarray,
+    timestep: float,
+    bandwidth: float,
+    damping: float,
+) -> tuple[str, mujoco.MjModel]:
     """The scene's MJCF and model: the robot as `hexabot-sim export` writes it, with gravity (no gravcomp), per joint
     a position servo (name = joint), a velocity servo (JOINT_velocity) and a feedforward motor (JOINT_bias); a floor
     under `frame_points` (k, 3), a light and the camera "three_quarter" framing them; keyframe home = q_start."""
@@ -56,8 +65,19 @@ def build(chain: SerialChain, masses: tuple[float | None, ...], comment: str, q_
     ET.SubElement(visual, "global", offwidth="1920", offheight="1080")
     root.insert(list(root).index(models.find(root, "asset")), visual)
     asset = models.find(root, "asset")
-    ET.SubElement(asset, "texture", type="2d", name="groundplane", builtin="checker", mark="edge", rgb1="0.2 0.3 0.4",
-                  rgb2="0.1 0.2 0.3", markrgb="0.8 0.8 0.8", width="300", height="300")  # fmt: skip
+    ET.SubElement(
+        asset,
+        "texture",
+        type="2d",
+        name="groundplane",
+        builtin="checker",
+        mark="edge",
+        rgb1="0.2 0.3 0.4",
+        rgb2="0.1 0.2 0.3",
+        markrgb="0.8 0.8 0.8",
+        width="300",
+        height="300",
+    )
     ET.SubElement(asset, "material", name="groundplane", texture="groundplane", texuniform="true", texrepeat="8 8")
     world = models.find(root, "worldbody")
     centre = frame_points.mean(axis=0)
@@ -67,11 +87,18 @@ def build(chain: SerialChain, masses: tuple[float | None, ...], comment: str, q_
     eye = render.fit_camera(frame_points, xyaxes, FOVY, text_lines=2)
     scene = [
         ET.Element("light", name="key", pos=models.fmt(light), dir="-0.2 0.4 -1", directional="true"),
-        ET.Element("geom", name="floor", type="plane", size=f"{2 * extent!r} {2 * extent!r} 0.05",
-                   pos=models.fmt((centre[0], centre[1], lowest)), material="groundplane", contype="0",
-                   conaffinity="0"),
+        ET.Element(
+            "geom",
+            name="floor",
+            type="plane",
+            size=f"{2 * extent!r} {2 * extent!r} 0.05",
+            pos=models.fmt((centre[0], centre[1], lowest)),
+            material="groundplane",
+            contype="0",
+            conaffinity="0",
+        ),
         ET.Element("camera", name="three_quarter", pos=models.fmt(eye), xyaxes=models.fmt(xyaxes), fovy=repr(FOVY)),
-    ]  # fmt: skip
+    ]
     for k, element in enumerate(scene):
         world.insert(k, element)
     actuator = models.find(root, "actuator")

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import itertools
 import math
 import os
 from typing import TYPE_CHECKING
@@ -44,8 +45,9 @@ class ArmTrackParams:
     """Parameters of the arm-track scenario (world frame: z up; the path's centre is the reference pose's tool
     point plus the offset)."""
 
-    robot: str = param("stanford", "", "a package robot or the path of a robot file (docs/robot-files.md)",
-                       name_or_file=ROBOT)  # fmt: skip
+    robot: str = param(
+        "stanford", "", "a package robot or the path of a robot file (docs/robot-files.md)", name_or_file=ROBOT
+    )
     path: str = param("circle", "", "circle (diameter size), line (back and forth), figure8", choices=PATHS)
     plane: str = param("xy", "", "the world plane the path lies in", choices=tuple(PLANES))
     size: float = param(0.1, "m", "circle diameter, line length, figure-8 width", gt=0.0, le=2.0, typo=MM)
@@ -53,23 +55,27 @@ class ArmTrackParams:
     offset_x: float = param(0.0, "m", "path centre from the reference tool point, x", ge=-5.0, le=5.0, typo=MM)
     offset_y: float = param(0.0, "m", "path centre from the reference tool point, y", ge=-5.0, le=5.0, typo=MM)
     offset_z: float = param(0.0, "m", "path centre from the reference tool point, z", ge=-5.0, le=5.0, typo=MM)
-    duration: float = param(0.0, "s", "simulated time; 0 = the 0.5 s ramp and one cycle of the path", ge=0.0,
-                            le=3600.0)  # fmt: skip
+    duration: float = param(0.0, "s", "simulated time; 0 = the 0.5 s ramp and one cycle of the path", ge=0.0, le=3600.0)
     timestep: float = param(0.001, "s", "control period and MuJoCo timestep", ge=1e-5, le=0.01)
     task_gain: float = param(20.0, "1/s", "K: feedback on the tool error; K * timestep <= 1", ge=0.0, le=1e4)
-    servo_bandwidth: float = param(10.0, "Hz", "natural frequency of each servo on its joint's inertia (mj_fullM)",
-                                   ge=0.1, le=200.0)  # fmt: skip
+    servo_bandwidth: float = param(
+        10.0, "Hz", "natural frequency of each servo on its joint's inertia (mj_fullM)", ge=0.1, le=200.0
+    )
     servo_damping: float = param(1.0, "1", "damping ratio of each servo", ge=0.05, le=10.0)
-    max_joint_speed: float = param(3.0, "rad/s", "limit on every revolute joint speed", ge=1e-3, le=100.0,
-                                   typo=("deg/s", math.pi / 180))  # fmt: skip
+    max_joint_speed: float = param(
+        3.0, "rad/s", "limit on every revolute joint speed", ge=1e-3, le=100.0, typo=("deg/s", math.pi / 180)
+    )
     max_slide_speed: float = param(1.0, "m/s", "limit on every prismatic joint speed", ge=1e-3, le=100.0)
-    max_joint_acceleration: float = param(50.0, "rad/s^2", "braking before a range end (m/s^2 for a slide)",
-                                          ge=1e-2, le=1e5)  # fmt: skip
-    sigma_threshold: float = param(0.01, "", "task Jacobian sigma_min below which DLS damps (m/rad rows)",
-                                   ge=1e-6, le=1.0)  # fmt: skip
+    max_joint_acceleration: float = param(
+        50.0, "rad/s^2", "braking before a range end (m/s^2 for a slide)", ge=1e-2, le=1e5
+    )
+    sigma_threshold: float = param(
+        0.01, "", "task Jacobian sigma_min below which DLS damps (m/rad rows)", ge=1e-6, le=1.0
+    )
     max_damping: float = param(0.01, "", "DLS damping lambda reached at a singularity", ge=0.0, le=1.0)
-    nullspace_gain: float = param(1.0, "1/s", "pull toward the reference pose in a redundant arm's null space",
-                                  ge=0.0, le=100.0)  # fmt: skip
+    nullspace_gain: float = param(
+        1.0, "1/s", "pull toward the reference pose in a redundant arm's null space", ge=0.0, le=100.0
+    )
 
     def __post_init__(self) -> None:
         if self.task_gain * self.timestep > 1:
@@ -77,8 +83,10 @@ class ArmTrackParams:
             raise ValueError(f"parameters 'task_gain' * 'timestep' must be <= {limit}; got {product}")
         if 2 * math.pi * self.servo_bandwidth * self.timestep > MAX_SERVO_STEP:
             shown, limit = apart(self.servo_bandwidth, MAX_SERVO_STEP / (2 * math.pi * self.timestep), "down")
-            raise ValueError(f"parameter 'servo_bandwidth' must be <= {limit} Hz at timestep {self.timestep!r} s "
-                             f"(2 pi f timestep <= {MAX_SERVO_STEP}); got {shown}")  # fmt: skip
+            raise ValueError(
+                f"parameter 'servo_bandwidth' must be <= {limit} Hz at timestep {self.timestep!r} s "
+                f"(2 pi f timestep <= {MAX_SERVO_STEP}); got {shown}"
+            )
         run_plan = plan_for(self)
         if self.duration == 0:
             object.__setattr__(self, "duration", RAMP_TIME + run_plan.path.period)
@@ -132,11 +140,13 @@ def prepare(p: ArmTrackParams) -> ArmLoop:
     spec = robots.resolve(p.robot)
     chain = spec.chain()
     run_plan = plan_for(p)
-    frames = np.concatenate([np.stack(chain.frames(run_plan.q), axis=1)[..., :3, 3].reshape(-1, 3),
-                             run_plan.path.at(run_plan.t)[0]])  # fmt: skip
+    frames = np.concatenate(
+        [np.stack(chain.frames(run_plan.q), axis=1)[..., :3, 3].reshape(-1, 3), run_plan.path.at(run_plan.t)[0]]
+    )
     comment = f"arm-track: {spec.name}" + (f" ({spec.source})" if spec.source and not spec.builtin else "")
-    xml, model = scene.build(chain, spec.masses, comment, run_plan.q_start, frames, p.timestep, p.servo_bandwidth,
-                             p.servo_damping)  # fmt: skip
+    xml, model = scene.build(
+        chain, spec.masses, comment, run_plan.q_start, frames, p.timestep, p.servo_bandwidth, p.servo_damping
+    )
     data = mujoco.MjData(model)
     names = [j.name for j in chain.joints]
     qadr = [int(model.joint(n).qposadr[0]) for n in names]
@@ -150,10 +160,23 @@ def prepare(p: ArmTrackParams) -> ArmLoop:
     desired, _ = run_plan.path.at(np.arange(n_steps + 2) * dt)  # (n_steps + 2, 3)
     feed = np.diff(desired, axis=0) / dt  # (n_steps + 1, 3) the reference's mean velocity over each period
     speed = np.array([p.max_slide_speed if j.prismatic else p.max_joint_speed for j in chain.joints])
-    gains = ArmRateGains(p.task_gain, p.sigma_threshold, p.max_damping, speed,
-                         np.full(chain.n, p.max_joint_acceleration), p.nullspace_gain)  # fmt: skip
-    controller = ArmRateController(pose_and_jacobian(chain), gains, run_plan.q_start, run_plan.lower, run_plan.upper,
-                                   run_plan.rows == 6, run_plan.q_ref)  # fmt: skip
+    gains = ArmRateGains(
+        p.task_gain,
+        p.sigma_threshold,
+        p.max_damping,
+        speed,
+        np.full(chain.n, p.max_joint_acceleration),
+        p.nullspace_gain,
+    )
+    controller = ArmRateController(
+        pose_and_jacobian(chain),
+        gains,
+        run_plan.q_start,
+        run_plan.lower,
+        run_plan.upper,
+        run_plan.rows == 6,
+        run_plan.q_ref,
+    )
     record = {
         "q_cmd": np.zeros((n_steps + 1, chain.n)),
         "sigma": np.full(n_steps + 1, np.nan),
@@ -186,15 +209,35 @@ def prepare(p: ArmTrackParams) -> ArmLoop:
         record["limits"][k + 1] = controller.clipped.sum()
         counter[0] = k + 1
 
-    return ArmLoop(xml, model, data, n_steps, control, mujoco.mj_step2, run_plan, names, spec.joint_units, qadr,
-                   dadr, desired, record)  # fmt: skip
+    return ArmLoop(
+        xml,
+        model,
+        data,
+        n_steps,
+        control,
+        mujoco.mj_step2,
+        run_plan,
+        names,
+        spec.joint_units,
+        qadr,
+        dadr,
+        desired,
+        record,
+    )
 
 
 def run(name: str, p: ArmTrackParams, progress: Progress | None = None) -> ScenarioResult:
     """Tracks the path with the arm in MuJoCo and measures the tracking error, sigma_min, limits and the J check."""
     loop = prepare(p)
-    traj = simulate(loop.model, loop.data, loop.n_steps, controller=loop.control, step=loop.step,
-                    progress=progress, record_ctrl=True)  # fmt: skip
+    traj = simulate(
+        loop.model,
+        loop.data,
+        loop.n_steps,
+        controller=loop.control,
+        step=loop.step,
+        progress=progress,
+        record_ctrl=True,
+    )
     return _result(name, p, loop, traj)
 
 
@@ -218,29 +261,38 @@ def _result(name: str, p: ArmTrackParams, loop: ArmLoop, traj) -> ScenarioResult
     metrics = {
         "tracking_error_rms": Metric(float(np.sqrt(np.mean(err**2))), "m", "RMS of |tool - desired| (MuJoCo's site)"),
         "tracking_error_max": Metric(float(err.max()), "m", "max |tool - desired|"),
-        "orientation_error_max": Metric(None if orient is None else float(orient.max()), "rad",
-                                        "max angle from the held tool orientation (6+ joints; null: position only)"),
+        "orientation_error_max": Metric(
+            None if orient is None else float(orient.max()),
+            "rad",
+            "max angle from the held tool orientation (6+ joints; null: position only)",
+        ),
         "sigma_min": Metric(float(sigma[worst]), "", "smallest sigma_min of the task Jacobian along the run"),
         "sigma_min_time": Metric(float(t[worst]), "s", "when it was smallest"),
         "sigma_min_point": Metric([float(v) for v in tool.pos[worst]], "m", "where the tool was then"),
         "near_singular_time": Metric(float(near.sum() * dt), "s", "time with sigma_min < sigma_threshold (DLS damps)"),
-        "planned_sigma_min": Metric(float(run_plan.sigma.min()), "", "smallest sigma_min of the exact IK along the path"),
-        "joint_limit_hits": Metric(int(np.sum(np.diff(np.r_[0, hits.astype(int)]) > 0)), "1",
-                                   "times a joint command reached a range end"),
+        "planned_sigma_min": Metric(float(run_plan.sigma.min()), "", "smallest sigma_min of the exact IK on the path"),
+        "joint_limit_hits": Metric(
+            int(np.sum(np.diff(np.r_[0, hits.astype(int)]) > 0)), "1", "times a joint command reached a range end"
+        ),
         "joint_limit_time": Metric(float(hits.sum() * dt), "s", "time some joint command sat at a range end"),
         "jacobian_max_diff": Metric(float(jac_diff.max()), "", "max |analytic J - mj_jacSite| over the run"),
         "centre": Metric([float(v) for v in run_plan.path.centre], "m", "the path's centre"),
         "reference_pose": Metric([float(v) for v in run_plan.q_ref], "", "the best-conditioned pose (rad or m)"),
         "joints": Metric(n, "1", "joints of the robot"),
-    }  # fmt: skip
+    }
     q, dq, ctrl = traj.qpos[:, loop.qadr], traj.qvel[:, loop.dadr], traj.ctrl
     columns: dict[str, np.ndarray] = {"t": t}
     units: dict[str, str] = {"t": "s"}
     for i, unit in enumerate(loop.units):
         rate = f"{unit}/s"
         force = "N*m" if unit == "rad" else "N"
-        for key, values, u in ((f"q{i + 1}", q[:, i], unit), (f"dq{i + 1}", dq[:, i], rate),
-                               (f"q{i + 1}_cmd", rec["q_cmd"][:, i], unit), (f"tau{i + 1}_ff", ctrl[:, 2 * n + i], force)):  # fmt: skip
+        joint = (
+            (f"q{i + 1}", q[:, i], unit),
+            (f"dq{i + 1}", dq[:, i], rate),
+            (f"q{i + 1}_cmd", rec["q_cmd"][:, i], unit),
+            (f"tau{i + 1}_ff", ctrl[:, 2 * n + i], force),
+        )
+        for key, values, u in joint:
             columns[key], units[key] = values, u
     for k, axis in enumerate("xyz"):
         columns[axis], units[axis] = tool.pos[:, k], "m"
@@ -252,18 +304,28 @@ def _result(name: str, p: ArmTrackParams, loop: ArmLoop, traj) -> ScenarioResult
     columns["near_singular"], units["near_singular"] = near.astype(float), "1"
     columns["joints_at_limit"], units["joints_at_limit"] = rec["limits"], "1"
     columns["jacobian_diff"], units["jacobian_diff"] = jac_diff, ""
-    path_t = np.linspace(RAMP_TIME, RAMP_TIME + run_plan.path.period, PATH_MARKERS + 1)
-    ring, _ = run_plan.path.at(path_t)
-    markers = [Marker(tuple(a), tuple(b), 0.0015, (0.9, 0.2, 0.15, 0.6)) for a, b in zip(ring[:-1], ring[1:], strict=True)]
+    near_text = ("", "  NEAR-SINGULAR")
     return ScenarioResult(
-        scenario=name, params=p, model=loop.model, model_xml=loop.xml, trajectory=traj, columns=columns,
-        column_units=units, metrics=metrics,
+        scenario=name,
+        params=p,
+        model=loop.model,
+        model_xml=loop.xml,
+        trajectory=traj,
+        columns=columns,
+        column_units=units,
+        metrics=metrics,
         summary=["tracking_error_rms", "tracking_error_max", "sigma_min", "joint_limit_hits", "jacobian_max_diff"],
-        camera="three_quarter", markers=markers, trail=tool.pos,
-        overlay=[lambda i: f"error = {err[i] * 1000:7.3f} mm   σmin = {sigma[i]:.3g}" + ("  NEAR-SINGULAR" if near[i] else "")],
-        extras={"robot": robots.resolve(p.robot).name, "ranges": (run_plan.lower, run_plan.upper),
-                "units": loop.units, "worst": worst},
-    )  # fmt: skip
+        camera="three_quarter",
+        markers=path_markers(run_plan),
+        trail=tool.pos,
+        overlay=[lambda i: f"error = {err[i] * 1000:7.3f} mm   σmin = {sigma[i]:.3g}{near_text[int(near[i])]}"],
+        extras={
+            "robot": robots.resolve(p.robot).name,
+            "ranges": (run_plan.lower, run_plan.upper),
+            "units": loop.units,
+            "worst": worst,
+        },
+    )
 
 
 def _final_check(loop: ArmLoop, qpos: np.ndarray, chain) -> tuple[float, float]:
@@ -278,6 +340,12 @@ def _final_check(loop: ArmLoop, qpos: np.ndarray, chain) -> tuple[float, float]:
     _, jac = pose_and_jacobian(chain)(qpos[loop.qadr])
     sigma = float(np.linalg.svd(jac[: loop.plan.rows], compute_uv=False)[-1])
     return sigma, float(max(np.abs(jac[:3] - jacp[:, loop.dadr]).max(), np.abs(jac[3:] - jacr[:, loop.dadr]).max()))
+
+
+def path_markers(run_plan: Plan) -> list[Marker]:
+    """The desired path as PATH_MARKERS segments, for the video and the viewer."""
+    ring, _ = run_plan.path.at(np.linspace(RAMP_TIME, RAMP_TIME + run_plan.path.period, PATH_MARKERS + 1))
+    return [Marker(tuple(a), tuple(b), 0.0015, (0.9, 0.2, 0.15, 0.6)) for a, b in itertools.pairwise(ring)]
 
 
 def figures(result: ScenarioResult) -> dict[str, Figure]:
@@ -295,17 +363,24 @@ def live(p: ArmTrackParams) -> Live:
     last = loop.n_steps
 
     def step() -> None:
-        if int(round(data.time / p.timestep)) >= last:  # the reference ends with the run: hold the last command
+        if round(data.time / p.timestep) >= last:  # the reference ends with the run: hold the last command
             mujoco.mj_step(model, data)
             return
         control(model, data)
         advance(model, data)
 
     def error_text(d: mujoco.MjData) -> str:
-        k = min(int(round(d.time / p.timestep)), last)
+        k = min(round(d.time / p.timestep), last)
         return f"error = {np.linalg.norm(d.site_xpos[tool] - loop.desired[k]) * 1000:7.3f} mm"
 
-    ring, _ = loop.plan.path.at(np.linspace(RAMP_TIME, RAMP_TIME + loop.plan.path.period, PATH_MARKERS + 1))
-    markers = [Marker(tuple(a), tuple(b), 0.0015, (0.9, 0.2, 0.15, 0.6)) for a, b in zip(ring[:-1], ring[1:], strict=True)]
-    return Live(model, data, step, p.timestep, p.duration, camera="three_quarter", markers=markers,
-                trail=lambda d: d.site_xpos[tool], overlay=[error_text])  # fmt: skip
+    return Live(
+        model,
+        data,
+        step,
+        p.timestep,
+        p.duration,
+        camera="three_quarter",
+        markers=path_markers(loop.plan),
+        trail=lambda d: d.site_xpos[tool],
+        overlay=[error_text],
+    )
