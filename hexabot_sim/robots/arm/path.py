@@ -9,6 +9,7 @@ import numpy as np
 
 from hexabot_sim.control.arm_rate import rotation_error
 from hexabot_sim.errors import UsageError
+from hexabot_sim.kinematics import numeric_ik
 from hexabot_sim.kinematics.chain import SerialChain
 from hexabot_sim.kinematics.mjcf import home_pose
 from hexabot_sim.kinematics.numeric_ik import batch_pose_and_jacobian, pose_and_jacobian, task_rows
@@ -166,6 +167,29 @@ def _solve(evaluate, q, goal_p, goal_r, lower, upper, steps):
     return q, pos_res, rot_res
 
 
+def _point(point: np.ndarray) -> str:
+    return ", ".join(f"{v:.4g}" for v in point)
+
+
+def _distance(metres: float) -> str:
+    return f"{metres * 1000:.3g} mm" if metres < 1 else f"{metres:.3g} m"
+
+
+def _start_from_seeds(chain, evaluate, q_ref, point, rot, lower, upper, where):
+    """The path's first point from numeric IK's many seeds (the solution nearest q_ref), when Gauss-Newton from q_ref
+    stalls; out of reach: one line with the closest the seeds got."""
+    target = point
+    if rot is not None:
+        target = np.eye(4)
+        target[:3, :3], target[:3, 3] = rot, point
+    try:
+        solutions = numeric_ik.solve(chain, target, where=f"{where}: the path's first point, ({_point(point)}) m")
+    except numeric_ik.IKError as e:
+        raise UsageError(f"{e}; lower 'size' or move the path with 'offset_x', 'offset_y', 'offset_z'") from None
+    best = min(solutions, key=lambda s: float(np.linalg.norm(s.q - q_ref)))
+    return _solve(evaluate, np.clip(best.q, lower, upper), point, rot, lower, upper, NEWTON_STEPS)
+
+
 def plan(
     chain: SerialChain,
     kind: str,
@@ -202,13 +226,15 @@ def plan(
         current, pos_res, rot_res = _solve(
             evaluate, current, point, rot, lower, upper, NEWTON_STEPS if k == 0 else NEWTON_STEPS // 10
         )
+        if k == 0 and (pos_res > REACH_TOL or rot_res > REACH_TOL):  # not from q_ref: from many seeds
+            current, pos_res, rot_res = _start_from_seeds(chain, evaluate, q_ref, point, rot, lower, upper, where)
         if pos_res > REACH_TOL or rot_res > REACH_TOL:
             what = "the path's first point" if k == 0 else f"the path at t = {t[k]:.3g} s"
             held = f" with the tool orientation held ({rot_res:.3g} rad off)" if rot is not None else ""
             raise UsageError(
-                f"{where}: {what}, ({', '.join(f'{v:.4g}' for v in point)}) m, is out of reach within the joint "
-                f"ranges{held}: the tool stops {pos_res * 1000:.3g} mm away; lower 'size' or move the path with "
-                f"'offset_x', 'offset_y', 'offset_z' (the centre is {', '.join(f'{v:.4g}' for v in path.centre)} m)"
+                f"{where}: {what}, ({_point(point)}) m, is out of reach within the joint "
+                f"ranges{held}: the tool stops {_distance(pos_res)} away; lower 'size' or move the path with "
+                f"'offset_x', 'offset_y', 'offset_z' (the centre is {_point(path.centre)} m)"
             )
         _, jac = evaluate(current)
         q[k] = current

@@ -207,9 +207,11 @@ def test_files_arm_track_cannot_move(capsys, tmp_path, rows, fragment):
 
 def test_a_path_out_of_reach_is_refused_before_the_run(capsys, tmp_path):
     err = refused(capsys, tmp_path, "robot=elbow", "offset_z=2")
-    assert "arm-track on elbow: the path's first point" in err and "is out of reach within the joint ranges" in err
-    err = refused(capsys, tmp_path, "robot=scara", "size=1.5")
-    assert "is out of reach" in err and "lower 'size'" in err
+    assert "arm-track on elbow: the path's first point, (-0.08336, -0.2892, 2.524) m: no solution" in err
+    assert "(closest: 1.49 m away)" in err and "lower 'size' or move the path" in err
+    # The SCARA's circle moved out until its far side is 0.05 mm beyond the 0.65 m reach (a1 + a2).
+    err = refused(capsys, tmp_path, "robot=scara", "offset_x=0.29276", "offset_y=-0.06992")
+    assert "arm-track on scara: the path at t = " in err and "is out of reach within the joint ranges" in err
 
 
 def test_the_python_api_gives_the_same_message(capsys, tmp_path):
