@@ -97,8 +97,8 @@ class ArmRateController:
         # Task-space rate: the reference velocity plus K times the error.
         u = np.empty(self.rows)  # (m,)
         u[:3] = v_des + g.task_gain * (p_des - pose[:3, 3])
-        if self.rows == 6:
-            u[3:] = g.task_gain * rotation_error(pose[:3, :3], rot_des)
+        if self.rows == 6:  # no goal orientation: none is corrected
+            u[3:] = g.task_gain * rotation_error(pose[:3, :3], pose[:3, :3] if rot_des is None else rot_des)
         task = jac[: self.rows]  # (m, n)
         sigma = np.linalg.svd(task, compute_uv=False)
         self.sigma_min = float(sigma[-1]) if len(sigma) == self.rows else 0.0

