@@ -46,9 +46,7 @@ class ArmTrackParams:
     """Parameters of the arm-track scenario (world frame: z up; the path's centre is the reference pose's tool
     point plus the offset)."""
 
-    robot: str = param(
-        "stanford", "", "a package robot or the path of a robot file (docs/robot-files.md)", name_or_file=ROBOT
-    )
+    robot: str = param("stanford", "", "which arm (your own: docs/robot-files.md)", name_or_file=ROBOT)
     path: str = param("circle", "", "circle (diameter size), line (back and forth), figure8", choices=PATHS)
     plane: str = param("xy", "", "the world plane the path lies in", choices=tuple(PLANES))
     size: float = param(0.1, "m", "circle diameter, line length, figure-8 width", gt=0.0, le=2.0, typo=MM)

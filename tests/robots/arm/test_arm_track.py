@@ -150,6 +150,22 @@ def test_paths_velocity_is_the_derivative_and_the_peak_speed_is_speed(kind):
         assert np.allclose(np.linalg.norm(pos - path.centre, axis=1), 0.05)
 
 
+def test_same_inputs_give_the_same_run():
+    first, second = (hs.run("arm-track", robot="scara", path="figure8", duration=0.2) for _ in range(2))
+    assert all(np.array_equal(first.columns[k], second.columns[k]) for k in first.columns)
+
+
+@pytest.mark.slow
+def test_a_sweep_over_robots_by_name_and_file(capsys, tmp_path):
+    path = robot_file(tmp_path)
+    out = tmp_path / "sweep"
+    code, _, err = cli(capsys, "sweep", "arm-track", "--grid", f"robot=elbow,{path}", "--set", "duration=0.3",
+                       "--out", str(out), "--workers", "1", "--no-plots")  # fmt: skip
+    assert code == 0, err
+    rows = (out / "sweep.csv").read_text().splitlines()
+    assert rows[1].startswith("elbow,") and rows[2].startswith(f"{path},") and len(rows) == 3
+
+
 def test_the_run_model_passes_the_replay_check(tmp_path):
     result = hs.run("arm-track", robot="elbow", duration=0.05)
     path = tmp_path / "model.xml"
