@@ -116,7 +116,7 @@ def singularity_figure(result: ScenarioResult) -> Figure:
     plots.legend_above(ax1, ncol=4)
     ax2.step(t, c["joints_at_limit"], where="post", color="tab:orange", label="joint commands at a range end")
     ax2.set_ylabel("joints")
-    plots.min_span(ax2, 1.0)
+    ax2.set_ylim(-0.1, max(1.0, float(c["joints_at_limit"].max())) + 0.1)
     plots.legend_above(ax2, ncol=2)
     diff = np.where(c["jacobian_diff"] > 0, c["jacobian_diff"], np.nan)
     ax3.semilogy(t, diff, color="tab:green", linewidth=0.8, label="max |analytic J - mj_jacSite| (0 not drawn)")

@@ -21,7 +21,7 @@ import numpy as np
 
 from hexabot_sim.control.arm_rate import ArmRateController, ArmRateGains, rotation_error
 from hexabot_sim.kinematics import robots
-from hexabot_sim.kinematics.numeric_ik import pose_and_jacobian
+from hexabot_sim.kinematics.numeric_ik import batch_pose_and_jacobian, pose_and_jacobian
 from hexabot_sim.params import NameOrFile, apart, check_duration, check_run_cost, param
 from hexabot_sim.result import Live, Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.robots.arm import scene
@@ -254,6 +254,8 @@ def _result(name: str, p: ArmTrackParams, loop: ArmLoop, traj) -> ScenarioResult
     worst = int(np.argmin(sigma))
     hits = rec["limits"] > 0
     dt = p.timestep
+    poses, _ = batch_pose_and_jacobian(robots.resolve(p.robot).chain(), traj.qpos[:, loop.qadr])
+    fk_diff = float(np.abs(poses[:, :3, 3] - tool.pos).max())  # our FK of MuJoCo's qpos against its site: qpos = q
     orient = None
     if run_plan.rot_hold is not None:
         orient = np.array([np.linalg.norm(rotation_error(r, run_plan.rot_hold)) for r in tool.xmat])
@@ -275,6 +277,7 @@ def _result(name: str, p: ArmTrackParams, loop: ArmLoop, traj) -> ScenarioResult
         ),
         "joint_limit_time": Metric(float(hits.sum() * dt), "s", "time some joint command sat at a range end"),
         "jacobian_max_diff": Metric(float(jac_diff.max()), "", "max |analytic J - mj_jacSite| over the run"),
+        "fk_max_diff": Metric(fk_diff, "m", "max |analytic FK(qpos) - MuJoCo's tool site| over the run"),
         "centre": Metric([float(v) for v in run_plan.path.centre], "m", "the path's centre"),
         "reference_pose": Metric([float(v) for v in run_plan.q_ref], "", "the best-conditioned pose (rad or m)"),
         "joints": Metric(n, "1", "joints of the robot"),

@@ -61,6 +61,7 @@ def test_circle_within_1_mm_rms_and_the_jacobian_check(robot):
     assert m["tracking_error_rms"].value < TARGET_RMS
     assert m["tracking_error_max"].value < 2 * TARGET_RMS
     assert m["jacobian_max_diff"].value < 1e-12  # analytic J against mj_jacSite at every control period
+    assert m["fk_max_diff"].value < 1e-12  # our FK of MuJoCo's qpos is its tool site: qpos = DH q
     assert m["sigma_min"].value > 0.1 and m["joint_limit_hits"].value == 0
     # The error column is MuJoCo's tool site against the path, recomputed here from the columns.
     c = result.columns
