@@ -72,9 +72,9 @@ def test_circle_within_1_mm_rms_and_the_jacobian_check(robot):
     assert m["orientation_error_max"].value is None  # position only below 6 joints
 
 
-@pytest.mark.slow
 def test_a_seven_dof_file_tracks_the_circle_and_holds_the_tool_orientation(tmp_path):
-    result = short(robot_file(tmp_path))
+    result = hs.run("arm-track", robot=robot_file(tmp_path), duration=1.5)  # a Path from Python
+    assert result.params["robot"] == str(tmp_path / "arm7.toml")
     m = result.metrics
     assert m["joints"].value == 7
     assert m["tracking_error_rms"].value < TARGET_RMS
