@@ -35,8 +35,8 @@ ROBOT = NameOrFile(tuple(robots.ROBOTS), "robot file (.toml)", robots.resolve)
 MM: tuple[str, float] = ("mm", 1e-3)  # the unit users type by mistake for a length in m
 MAX_SERVO_STEP: float = 0.5  # largest 2 pi bandwidth * timestep: the servo's stiffness is integrated explicitly
 # Cost of a run for params.check_run_cost, measured on the 2-core development machine: seconds per control period
-# (controller, mj_step1/2, the Jacobian check: 0.55 ms for scara, 0.67 ms for 7 joints), per recorded row (site
-# replay, columns: 11-40 us), bytes per row.
+# (controller, mj_step1/2, the Jacobian check: 0.22-0.31 ms quiet, 0.55-0.7 ms under load, scara to 7 joints; the
+# worst is taken), per recorded row (site replay, columns: 10-40 us), bytes per row.
 RUN_COST: tuple[float, float, float] = (7e-4, 4e-5, 1500.0)
 PATH_MARKERS: int = 96  # segments drawn for the desired path in the video
 
