@@ -256,11 +256,7 @@ def _name_or_file(name: str, raw: Any, kind: NameOrFile) -> str:
     canonical = {n.casefold(): n for n in kind.names}
     if text.strip().casefold() in canonical:
         return canonical[text.strip().casefold()]
-    try:
-        exists = len(text) <= MAX_PATH_CHARS and "\0" not in text and os.path.exists(text)
-    except (OSError, ValueError):
-        exists = False
-    if not exists:
+    if not (len(text) <= MAX_PATH_CHARS and "\0" not in text and os.path.exists(text)):  # exists() raises no OSError
         raise UsageError(f"parameter '{name}' must be {kind.allowed()}; got {_show(raw)} (no such name or file)")
     try:
         kind.check(text)

@@ -25,7 +25,7 @@ from hexabot_sim.kinematics.numeric_ik import batch_pose_and_jacobian, pose_and_
 from hexabot_sim.params import NameOrFile, apart, check_duration, check_run_cost, param
 from hexabot_sim.result import Live, Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.robots.arm import scene
-from hexabot_sim.robots.arm.path import PATHS, PLANES, RAMP_TIME, Plan, plan
+from hexabot_sim.robots.arm.path import PATHS, PLANES, RAMP_TIME, Path, Plan, plan
 from hexabot_sim.simulate import Controller, simulate, site_trajectory, step_count
 
 if TYPE_CHECKING:
@@ -105,7 +105,9 @@ def _file_key(robot: str) -> tuple:
 def plan_for(p: ArmTrackParams) -> Plan:
     """The run's plan (reference pose, path, start pose, reach check), made once per robot and path."""
     offset = (p.offset_x, p.offset_y, p.offset_z)
-    return _plan(_file_key(p.robot), p.robot, p.path, p.size, p.speed, p.plane, offset, p.duration)
+    cycle = RAMP_TIME + Path(p.path, p.size, p.speed, np.zeros(3), (np.zeros(3), np.zeros(3))).period
+    checked = 0.0 if p.duration == 0 or p.duration >= cycle else p.duration  # 0: the ramp and one cycle
+    return _plan(_file_key(p.robot), p.robot, p.path, p.size, p.speed, p.plane, offset, checked)
 
 
 @functools.lru_cache(maxsize=16)
