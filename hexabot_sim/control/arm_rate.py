@@ -51,7 +51,8 @@ class ArmRateController:
     The tool error is measured from the joint values the controller is given (MuJoCo's qpos), so servo lag and
     integration drift are fed back. The task is the tool position (3 rows), plus the tool orientation (6 rows)
     when `orientation` is set. Near a singularity (sigma_min < threshold) damped least squares with
-    lambda^2 = lambda_max^2 (1 - (sigma/threshold)^2); joint speeds are limited as a whole, the command brakes
+    lambda^2 = lambda_max^2 (1 - (sigma/threshold)^2). A joint at a range end that the step would drive further out
+    is held and the task solved by the others (clamping); joint speeds are limited as a whole, the command brakes
     before a range end at max_acceleration and is clipped into the range (a "limit hit").
     """
 
@@ -84,8 +85,9 @@ class ArmRateController:
 
         Args:
             q: Measured joint values (n,) [rad or m].
-            p_des: Desired tool position (3,) [m] at the end of the period.
-            v_des: Desired tool velocity (3,) [m/s].
+            p_des: Desired tool position (3,) [m] at the time of q (the start of the period).
+            v_des: Desired tool velocity (3,) [m/s]: the desired position's mean rate over the period, so that
+                p_des + v_des dt is the next desired position and the error decays as (1 - K dt) per period.
             rot_des: Desired tool orientation (3, 3) (held; zero angular velocity), or None for position only.
             dt: Control period [s].
 
@@ -100,24 +102,22 @@ class ArmRateController:
         if self.rows == 6:  # no goal orientation: none is corrected
             u[3:] = g.task_gain * rotation_error(pose[:3, :3], pose[:3, :3] if rot_des is None else rot_des)
         task = jac[: self.rows]  # (m, n)
-        sigma = np.linalg.svd(task, compute_uv=False)
-        self.sigma_min = float(sigma[-1]) if len(sigma) == self.rows else 0.0
-        # Damped least squares: dq = Jᵀ (J Jᵀ + λ² I)⁻¹ u, λ = 0 far from singularities.
-        ratio = self.sigma_min / g.sigma_threshold
-        lam = max(g.max_damping * math.sqrt(max(1.0 - ratio * ratio, 0.0)), MIN_DAMPING) if ratio < 1.0 else 0.0
-        gram = task @ task.T + lam * lam * np.eye(self.rows)  # (m, m)
-        dq = task.T @ np.linalg.solve(gram, u)  # (n,)
-        if g.nullspace_gain > 0 and task.shape[1] > self.rows:
-            # Pull toward the rest pose in the null space of the task: (I - J⁺ J) K_n (q_rest - q).
-            pull = g.nullspace_gain * (self.q_rest - q)
-            dq += pull - task.T @ np.linalg.solve(gram, task @ pull)
+        dq, self.sigma_min = self._damped(task, u, q, np.ones(task.shape[1]))
+        # A joint at a range end that dq drives further out is held there and the others solve the task (clamping).
+        room_low = np.maximum(self.q_cmd - self.lower, 0.0)
+        room_high = np.maximum(self.upper - self.q_cmd, 0.0)
+        free = np.ones(task.shape[1])  # (n,) 1: the joint takes part, 0: held at its range end
+        for _ in range(task.shape[1]):
+            blocked = (free > 0) & (((room_low <= LIMIT_TOL) & (dq < 0)) | ((room_high <= LIMIT_TOL) & (dq > 0)))
+            if not blocked.any():
+                break
+            free[blocked] = 0.0
+            dq, _ = self._damped(task, u, q, free)
         # Joint speed limit, on dq as a whole so the tool keeps its direction.
         over = np.max(np.abs(dq) / g.max_speed)
         if over > 1.0:
             dq /= over
         # Range ends: never faster toward one than braking at max_acceleration can stop, sqrt(2 a room).
-        room_low = np.maximum(self.q_cmd - self.lower, 0.0)
-        room_high = np.maximum(self.upper - self.q_cmd, 0.0)
         dq = np.clip(dq, -np.sqrt(2 * g.max_acceleration * room_low), np.sqrt(2 * g.max_acceleration * room_high))
         # Integrate inside the ranges; the rate recorded is what q_cmd actually did.
         target = self.q_cmd + dq * dt
@@ -126,3 +126,20 @@ class ArmRateController:
         self.dq = (new - self.q_cmd) / dt
         self.q_cmd = new
         return self.q_cmd, self.dq
+
+    def _damped(self, task: np.ndarray, u: np.ndarray, q: np.ndarray, free: np.ndarray) -> tuple[np.ndarray, float]:
+        """dq (n,) = Jᵀ (J Jᵀ + λ² I)⁻¹ u with the columns of held joints (free = 0) zeroed, λ = 0 far from
+        singularities, plus the null-space pull of a redundant task; and sigma_min of that Jacobian."""
+        g = self.gains
+        jac = task * free  # (m, n)
+        sigma = np.linalg.svd(jac, compute_uv=False)
+        sigma_min = float(sigma[-1]) if len(sigma) == self.rows else 0.0
+        ratio = sigma_min / g.sigma_threshold
+        lam = max(g.max_damping * math.sqrt(max(1.0 - ratio * ratio, 0.0)), MIN_DAMPING) if ratio < 1.0 else 0.0
+        gram = jac @ jac.T + lam * lam * np.eye(self.rows)  # (m, m)
+        dq = jac.T @ np.linalg.solve(gram, u)  # (n,)
+        if g.nullspace_gain > 0 and free.sum() > self.rows:
+            # Pull toward the rest pose in the null space of the task: (I - J⁺ J) K_n (q_rest - q).
+            pull = g.nullspace_gain * (self.q_rest - q) * free
+            dq += pull - jac.T @ np.linalg.solve(gram, jac @ pull)
+        return dq, sigma_min

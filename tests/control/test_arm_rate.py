@@ -7,6 +7,7 @@ import pytest
 
 from hexabot_sim.control.arm_rate import ArmRateController, ArmRateGains, rotation_error
 from hexabot_sim.kinematics import robots
+from hexabot_sim.kinematics.chain import Joint, SerialChain
 from hexabot_sim.kinematics.numeric_ik import pose_and_jacobian
 
 ELBOW = robots.get("elbow").chain()
@@ -64,3 +65,23 @@ def test_rotation_error_is_axis_times_angle(angle):
     turn = np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * k @ k  # Rodrigues
     rot = ELBOW.fk(np.array([0.1, 0.2, 0.3]))[:3, :3]
     assert np.allclose(rotation_error(rot, turn @ rot), angle * axis, atol=1e-9)
+
+
+def test_a_joint_at_its_range_end_is_held_and_the_others_track():
+    """A redundant arm (7 joints, position task) with joint 4 at its upper end, asked to move the tool the way joint 4
+    alone would: the step holds joint 4 and the other six follow the moving target (kinematically, q = q_cmd)."""
+    rows = [(0.36, -90), (0.0, 90), (0.42, 90), (0.0, -90), (0.4, -90), (0.0, 90), (0.126, 0)]
+    joints = tuple(Joint(f"q{i}", "revolute", 0.0, d, 0.0, math.radians(alpha), -2.0, 2.0)
+                   for i, (d, alpha) in enumerate(rows))  # fmt: skip
+    chain = SerialChain("seven", joints)
+    q0 = np.array([0.3, 0.8, -0.4, 2.0, 0.5, 0.9, 0.1])  # q4 at its 2 rad end
+    velocity = chain.jacobian(q0)[:3, 3]
+    velocity *= 0.05 / np.linalg.norm(velocity)  # [m/s] the way joint 4 alone would move the tool
+    g = ArmRateGains(10.0, 0.01, 0.01, np.full(7, 3.0), np.full(7, 50.0))
+    c = ArmRateController(pose_and_jacobian(chain), g, q0, np.full(7, -2.0), np.full(7, 2.0), orientation=False)
+    start, dt = chain.fk(q0)[:3, 3], 1e-3
+    for k in range(500):
+        c.update(c.q_cmd, start + velocity * k * dt, velocity, None, dt)
+        assert c.q_cmd[3] == 2.0 and c.clipped[3]
+    # Within 3.6 µm all along (measured; without the clamping the tool falls 24 mm behind: joint 4 takes the motion).
+    assert np.linalg.norm(chain.fk(c.q_cmd)[:3, 3] - (start + velocity * 0.5)) < 1e-5

@@ -20,6 +20,7 @@ RAMP_TIME: float = 0.5  # [s] the path speed rises from 0 as (1 - cos(pi t / RAM
 CANDIDATES: int = 512  # random configurations the reference pose is chosen among (plus the home pose)
 RANGE_MARGIN: float = 0.15  # candidates keep this fraction of each joint range from its ends
 SEED: int = 20  # the candidates are the same on every call: the same robot gets the same reference pose
+TRIES: int = 8  # with no offset, the next-best reference poses are tried while the path is out of reach from one
 SAMPLES: int = 200  # points of the path checked for reach before the run (one period or the duration)
 REACH_TOL: float = 1e-6  # [m and rad] a sample the tool reaches closer than this is reached
 RANK_TOL: float = 1e-9  # sigma_min below this fraction of the largest singular value is 0 (rank deficient)
@@ -127,9 +128,15 @@ def sigma_scale(jac: np.ndarray) -> float:
     return float(np.linalg.svd(jac, compute_uv=False)[:, 0].max())
 
 
-def reference_pose(chain: SerialChain, lower: np.ndarray, upper: np.ndarray, where: str) -> np.ndarray:
-    """The configuration with the largest task-Jacobian sigma_min among CANDIDATES random ones (and the home pose),
-    each joint at least RANGE_MARGIN of its range from the ends; tool above the base frame's origin if any is."""
+def reference_poses(chain: SerialChain, lower: np.ndarray, upper: np.ndarray, where: str) -> tuple[np.ndarray, int]:
+    """The TRIES configurations with the largest task-Jacobian sigma_min among CANDIDATES random ones (and the home
+    pose), best first, each joint at least RANGE_MARGIN of its range from the ends; tool above the base frame's
+    origin first.
+
+    Returns:
+        (q_refs (TRIES, n), task rows): 6 (position and orientation) for 6+ joints that turn the tool about every
+        axis, else 3 (position only: a 6-joint chain of parallel axes cannot hold an orientation).
+    """
     lo = np.where(np.isfinite(lower), lower, -math.pi)
     hi = np.where(np.isfinite(upper), upper, math.pi)
     span = hi - lo
@@ -137,16 +144,16 @@ def reference_pose(chain: SerialChain, lower: np.ndarray, upper: np.ndarray, whe
     q = lo + span * (RANGE_MARGIN + (1 - 2 * RANGE_MARGIN) * rng.random((CANDIDATES, chain.n)))  # (S, n)
     q = np.vstack([np.clip(home_pose(chain), lo + RANGE_MARGIN * span, hi - RANGE_MARGIN * span), q])
     pose, jac = batch_pose_and_jacobian(chain, q)
-    sigma = np.linalg.svd(jac[:, list(task_rows(chain))], compute_uv=False)[:, -1]  # (S,)
-    if sigma.max() <= RANK_TOL * sigma_scale(jac):
-        raise UsageError(
-            f"{where}: its tool cannot move in every direction at any of {len(q)} poses (sigma_min of the task "
-            f"Jacobian is 0 at each): arm-track needs {'6 (position and orientation)' if jac.shape[2] >= 6 else '3'} "
-            "independent directions"
-        )
-    above = pose[:, 2, 3] >= np.asarray(chain.base)[2, 3]
-    score = np.where(above, sigma, sigma - np.inf) if above.any() else sigma
-    return q[int(np.argmax(score))]
+    for rows in (6, 3) if len(task_rows(chain)) == 6 else (3,):
+        sigma = np.linalg.svd(jac[:, :rows], compute_uv=False)[:, -1]  # (S,)
+        if sigma.max() > RANK_TOL * sigma_scale(jac):
+            above = pose[:, 2, 3] >= np.asarray(chain.base)[2, 3]
+            score = np.where(above, sigma, sigma - np.inf) if above.any() else sigma
+            return q[np.argsort(-score, kind="stable")[:TRIES]], rows
+    raise UsageError(
+        f"{where}: its tool cannot move in every direction at any of {len(q)} poses (sigma_min of the position "
+        "Jacobian is 0 at each): arm-track needs 3 independent directions of the tool point"
+    )
 
 
 def _solve(evaluate, q, goal_p, goal_r, lower, upper, steps):
@@ -202,6 +209,9 @@ def plan(
 ) -> Plan:
     """The reference pose, the path, the start pose and the path's reach along one period (or the duration).
 
+    The reference pose is the best-conditioned candidate (reference_poses); with no offset, the next ones are tried
+    while the path is out of reach from it. The path is centred on its tool point plus `offset`.
+
     Raises:
         UsageError: fewer than 3 joints, a slide without limits, or a path point the tool cannot reach within the
             joint ranges (one line naming the time and the point).
@@ -209,12 +219,37 @@ def plan(
     if chain.n < 3:
         raise UsageError(f"{where}: arm-track moves the tool in 3-D and needs 3 or more joints; it has {chain.n}")
     lower, upper = ranges(chain, where)
-    rows = len(task_rows(chain))
-    q_ref = reference_pose(chain, lower, upper, where)
+    q_refs, rows = reference_poses(chain, lower, upper, where)
     evaluate = pose_and_jacobian(chain)
-    pose_ref, _ = evaluate(q_ref)
+    refused = None
+    for q_ref in q_refs if not np.any(offset) else q_refs[:1]:  # an offset is from the best pose's tool point
+        try:
+            return _follow(
+                chain,
+                evaluate,
+                q_ref,
+                rows,
+                Path(kind, size, speed, offset, _axes(plane)),
+                duration,
+                lower,
+                upper,
+                where,
+            )
+        except UsageError as e:
+            refused = refused or e
+    assert refused is not None
+    raise refused
+
+
+def _axes(plane: str) -> tuple[np.ndarray, np.ndarray]:
     e1, e2 = (np.eye(3)[i] for i in PLANES[plane])
-    path = Path(kind, size, speed, pose_ref[:3, 3] + offset, (e1, e2))
+    return e1, e2
+
+
+def _follow(chain, evaluate, q_ref, rows, shape, duration, lower, upper, where) -> Plan:
+    """The path `shape` moved to q_ref's tool point (its centre was the offset), followed from q_ref (see plan)."""
+    pose_ref, _ = evaluate(q_ref)
+    path = dataclasses.replace(shape, centre=pose_ref[:3, 3] + shape.centre)
     rot = pose_ref[:3, :3].copy() if rows == 6 else None
     end = min(duration, RAMP_TIME + path.period)
     t = np.linspace(0.0, end, SAMPLES + 1)  # (k,)
