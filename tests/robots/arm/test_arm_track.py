@@ -236,3 +236,17 @@ def test_the_python_api_gives_the_same_message(capsys, tmp_path):
     with pytest.raises(UsageError) as info:
         hs.run("arm-track", robot="elbow", offset_z=2)
     assert err == f"hexabot-sim: error: {info.value}"
+
+
+def test_six_joints_that_cannot_turn_the_tool_about_every_axis_track_the_position_only(tmp_path):
+    """A base turn and five parallel elbows: 6 joints, 2 axis directions; no held orientation, the position tracked."""
+    rows = [("0.0", "90.0", "0.3")] + [("0.15", "0.0", "0.0")] * 5  # (a, alpha, d)
+    text = ['name = "planar6"', 'convention = "standard"', 'angles = "deg"']
+    for i, (a, alpha, d) in enumerate(rows, start=1):
+        text += ["[[joints]]", f'name = "q{i}"', 'type = "revolute"', f"a = {a}", f"alpha = {alpha}", f"d = {d}",
+                 "theta = 0.0", "lower = -150.0", "upper = 150.0"]  # fmt: skip
+    path = tmp_path / "planar6.toml"
+    path.write_text("\n".join(text))
+    m = hs.run("arm-track", robot=str(path), duration=1.0).metrics
+    assert m["joints"].value == 6 and m["orientation_error_max"].value is None
+    assert m["tracking_error_rms"].value < TARGET_RMS
