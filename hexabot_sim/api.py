@@ -35,7 +35,8 @@ class Parameter:
         doc: One-line meaning.
         allowed: The allowed values in words, e.g. "-1 <= amplitude <= 1 m/s" or "one of dynamic, kinematic".
         bounds: (lowest, highest) allowed number (whether each end is included: see `allowed`); None for text.
-        choices: The allowed strings of a text parameter (case-insensitive), else None.
+        choices: The allowed strings of a text parameter (case-insensitive), else None (a number, or a parameter
+            that takes a name or a file's path: see `allowed`).
     """
 
     name: str
@@ -66,7 +67,7 @@ def _info(scenario: Scenario) -> ScenarioInfo:
     for name, (info, default) in params_mod.infos(scenario.params_type).items():
         value = scenario.defaults.get(name, default)
         bounds = None
-        if info.choices is None and info.table is None:
+        if not info.text and info.table is None:
             low = info.ge if info.ge is not None else info.gt
             high = info.le if info.le is not None else info.lt
             bounds = (float(low), float(high))  # type: ignore[arg-type]

@@ -103,8 +103,8 @@ RUN_MODEL_ELEMENTS = 20_000  # runs write ~200
 RUN_MODEL_DEPTH = 32  # runs write 7
 RUN_MODEL_TAGS = frozenset(
     "accelerometer actuator asset body camera compiler default framequat freejoint geom global gyro headlight hfield "
-    "inertial joint key keyframe light material mujoco option position sensor site statistic texture touch velocity "
-    "visual worldbody".split()
+    "inertial joint key keyframe light material motor mujoco option position sensor site statistic texture touch "
+    "velocity visual worldbody".split()
 )
 _FILE_ATTRIBUTES = frozenset(
     "file fileback filedown filefront fileleft fileright fileup meshdir texturedir assetdir content_type".split()

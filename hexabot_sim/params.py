@@ -21,6 +21,21 @@ from hexabot_sim.errors import UsageError
 MAX_LIST_ITEMS: int = 400  # longest comma-separated list a parameter takes (a grid axis)
 MAX_CONFIG_BYTES: int = 1 << 20  # a parameter file is a few lines; more than 1 MiB is not one
 MAX_SHOWN: int = 40  # characters of a bad value quoted back in an error message
+MAX_PATH_CHARS: int = 4096  # longest file path a name-or-file parameter takes (PATH_MAX on Linux)
+
+
+@dataclasses.dataclass(frozen=True)
+class NameOrFile:
+    """A text parameter that names one of `names` or gives the path of a file (a robot: a name or a TOML file);
+    `check` reads the file when the parameter is resolved, so a bad one is refused (UsageError) before the run."""
+
+    names: tuple[str, ...]  # matched case-insensitively; a name wins over a file of the same name
+    what: str  # the file's kind in messages, e.g. "robot file (.toml)"
+    check: Callable[[str], object]  # path -> anything; raises UsageError (one line) for any problem
+
+    def allowed(self) -> str:
+        return f"one of {', '.join(self.names)}, or the path of a {self.what}"
+
 
 # What one run may cost, checked before it starts (check_budget). Measured on the 2-core
 # development machine (numbers in the report of issue 8): a pendulum mj_step costs 7.5-10 us,
@@ -48,6 +63,7 @@ class ParamInfo:
             a value out of range, at least 10 in size and in range in that unit gets a "did you mean" hint.
         table: (what it takes in words, reader) of a table parameter: a CSV file name (--set, TOML) or rows
             (the Python API), which reader(name, raw) turns into a tuple of rows or refuses (UsageError).
+        name_or_file: A text parameter that is a built-in name or the path of a file (NameOrFile), else None.
     """
 
     unit: str
@@ -59,6 +75,11 @@ class ParamInfo:
     choices: tuple[str, ...] | None = None
     typo: tuple[str, float] | None = None
     table: tuple[str, Callable[[str, Any], tuple]] | None = None
+    name_or_file: NameOrFile | None = None
+
+    @property
+    def text(self) -> bool:  # a text parameter (choices, or a name or file), not a number
+        return self.choices is not None or self.name_or_file is not None
 
     def contains(self, value: float) -> bool:
         """True if the number is inside the allowed range."""
@@ -82,16 +103,18 @@ def param(
     choices: tuple[str, ...] | None = None,
     typo: tuple[str, float] | None = None,
     table: tuple[str, Callable[[str, Any], tuple]] | None = None,
+    name_or_file: NameOrFile | None = None,
 ) -> Any:
     """Declares a field of a scenario's parameter dataclass.
 
     A number needs a range with both ends (ge or gt, le or lt): every value that passes is one the
-    scenario can run. A text parameter needs its choices; a table parameter its reader (ParamInfo.table).
+    scenario can run. A text parameter needs its choices, or is a name or a file (name_or_file); a table
+    parameter needs its reader (ParamInfo.table).
     """
-    bounded = choices is not None or table is not None
+    bounded = choices is not None or name_or_file is not None or table is not None
     if not bounded and ((ge is None) == (gt is None) or (le is None) == (lt is None)):
         raise ValueError(f"parameter {doc!r}: give exactly one lower (ge, gt) and one upper (le, lt) bound")
-    info = ParamInfo(unit, doc, ge, gt, le, lt, choices, typo, table)
+    info = ParamInfo(unit, doc, ge, gt, le, lt, choices, typo, table, name_or_file)
     return dataclasses.field(default=default, metadata={"param": info})
 
 
@@ -134,6 +157,8 @@ def describe_range(info: ParamInfo, name: str = "value") -> str:
         return f"one of {', '.join(info.choices)}"
     if info.table is not None:
         return f"{name} = {info.table[0]}"
+    if info.name_or_file is not None:
+        return info.name_or_file.allowed()
     low = f"{_number(info.ge)} <= " if info.ge is not None else f"{_number(info.gt)} < "  # type: ignore[arg-type]
     high = f" <= {_number(info.le)}" if info.le is not None else f" < {_number(info.lt)}"  # type: ignore[arg-type]
     unit = f" {info.unit}" if info.unit and info.unit != "1" else ""
@@ -205,6 +230,8 @@ def _convert(name: str, raw: Any, info: ParamInfo, kind: type) -> Any:
         if len(items) > MAX_LIST_ITEMS:
             raise UsageError(f"parameter '{name}' takes at most {MAX_LIST_ITEMS} numbers; got more")
         return tuple(_convert(name, v, info, float) for v in items)
+    if info.name_or_file is not None:
+        return _name_or_file(name, raw, info.name_or_file)
     if info.choices is not None:
         text = raw.strip() if isinstance(raw, str) else None
         canonical = {c.casefold(): c for c in info.choices}
@@ -228,6 +255,23 @@ def _convert(name: str, raw: Any, info: ParamInfo, kind: type) -> Any:
             raise UsageError(f"parameter '{name}' must be a whole number with {allowed}; got {_show(raw)}")
         return int(value)
     return value
+
+
+def _name_or_file(name: str, raw: Any, kind: NameOrFile) -> str:
+    """A built-in name (canonical spelling) or the path of a file that kind.check accepts, as given."""
+    text = os.fspath(raw) if isinstance(raw, (str, os.PathLike)) else None
+    if not isinstance(text, str) or not text.strip():
+        raise UsageError(f"parameter '{name}' must be {kind.allowed()}; got {_show(raw)}")
+    canonical = {n.casefold(): n for n in kind.names}
+    if text.strip().casefold() in canonical:
+        return canonical[text.strip().casefold()]
+    if not (len(text) <= MAX_PATH_CHARS and "\0" not in text and os.path.exists(text)):  # exists() raises no OSError
+        raise UsageError(f"parameter '{name}' must be {kind.allowed()}; got {_show(raw)} (no such name or file)")
+    try:
+        kind.check(text)
+    except UsageError as e:
+        raise UsageError(f"parameter '{name}': {e}") from None
+    return text
 
 
 def parse_assignments(items: list[str]) -> dict[str, str]:

@@ -8,7 +8,7 @@ from hexabot_sim.errors import lookup
 from hexabot_sim.scenario import Scenario
 
 # The robot folders, in the order `hexabot-sim list` shows them: adding a robot is one name here.
-ROBOTS: tuple[str, ...] = ("pendulum", "leg", "hexabot", "quadbot", "rrp")
+ROBOTS: tuple[str, ...] = ("pendulum", "leg", "hexabot", "quadbot", "rrp", "arm")
 
 
 def _declared() -> dict[str, Scenario]:

@@ -33,12 +33,14 @@ def test_scenarios_lists_every_scenario_with_its_parameters():
             assert p.doc and (p.choices or p.name in p.allowed)
             if p.choices is not None:
                 assert p.default in p.choices
-            elif p.bounds is None:  # a table parameter (a CSV file, or rows from the API): empty by default
-                assert p.default == () and "CSV file" in p.allowed
-            else:
+            elif p.bounds is not None:
                 low, high = p.bounds
                 values = p.default if isinstance(p.default, tuple) else (p.default,)
                 assert all(low <= v <= high for v in values), (info.name, p)
+            elif "CSV file" in p.allowed:  # a table parameter (a CSV file, or rows from the API): empty by default
+                assert p.default == ()
+            else:  # a name or a file: the default is a name, and the names are listed
+                assert p.default in p.allowed and "path of a" in p.allowed
     amplitude = infos["leg-step"].parameters["amplitude"]
     assert (amplitude.default, amplitude.unit, amplitude.allowed) == (0.05, "m/s", "-1 <= amplitude <= 1 m/s")
     assert infos["pendulum"].defaults["stiffness"] == 0.5 and infos["pendulum-undamped"].defaults["stiffness"] == 0

@@ -141,7 +141,7 @@ def _bounds():
     for cls_name, scenario in sorted(classes.items()):
         cls = scenario.params_type
         for name, (info, default) in params.infos(cls).items():
-            if info.choices is None and info.table is None:  # a table's rows are checked by its reader
+            if not info.text and info.table is None:  # a table's rows are checked by its reader
                 yield pytest.param(scenario, name, info, type(default), id=f"{cls_name}.{name}")
 
 
@@ -194,6 +194,8 @@ def test_every_number_has_a_range_and_every_text_choices():
                 assert default in info.choices, name
             elif info.table is not None:  # a table (a CSV file or rows): empty by default, and its reader takes that
                 assert default == () and info.table[1](name, default) == (), name
+            elif info.name_or_file is not None:
+                assert default in info.name_or_file.names, name
             else:
                 assert (info.ge is None) != (info.gt is None) and (info.le is None) != (info.lt is None), name
                 values = default if isinstance(default, tuple) else (default,)

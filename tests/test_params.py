@@ -1,6 +1,7 @@
 """Parameter resolution: defaults, config files, --set, and the messages for bad values."""
 
 import dataclasses
+from pathlib import Path
 
 import pytest
 
@@ -111,3 +112,52 @@ def test_exact_python_numbers_are_accepted():
     assert (p.duration, p.damping) == (2.5, 0.02)
     with pytest.raises(UsageError, match="got Decimal"):
         params.resolve(PendulumParams, {}, {"duration": decimal.Decimal("NaN")})
+
+
+# --- a parameter that is a built-in name or a file's path (arm-track's robot) ------------------------------------
+
+
+def _name_or_file_class():
+    def check(path):
+        if Path(path).read_text() != "ok":
+            raise UsageError(f"file {path}: not ok")
+
+    kind = params.NameOrFile(("alpha", "beta"), "thing file (.txt)", check)
+
+    @dataclasses.dataclass(frozen=True)
+    class Things:
+        thing: str = params.param("alpha", "", "a thing", name_or_file=kind)
+
+    return Things
+
+
+def test_name_or_file_takes_a_name_in_any_case_or_a_good_file_as_given(tmp_path):
+    cls = _name_or_file_class()
+    assert params.resolve(cls, {}, {"thing": " BETA "}).thing == "beta"
+    good = tmp_path / "good.txt"
+    good.write_text("ok")
+    assert params.resolve(cls, {}, {"thing": str(good)}).thing == str(good)
+    assert params.resolve(cls, {}, {"thing": good}).thing == str(good)  # a Path from Python
+    allowed = params.describe_range(params.infos(cls)["thing"][0])
+    assert allowed == "one of alpha, beta, or the path of a thing file (.txt)"
+
+
+@pytest.mark.parametrize(
+    ("value", "fragment"),
+    [
+        ("gamma", "must be one of alpha, beta, or the path of a thing file (.txt); got 'gamma' (no such name or file)"),
+        (5, "got 5"),
+        ("", "got ''"),
+        ("a\0b", "(no such name or file)"),
+        ("x" * 5000, "(no such name or file)"),
+        ("BAD", "parameter 'thing': file "),
+    ],
+)
+def test_name_or_file_refusals_are_one_line(tmp_path, value, fragment):
+    bad = tmp_path / "BAD"
+    bad.write_text("no")
+    if value == "BAD":
+        value = str(bad)
+    with pytest.raises(UsageError) as info:
+        params.resolve(_name_or_file_class(), {}, {"thing": value})
+    assert fragment in str(info.value) and "\n" not in str(info.value)
