@@ -6,6 +6,7 @@ import dataclasses
 import math
 import os
 import re
+import stat
 import tomllib
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -72,6 +73,7 @@ class RobotSpec:
         masses: Each joint's link mass in [kg], or None for the model's default (solid aluminium cylinders).
         source: The file it was read from, or None for a spec written in Python.
         builtin: One of the package's robots (their closed-form IK and singular sets apply).
+        file_id: The file's (device, inode), or None: `export` refuses to write over it.
     """
 
     name: str
@@ -83,6 +85,7 @@ class RobotSpec:
     masses: tuple[float | None, ...] = ()
     source: str | None = None
     builtin: bool = False
+    file_id: tuple[int, int] | None = None  # (st_dev, st_ino) of the file read: exports never write over it
 
     def values(self, overrides: Mapping[str, float] | None = None) -> dict[str, float]:
         """Every length by name in [m]: the defaults replaced by `overrides` (validated)."""
@@ -121,19 +124,31 @@ def read(path: str | os.PathLike[str], *, builtin: bool = False) -> RobotSpec:
     """
     shown = printable(os.fspath(path))
     try:
-        with open(path, "rb") as f:
-            data = f.read(MAX_FILE_BYTES + 1)
+        # Non-blocking: a FIFO opens at once (and is refused below) instead of waiting for a writer forever.
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_BINARY", 0))
     except IsADirectoryError:
         raise UsageError(f"robot file {shown}: is a folder, not a file") from None
     except OSError as e:
         raise UsageError(f"robot file {shown}: cannot be read ({e.strerror or e})") from None
+    status = os.fstat(fd)
+    if not stat.S_ISREG(status.st_mode):  # a folder, a FIFO, a device (/dev/zero), a socket: not a DH table
+        os.close(fd)
+        if stat.S_ISDIR(status.st_mode):
+            raise UsageError(f"robot file {shown}: is a folder, not a file")
+        raise UsageError(f"robot file {shown}: not a regular file (a pipe or a device); give a .toml file")
+    with open(fd, "rb") as f:
+        try:
+            data = f.read(MAX_FILE_BYTES + 1)
+        except OSError as e:
+            raise UsageError(f"robot file {shown}: cannot be read ({e.strerror or e})") from None
     if len(data) > MAX_FILE_BYTES:
         raise UsageError(f"robot file {shown}: larger than {MAX_FILE_BYTES // 1024} KiB; a robot file is a DH table")
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-8").removeprefix("\ufeff")  # a BOM from a Windows editor, as params.read_config
     except UnicodeDecodeError as e:
         raise UsageError(f"robot file {shown}: not UTF-8 text (byte {e.start})") from None
-    return parse(text, shown, builtin=builtin)
+    spec = parse(text, shown, builtin=builtin)
+    return dataclasses.replace(spec, file_id=(status.st_dev, status.st_ino))
 
 
 def parse(text: str, source: str = "<robot file>", *, builtin: bool = False) -> RobotSpec:
@@ -142,6 +157,8 @@ def parse(text: str, source: str = "<robot file>", *, builtin: bool = False) -> 
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise UsageError(f"robot file {source}: not valid TOML: {e}") from None
+    except RecursionError:  # tomllib parses nested arrays and inline tables recursively: `x = [[[[...]]]]`
+        raise UsageError(f"robot file {source}: not valid TOML: arrays or tables nested too deeply") from None
     return _Reader(source, doc).spec(builtin)
 
 

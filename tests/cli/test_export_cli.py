@@ -96,3 +96,33 @@ def test_the_api_exports_a_spec_and_refuses_a_folder(tmp_path):
     assert path == tmp_path / "leg.urdf" and 'name="tool"' in path.read_text()
     with pytest.raises(UsageError, match="is a folder"):
         api.export("leg", mjcf=tmp_path)
+
+
+def test_the_robot_file_itself_is_never_written_over_not_even_with_force(tmp_path, capsys):
+    robot = tmp_path / "slide.toml"
+    robot.write_text(SLIDE)
+    (tmp_path / "link.toml").symlink_to(robot)
+    (tmp_path / "hard.xml").hardlink_to(robot)
+    for source, out in (("slide.toml", "slide.toml"), ("link.toml", "slide.toml"), ("slide.toml", "link.toml"),
+                        ("slide.toml", "hard.xml")):  # fmt: skip
+        code, stdout, err = cli(capsys, "export", str(tmp_path / source), "--mjcf", str(tmp_path / out), "--force")
+        assert code == 2 and stdout == "" and err.count("\n") == 1, err
+        assert "is the robot file being exported; it is never written over" in err
+    assert robot.read_text() == SLIDE and sorted(p.name for p in tmp_path.iterdir()) == [
+        "hard.xml", "link.toml", "slide.toml"]  # fmt: skip
+
+
+@pytest.mark.parametrize("urdf", ["{d}/out.xml", "{d}/sub/../out.xml", "./out.xml"])
+def test_one_file_spelled_two_ways_is_refused_before_anything_is_written(tmp_path, capsys, monkeypatch, urdf):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "sub").mkdir()
+    for force in ([], ["--force"]):
+        code, out, err = cli(capsys, "export", "elbow", "--mjcf", "out.xml", "--urdf", urdf.format(d=tmp_path), *force)
+        assert code == 2 and out == "" and err.count("\n") == 1 and "--mjcf and --urdf name the same file" in err
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["sub"]
+
+
+def test_a_path_ending_in_a_slash_names_a_folder_not_a_file(tmp_path, capsys):
+    code, out, err = cli(capsys, "export", "elbow", "--mjcf", f"{tmp_path}/new/")
+    assert code == 2 and out == "" and "ends with '/': that names a folder; give a file name" in err
+    assert list(tmp_path.iterdir()) == []

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -208,3 +209,26 @@ def test_a_name_or_a_path_resolves(tmp_path):
     assert robots.resolve(write(tmp_path, ARM)).name == "textbook-arm"
     with pytest.raises(UsageError, match="unknown robot 'puma'; known: rrp, elbow, stanford, scara, leg, or the path"):
         robots.resolve("puma")
+
+
+def test_a_fifo_or_a_device_is_refused_at_once_not_waited_on(tmp_path):
+    fifo = tmp_path / "pipe.toml"
+    os.mkfifo(fifo)  # no writer: a blocking open would wait forever
+    for path in (fifo, Path(os.devnull)):
+        with pytest.raises(UsageError, match=r"not a regular file \(a pipe or a device\)"):
+            robot_file.read(path)
+    with pytest.raises(UsageError, match="is a folder, not a file"):
+        robot_file.read(tmp_path)
+
+
+@pytest.mark.parametrize("value", ["[" * 5000 + "]" * 5000, "{a=" * 5000 + "1" + "}" * 5000])
+def test_deeply_nested_toml_is_one_line_not_a_recursion_error(tmp_path, capsys, value):
+    path = write(tmp_path, ARM + f"x = {value}\n")
+    code, out, err = cli(capsys, "kin", str(path))
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert "not valid TOML: arrays or tables nested too deeply" in err
+
+
+def test_a_byte_order_mark_is_read_as_params_read_config_reads_it(tmp_path):
+    spec = robot_file.read(write(tmp_path, "\ufeff" + ARM))
+    assert spec.name == "textbook-arm" and spec.file_id is not None
