@@ -8,6 +8,7 @@ import os
 import re
 import stat
 import tomllib
+import unicodedata
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
@@ -213,7 +214,7 @@ class _Reader:
         doc = self.keys(self.doc, TOP_KEYS, "", ("name", "convention", "angles", "joints"))
         name = self.name(doc["name"], "", "'name'")
         summary = doc.get("summary", "")
-        if not isinstance(summary, str) or "\n" in summary or len(summary) > 200:
+        if not _one_line(summary) or len(summary) > 200:
             raise self.fail("", f"'summary' must be one line of text (at most 200 characters); got {_shown(summary)}")
         convention = self.choice(doc, "convention", CONVENTIONS, "")
         self.unit = self.choice(doc, "angles", ANGLE_UNITS, "")
@@ -276,7 +277,7 @@ class _Reader:
                 entry = {"value": entry}
             doc = entry.get("doc", "")
             zero = entry.get("zero", False)
-            if not isinstance(doc, str) or "\n" in doc:
+            if not _one_line(doc):
                 raise self.fail(where, f"'doc' must be one line of text; got {_shown(doc)}")
             if not isinstance(zero, bool):
                 raise self.fail(where, f"'zero' must be true or false; got {_shown(zero)}")
@@ -353,6 +354,14 @@ class _Reader:
         return position, _rz(*cs[2]) @ _ry(*cs[1]) @ _rx(*cs[0]) + 0.0
 
 
+def _one_line(text: Any) -> bool:
+    """One line of printable text: it goes into the MJCF's and URDF's header comment (XML allows no control
+    characters, U+FFFE or U+FFFF, even in a comment) and onto the terminal (ESC would recolour it)."""
+    return isinstance(text, str) and not any(
+        (unicodedata.category(c) == "Cc" and c != "\t") or c in "\u2028\u2029\ufffe\uffff" for c in text
+    )
+
+
 def _shown(value: Any) -> str:
     """A TOML value for a message, short and on one line."""
     text = printable(repr(value))
@@ -426,7 +435,8 @@ def _build(
 
 
 def _check_not_degenerate(spec: RobotSpec, source: str) -> None:
-    """A chain whose every link, offset, stroke and tool offset is zero cannot move its tool: refused."""
+    """A chain whose links, offsets, strokes and tool offset are all zero (or add up to less than LENGTH_MIN) cannot
+    move its tool: refused."""
     chain = spec.chain()
     size = sum(abs(j.a) + abs(j.d) for j in chain.joints) + float(np.linalg.norm(chain.tool[:3, 3]))
     size += sum(abs(j.upper or 0.0) + abs(j.lower or 0.0) for j in chain.joints if j.prismatic)
@@ -434,6 +444,11 @@ def _check_not_degenerate(spec: RobotSpec, source: str) -> None:
         raise UsageError(
             f"robot file {source}: every link length, offset and tool offset is 0, so the tool point never moves; "
             "give at least one 'a', 'd' or tool 'xyz' a length"
+        )
+    if 0 < size < LENGTH_MIN and not any(j.prismatic for j in chain.joints):  # e.g. a = 1e-300: a point, no arm
+        raise UsageError(
+            f"robot file {source}: the link lengths, offsets and tool offset add up to {size:.3g} m, less than "
+            f"{LENGTH_MIN * 1000:g} mm: the tool point barely moves and no tolerance means anything at that scale"
         )
 
 

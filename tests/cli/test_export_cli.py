@@ -126,3 +126,20 @@ def test_a_path_ending_in_a_slash_names_a_folder_not_a_file(tmp_path, capsys):
     code, out, err = cli(capsys, "export", "elbow", "--mjcf", f"{tmp_path}/new/")
     assert code == 2 and out == "" and "ends with '/': that names a folder; give a file name" in err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_exported_files_are_well_formed_xml_whatever_the_summary_says(tmp_path, capsys):
+    from xml.dom import minidom
+
+    robot = tmp_path / "slide.toml"
+    robot.write_text(SLIDE.replace('name = "slide"', 'name = "slide"\nsummary = "x-->y <&> ends with-"'))
+    mjcf, urdf = tmp_path / "out.xml", tmp_path / "out.urdf"
+    code, _, err = cli(capsys, "export", str(robot), "--mjcf", str(mjcf))
+    assert code == 0, err
+    minidom.parse(str(mjcf))
+    mujoco.MjModel.from_xml_path(str(mjcf))
+    robot.write_text(robot.read_text().replace("d = 0.1\n", "d = 0.1\nlower = 0.0\nupper = 0.2\n"))
+    code, _, err = cli(capsys, "export", str(robot), "--urdf", str(urdf))
+    assert code == 0, err
+    minidom.parse(str(urdf))
+    mujoco.MjModel.from_xml_path(str(urdf))

@@ -156,6 +156,16 @@ def joint_block(i: int) -> str:
         ("name = [", "not valid TOML"),
         ('name = "x"\nconvention = "standard"\nangles = "deg"\n[lengths]\nL = 20.0\n' + joint_block(1),
          "[lengths] L: 'value' = 20 m is outside the allowed ±10 m"),
+        # Control characters went raw into the MJCF/URDF comment (not well-formed XML) and onto the terminal:
+        ('name = "x"\nsummary = "a\\u001b[2Jb"\nconvention = "standard"\nangles = "deg"\n' + joint_block(1),
+         "'summary' must be one line of text (at most 200 characters); got 'a\\x1b[2Jb'"),
+        ('name = "x"\nsummary = "a\\u0000b\\uffff"\nconvention = "standard"\nangles = "deg"\n' + joint_block(1),
+         "'summary' must be one line of text"),
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n[lengths]\nL = { value = 0.1, doc = "a\\u0007" }\n'
+         + joint_block(1), "[lengths] L: 'doc' must be one line of text"),
+        # A chain of 1e-300 m was accepted: every q "solved" every target near 0 and J was "not singular"
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n' + joint_block(1).replace("a = 0.1", "a = 1e-300"),
+         "add up to 1e-300 m, less than 1 mm: the tool point barely moves"),
     ],
 )  # fmt: skip
 def test_bad_tables(tmp_path, text, message):
