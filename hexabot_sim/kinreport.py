@@ -36,6 +36,8 @@ def parse_numbers(text: str, what: str) -> list[float]:
     """'0.1,0.2,-1' -> [0.1, 0.2, -1.0]; a one-line UsageError naming `what` otherwise."""
     parts = [p.strip().replace("\u2212", "-") for p in text.split(",")]  # accept the typographic minus
     try:
+        if any("_" in p for p in parts):  # float() reads "1_0" as 10: a slip for "1,0" or "1.0" must not be 10
+            raise ValueError
         values = [float(p) for p in parts]
     except ValueError:
         raise UsageError(f"{what} must be comma-separated numbers; got {text!r}") from None
