@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import secrets
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -30,8 +31,9 @@ def export(
         lengths: The robot's named lengths to change, in [m].
 
     Returns:
-        The paths written. Both models are made before anything is written, and each file is written to a
-        temporary name in its folder and renamed into place: an error leaves no file half-written.
+        The paths written. Both models are made before anything is written, and both files are written to
+        temporary names in their folders, then renamed into place: an error, Ctrl-C or SIGTERM while writing leaves
+        no file half-written and neither file written.
 
     Raises:
         hexabot_sim.errors.UsageError: a bad robot, file or length; an existing path without force; no path; a
@@ -82,26 +84,36 @@ def export(
         if spec.file_id is not None and _is_file(path, spec.file_id):
             raise UsageError(f"{what} {shown!r} is the robot file being exported; it is never written over")
         folders.check_replace(path, force, what, "add --force (force=True)")
+    # Both files are written and synced under temporary names first, then renamed into place one right after
+    # the other: Ctrl-C or SIGTERM while a file is written leaves neither (and no temporary file).
+    staged: dict[Path, Path] = {}
     written = []
-    for path, (what, text) in texts.items():
-        staging = path.with_name(f".{path.name}.partial-{os.getpid()}")
-        try:
-            with open(staging, "x", encoding="utf-8") as f:
-                f.write(text)
-                f.flush()
-                os.fsync(f.fileno())
+    try:
+        for path, (what, text) in texts.items():
+            staging = path.with_name(f".{path.name}.partial-{os.getpid()}-{secrets.token_hex(4)}")
+            try:
+                with open(staging, "x", encoding="utf-8") as f:
+                    staged[path] = staging
+                    f.write(text)
+                    f.flush()
+                    os.fsync(f.fileno())
+            except OSError as e:
+                raise OutputError(f"writing the {what} {printable(str(path))!r} failed: {e.strerror or e}") from None
+        for path, (what, _) in texts.items():
             folders.check_replace(path, force, what, "add --force (force=True)")
             if spec.file_id is not None and _is_file(path, spec.file_id):  # linked to it meanwhile
                 raise UsageError(f"{what} {printable(str(path))!r} is the robot file being exported; left alone")
-            if force:
-                os.replace(staging, path)
-            else:
-                folders.publish_new(staging, path, what, "it was written")
-        except OSError as e:
-            raise OutputError(f"writing the {what} {printable(str(path))!r} failed: {e.strerror or e}") from None
-        finally:
+            try:
+                if force:
+                    os.replace(staged[path], path)
+                else:
+                    folders.publish_new(staged[path], path, what, "it was written")
+            except OSError as e:
+                raise OutputError(f"writing the {what} {printable(str(path))!r} failed: {e.strerror or e}") from None
+            written.append(path)
+    finally:
+        for staging in staged.values():
             staging.unlink(missing_ok=True)
-        written.append(path)
     return written
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import mujoco
 import numpy as np
 import pytest
@@ -143,3 +145,24 @@ def test_the_exported_files_are_well_formed_xml_whatever_the_summary_says(tmp_pa
     assert code == 0, err
     minidom.parse(str(urdf))
     mujoco.MjModel.from_xml_path(str(urdf))
+
+
+@pytest.mark.parametrize("stop_at", [1, 2])
+def test_ctrl_c_while_writing_leaves_neither_file(tmp_path, monkeypatch, stop_at):
+    """Ctrl-C (or SIGTERM, raised the same way by the CLI) while the second file was synced left the first
+    published: both are now written under temporary names first and renamed only when both are whole."""
+    from hexabot_sim import exporting
+
+    calls = []
+    real = os.fsync
+
+    def fsync(fd):
+        calls.append(fd)
+        if len(calls) == stop_at:
+            raise KeyboardInterrupt
+        real(fd)
+
+    monkeypatch.setattr(exporting.os, "fsync", fsync)
+    with pytest.raises(KeyboardInterrupt):
+        api.export("elbow", mjcf=tmp_path / "a.xml", urdf=tmp_path / "a.urdf")
+    assert list(tmp_path.iterdir()) == []
