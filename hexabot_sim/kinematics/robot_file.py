@@ -25,6 +25,8 @@ LENGTH_MIN: float = 1e-3
 LENGTH_MAX: float = 10.0
 MAX_FILE_BYTES: int = 1 << 20  # a robot file is a few hundred bytes; 1 MiB is far beyond any real table
 MAX_JOINTS: int = 7  # the joints (revolute or prismatic) of a chain; fixed rows do not count
+MAX_FIXED_ROWS: int = 8  # fixed rows after the last joint (a foot, a flange, a tool): 12,000 of them made kin hang
+MAX_LENGTHS: int = 64  # named lengths: a 7-joint table with tool and base names at most 4 x 7 + 2 x 14 + 6 of them
 DISTANCE_MAX: float = 100.0  # |a|, |d|, |prismatic limit|, |tool and base xyz| typed as numbers, in [m]
 ANGLE_MAX_DEG: float = 360.0  # |theta|, |alpha|, |revolute limit|, |rpy| in [deg] (2π rad): beyond it, a unit slip
 MASS_MAX: float = 1000.0  # [kg] a link's optional mass
@@ -173,11 +175,13 @@ class _Reader:
     def fail(self, where: str, message: str) -> UsageError:
         return UsageError(f"robot file {self.source}: {where}{': ' if where else ''}{message}")
 
-    def keys(self, table: Any, allowed: tuple[str, ...], where: str, required: tuple[str, ...] = ()) -> dict:
+    def keys(
+        self, table: Any, allowed: tuple[str, ...], where: str, required: tuple[str, ...] = (), any_key: bool = False
+    ) -> dict:
         if not isinstance(table, dict):
             raise self.fail(where, f"must be a table; got {type(table).__name__}")
         for key in table:
-            if key not in allowed:
+            if not any_key and key not in allowed:
                 raise self.fail(where, f"unknown key '{printable(key)}'; allowed: {', '.join(allowed)}")
         for key in required:
             if key not in table:
@@ -223,12 +227,19 @@ class _Reader:
         rows = doc["joints"]
         if not isinstance(rows, list) or not rows:
             raise self.fail("", "'joints' must be one or more [[joints]] tables")
+        if len(rows) > MAX_JOINTS + MAX_FIXED_ROWS:
+            raise self.fail(
+                "",
+                f"{len(rows)} [[joints]] rows; at most {MAX_JOINTS} joints and {MAX_FIXED_ROWS} fixed rows after them",
+            )
         joints = [self.row(i, row) for i, row in enumerate(rows, start=1)]
         moving = [j for j in joints if j["type"] != "fixed"]
         if not moving:
             raise self.fail("", "no joint: a chain needs at least one revolute or prismatic joint")
         if len(moving) > MAX_JOINTS:
             raise self.fail("", f"{len(moving)} joints; at most {MAX_JOINTS} (fixed rows not counted)")
+        if len(joints) - len(moving) > MAX_FIXED_ROWS:
+            raise self.fail("", f"{len(joints) - len(moving)} fixed rows; at most {MAX_FIXED_ROWS}")
         last = max(i for i, j in enumerate(joints) if j["type"] != "fixed")
         for i, j in enumerate(joints[:last]):
             if j["type"] == "fixed":
@@ -267,7 +278,9 @@ class _Reader:
         return f"joint {index}" + (f" ('{name}')" if isinstance(name, str) and NAME.fullmatch(name) else "")
 
     def named_lengths(self, table: Any) -> dict[str, Length]:
-        table = self.keys(table, tuple(table) if isinstance(table, dict) else (), "[lengths]")
+        if isinstance(table, dict) and len(table) > MAX_LENGTHS:  # before any loop over them (40,000 took 24 s)
+            raise self.fail("[lengths]", f"{len(table)} lengths; at most {MAX_LENGTHS}")
+        table = self.keys(table, (), "[lengths]", any_key=True)
         out = {}
         for key, entry in table.items():
             where = f"[lengths] {self.name(key, '[lengths]', 'a length name')}"

@@ -163,6 +163,14 @@ def joint_block(i: int) -> str:
          "'summary' must be one line of text"),
         ('name = "x"\nconvention = "standard"\nangles = "deg"\n[lengths]\nL = { value = 0.1, doc = "a\\u0007" }\n'
          + joint_block(1), "[lengths] L: 'doc' must be one line of text"),
+        # 12,000 fixed rows made kin run for minutes, 40,000 lengths took 24 s (each a file under 1 MiB):
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n' + joint_block(0)
+         + "".join(joint_block(i).replace("revolute", "fixed") for i in range(1, 16)),
+         "16 [[joints]] rows; at most 7 joints and 8 fixed rows after them"),
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n' + "".join(joint_block(i) for i in range(6))
+         + "".join(joint_block(i).replace("revolute", "fixed") for i in range(6, 15)), "9 fixed rows; at most 8"),
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n[lengths]\n'
+         + "".join(f"l{i} = 0.1\n" for i in range(65)) + joint_block(1), "[lengths]: 65 lengths; at most 64"),
         # A chain of 1e-300 m was accepted: every q "solved" every target near 0 and J was "not singular"
         ('name = "x"\nconvention = "standard"\nangles = "deg"\n' + joint_block(1).replace("a = 0.1", "a = 1e-300"),
          "add up to 1e-300 m, less than 1 mm: the tool point barely moves"),
