@@ -134,7 +134,8 @@ def test_the_exported_files_are_well_formed_xml_whatever_the_summary_says(tmp_pa
     from xml.dom import minidom
 
     robot = tmp_path / "slide.toml"
-    robot.write_text(SLIDE.replace('name = "slide"', 'name = "slide"\nsummary = "x-->y <&> ends with-"'))
+    text = SLIDE.replace('name = "slide"', 'name = "slide"\nsummary = "x-->y <&> ends with-"')
+    robot.write_text(text.replace('name = "q1"', 'name = "q---1"'))  # "--" went raw into the MJCF's DH table comment
     mjcf, urdf = tmp_path / "out.xml", tmp_path / "out.urdf"
     code, _, err = cli(capsys, "export", str(robot), "--mjcf", str(mjcf))
     assert code == 0, err
