@@ -392,8 +392,7 @@ def symbolic_forms(robot: Robot) -> dict[str, str]:
     except ImportError:
         raise UsageError(SYMBOLIC_HINT) from None
     chain = symbolic.symbolic_chain(robot.spec)
-    pose = symbolic.transforms(chain, max_ops=symbolic.MAX_OPS)[-1]  # a UsageError if it would take minutes
-    jac = symbolic.jacobian(chain)
+    pose, jac = symbolic.transforms(chain, max_ops=symbolic.MAX_OPS)[-1], symbolic.jacobian(chain)  # bounded time
     return {"T0n": symbolic.pretty(pose), "J": symbolic.pretty(jac), "T0n_latex": symbolic.latex(pose),
             "J_latex": symbolic.latex(jac)}  # fmt: skip
 
