@@ -254,8 +254,8 @@ class _Reader:
         base = self.frame(doc.get("base"), "[base]")
         rows_t = tuple(joints)
 
-        def build(values: Mapping[str, float]) -> SerialChain:
-            return _build(name, convention, rows_t, tool, base, values, self.source)
+        def build(values: Mapping[str, float]) -> SerialChain:  # checked for every set of lengths (--set too)
+            return _check_not_degenerate(_build(name, convention, rows_t, tool, base, values, self.source), self.source)
 
         def fixed(values: Mapping[str, float]) -> tuple[Joint, ...]:
             return tuple(_joint(row, values) for row in rows_t if row["type"] == "fixed")
@@ -271,7 +271,7 @@ class _Reader:
             source=self.source,
             builtin=builtin,
         )
-        _check_not_degenerate(spec, self.source)
+        spec.chain()  # the default lengths must make a tool that moves
         return spec
 
     def where(self, index: int, name: Any = None) -> str:
@@ -447,10 +447,9 @@ def _build(
     return SerialChain(name, joints, convention, base=_transform(base, values), tool=tool_t)
 
 
-def _check_not_degenerate(spec: RobotSpec, source: str) -> None:
-    """A chain whose links, offsets, strokes and tool offset are all zero (or add up to less than LENGTH_MIN) cannot
-    move its tool: refused."""
-    chain = spec.chain()
+def _check_not_degenerate(chain: SerialChain, source: str) -> SerialChain:
+    """`chain`, unless its links, offsets, strokes and tool offset are all zero (or add up to less than LENGTH_MIN):
+    then it cannot move its tool, and it is refused (with the file's lengths, or with those set by --set)."""
     size = sum(abs(j.a) + abs(j.d) for j in chain.joints) + float(np.linalg.norm(chain.tool[:3, 3]))
     size += sum(abs(j.upper or 0.0) + abs(j.lower or 0.0) for j in chain.joints if j.prismatic)
     if size == 0 and not any(j.prismatic for j in chain.joints):
@@ -463,6 +462,7 @@ def _check_not_degenerate(spec: RobotSpec, source: str) -> None:
             f"robot file {source}: the link lengths, offsets and tool offset add up to {size:.3g} m, less than "
             f"{LENGTH_MIN * 1000:g} mm: the tool point barely moves and no tolerance means anything at that scale"
         )
+    return chain
 
 
 # --------------------------------------------------------------------------------------------- the package's

@@ -250,3 +250,19 @@ def test_deeply_nested_toml_is_one_line_not_a_recursion_error(tmp_path, capsys, 
 def test_a_byte_order_mark_is_read_as_params_read_config_reads_it(tmp_path):
     spec = robot_file.read(write(tmp_path, "\ufeff" + ARM))
     assert spec.name == "textbook-arm" and spec.file_id is not None
+
+
+def test_lengths_set_to_zero_are_checked_like_the_files_own(tmp_path, capsys):
+    """--set L=0 (a length with zero = true) made a chain that is a point: kin "solved" every target with any q and
+    export wrote its model; the file's own all-zero table was already refused."""
+    text = ARM.replace("[[joints]]", "[lengths]\nL = { value = 0.3, zero = true }\n[[joints]]", 1)
+    text = text.replace("d = 0.4", 'd = "L"').replace("a = 0.3", 'a = "L"').replace("xyz = [0.0, 0.0, 0.1]", "")
+    text = text.replace('type = "prismatic"', 'type = "revolute"').replace("d = 0.1", "d = 0.0")
+    text = text.replace("lower = 0.0\nupper = 0.2\n", "")
+    path = write(tmp_path, text)
+    assert robot_file.read(path).chain({"L": 0.2}).n == 3
+    for argv in (["kin", str(path), "--set", "L=0", "--target", "0,0,0"],
+                 ["export", str(path), "--set", "L=0", "--mjcf", str(tmp_path / "out.xml")]):  # fmt: skip
+        code, out, err = cli(capsys, *argv)
+        assert code == 2 and out == "" and err.count("\n") == 1 and "the tool point never moves" in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["arm.toml"]
