@@ -30,7 +30,8 @@ MAX_LENGTHS: int = 64  # named lengths: a 7-joint table with tool and base names
 DISTANCE_MAX: float = 100.0  # |a|, |d|, |prismatic limit|, |tool and base xyz| typed as numbers, in [m]
 ANGLE_MAX_DEG: float = 360.0  # |theta|, |alpha|, |revolute limit|, |rpy| in [deg] (2π rad): beyond it, a unit slip
 MASS_MAX: float = 1000.0  # [kg] a link's optional mass
-NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_.-]{0,63}")  # robot, joint and length names: XML-, URDF- and file-safe
+NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_.-]{0,63}")  # robot and joint names: XML-, URDF- and file-safe
+LENGTH_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,63}")  # length names: symbols of --symbolic too
 
 TOP_KEYS = ("name", "summary", "convention", "angles", "lengths", "joints", "tool", "base")
 JOINT_KEYS = ("name", "type", "a", "alpha", "d", "theta", "lower", "upper", "mass")
@@ -283,7 +284,13 @@ class _Reader:
         table = self.keys(table, (), "[lengths]", any_key=True)
         out = {}
         for key, entry in table.items():
-            where = f"[lengths] {self.name(key, '[lengths]', 'a length name')}"
+            if not LENGTH_NAME.fullmatch(key):  # a symbol in --symbolic: "c1*l-1" would read as c1 l minus 1
+                raise self.fail(
+                    "[lengths]",
+                    f"a length name must be 1 to 64 letters, digits, _ (starting with a letter or _; it is a symbol in "
+                    f"--symbolic, where - and . would read as a minus and a decimal point); got {_shown(key)}",
+                )
+            where = f"[lengths] {key}"
             if isinstance(entry, dict):
                 entry = self.keys(entry, LENGTH_KEYS, where, ("value",))
             else:

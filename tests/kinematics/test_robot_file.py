@@ -171,6 +171,9 @@ def joint_block(i: int) -> str:
          + "".join(joint_block(i).replace("revolute", "fixed") for i in range(6, 15)), "9 fixed rows; at most 8"),
         ('name = "x"\nconvention = "standard"\nangles = "deg"\n[lengths]\n'
          + "".join(f"l{i} = 0.1\n" for i in range(65)) + joint_block(1), "[lengths]: 65 lengths; at most 64"),
+        # A length named "l-1" printed as c1*l-1 in --symbolic (c1 l minus 1):
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n[lengths]\n"l-1" = 0.1\n' + joint_block(1),
+         "a length name must be 1 to 64 letters, digits, _ (starting with a letter or _; it is a symbol in"),
         # A chain of 1e-300 m was accepted: every q "solved" every target near 0 and J was "not singular"
         ('name = "x"\nconvention = "standard"\nangles = "deg"\n' + joint_block(1).replace("a = 0.1", "a = 1e-300"),
          "add up to 1e-300 m, less than 1 mm: the tool point barely moves"),
