@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import os
+import secrets
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 from hexabot_sim import folders
-from hexabot_sim.errors import OutputError, UsageError
+from hexabot_sim.errors import OutputError, UsageError, printable
 
 
 def export(
@@ -25,15 +26,18 @@ def export(
         robot: A package robot's name (rrp, elbow, stanford, scara, leg), the path of a robot file, or a RobotSpec.
         mjcf: The MJCF file to write, or None.
         urdf: The URDF file to write, or None.
-        force: Replace existing files (regular files only); without it an existing file is an error.
+        force: Replace existing files (regular files only); without it an existing file is an error. The robot
+            file being exported is never replaced, not even with force (nor through a link to it).
         lengths: The robot's named lengths to change, in [m].
 
     Returns:
-        The paths written. Both models are made before anything is written, and each file is written to a
-        temporary name in its folder and renamed into place: an error leaves no file half-written.
+        The paths written. Both models are made before anything is written, and both files are written to
+        temporary names in their folders, then renamed into place: an error, Ctrl-C or SIGTERM while writing leaves
+        no file half-written and neither file written.
 
     Raises:
-        hexabot_sim.errors.UsageError: a bad robot, file or length; an existing path without force; no path.
+        hexabot_sim.errors.UsageError: a bad robot, file or length; an existing path without force; no path; a
+            path ending in '/', both paths naming one file, or a path that is the robot file itself.
         hexabot_sim.errors.OutputError: a file could not be written.
     """
     from hexabot_sim.kinematics import robots
@@ -52,37 +56,79 @@ def export(
     where = f"{spec.name} ({spec.source})" if spec.source else spec.name
     comment = f"{where}: {spec.summary}".replace("--", "- -")
     texts: dict[Path, tuple[str, str]] = {}
-    if mjcf is not None:
-        texts[Path(mjcf)] = ("MJCF file", to_mjcf(chain, comment=comment, masses=spec.masses))
-    if urdf is not None:
-        if Path(urdf) in texts:
-            raise UsageError(f"--mjcf and --urdf name the same file {str(urdf)!r}")
-        try:
-            texts[Path(urdf)] = ("URDF file", urdf_mod.to_urdf(chain, comment=comment, masses=spec.masses))
-        except UsageError as e:
-            raise UsageError(f"{where}: {e}") from None
+    for value, what in ((mjcf, "MJCF file"), (urdf, "URDF file")):
+        if value is None:
+            continue
+        raw = os.fspath(value)
+        shown = printable(os.fsdecode(raw))
+        if raw.endswith((os.sep, os.altsep or os.sep) if isinstance(raw, str) else os.fsencode(os.sep)):
+            raise UsageError(f"{what} {shown!r} ends with '{os.sep}': that names a folder; give a file name")
+        path = Path(os.fsdecode(raw))
+        if any(_same_place(path, other) for other in texts):
+            raise UsageError(f"--mjcf and --urdf name the same file {shown!r}")
+        texts[path] = (what, "")
     for path, (what, _) in texts.items():
+        if what == "MJCF file":
+            texts[path] = (what, to_mjcf(chain, comment=comment, masses=spec.masses))
+        else:
+            try:
+                texts[path] = (what, urdf_mod.to_urdf(chain, comment=comment, masses=spec.masses))
+            except UsageError as e:
+                raise UsageError(f"{where}: {e}") from None
+    for path, (what, _) in texts.items():
+        shown = printable(str(path))
         if path.is_dir():
-            raise UsageError(f"{what} {str(path)!r} is a folder; give a file name")
+            raise UsageError(f"{what} {shown!r} is a folder; give a file name")
         if not path.parent.is_dir():
-            raise UsageError(f"the folder {str(path.parent)!r} for the {what} does not exist")
+            raise UsageError(f"the folder {printable(str(path.parent))!r} for the {what} does not exist")
+        if spec.file_id is not None and _is_file(path, spec.file_id):
+            raise UsageError(f"{what} {shown!r} is the robot file being exported; it is never written over")
         folders.check_replace(path, force, what, "add --force (force=True)")
+    # Both files are written and synced under temporary names first, then renamed into place one right after
+    # the other: Ctrl-C or SIGTERM while a file is written leaves neither (and no temporary file).
+    staged: dict[Path, Path] = {}
     written = []
-    for path, (what, text) in texts.items():
-        staging = path.with_name(f".{path.name}.partial-{os.getpid()}")
-        try:
-            with open(staging, "x", encoding="utf-8") as f:
-                f.write(text)
-                f.flush()
-                os.fsync(f.fileno())
+    try:
+        for path, (what, text) in texts.items():
+            staging = path.with_name(f".{path.name}.partial-{os.getpid()}-{secrets.token_hex(4)}")
+            try:
+                with open(staging, "x", encoding="utf-8") as f:
+                    staged[path] = staging
+                    f.write(text)
+                    f.flush()
+                    os.fsync(f.fileno())
+            except OSError as e:
+                raise OutputError(f"writing the {what} {printable(str(path))!r} failed: {e.strerror or e}") from None
+        for path, (what, _) in texts.items():
             folders.check_replace(path, force, what, "add --force (force=True)")
-            if force:
-                os.replace(staging, path)
-            else:
-                folders.publish_new(staging, path, what, "it was written")
-        except OSError as e:
-            raise OutputError(f"writing the {what} {str(path)!r} failed: {e.strerror or e}") from None
-        finally:
+            if spec.file_id is not None and _is_file(path, spec.file_id):  # linked to it meanwhile
+                raise UsageError(f"{what} {printable(str(path))!r} is the robot file being exported; left alone")
+            try:
+                if force:
+                    os.replace(staged[path], path)
+                else:
+                    folders.publish_new(staged[path], path, what, "it was written")
+            except OSError as e:
+                raise OutputError(f"writing the {what} {printable(str(path))!r} failed: {e.strerror or e}") from None
+            written.append(path)
+    finally:
+        for staging in staged.values():
             staging.unlink(missing_ok=True)
-        written.append(path)
     return written
+
+
+def _same_place(path: Path, other: Path) -> bool:
+    """Whether two output paths name the same directory entry (`a.xml`, `./a.xml`, `/abs/a.xml`, `d/../a.xml`)."""
+    return path.name == other.name and os.path.realpath(path.parent) == os.path.realpath(other.parent)
+
+
+def _is_file(path: Path, file_id: tuple[int, int]) -> bool:
+    """Whether `path` is (or links to) the file with this (device, inode)."""
+    for look in (os.stat, os.lstat):
+        try:
+            status = look(path)
+        except OSError:
+            continue
+        if (status.st_dev, status.st_ino) == file_id:
+            return True
+    return False

@@ -36,6 +36,8 @@ def parse_numbers(text: str, what: str) -> list[float]:
     """'0.1,0.2,-1' -> [0.1, 0.2, -1.0]; a one-line UsageError naming `what` otherwise."""
     parts = [p.strip().replace("\u2212", "-") for p in text.split(",")]  # accept the typographic minus
     try:
+        if any("_" in p for p in parts):  # float() reads "1_0" as 10: a slip for "1,0" or "1.0" must not be 10
+            raise ValueError
         values = [float(p) for p in parts]
     except ValueError:
         raise UsageError(f"{what} must be comma-separated numbers; got {text!r}") from None
@@ -390,7 +392,7 @@ def symbolic_forms(robot: Robot) -> dict[str, str]:
     except ImportError:
         raise UsageError(SYMBOLIC_HINT) from None
     chain = symbolic.symbolic_chain(robot.spec)
-    pose, jac = symbolic.transforms(chain)[-1], symbolic.jacobian(chain)
+    pose, jac = symbolic.transforms(chain, max_ops=symbolic.MAX_OPS)[-1], symbolic.jacobian(chain)  # bounded time
     return {"T0n": symbolic.pretty(pose), "J": symbolic.pretty(jac), "T0n_latex": symbolic.latex(pose),
             "J_latex": symbolic.latex(jac)}  # fmt: skip
 

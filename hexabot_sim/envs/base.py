@@ -19,7 +19,21 @@ if TYPE_CHECKING:
     from hexabot_sim.render import Frames
 
 TOUCH_THRESHOLD: float = 0.3  # [N] a foot's touch reading above this counts as a foot down (as GroundSettings')
+SIGMA_MIN: float = 1e-6  # [m/s or rad/s] the smallest tracking scale of a Reward (its square stays a normal number)
+WEIGHT_MAX: float = 1e6  # the largest weight or scale of a Reward (the reward stays finite)
 COMMAND_RANGE: tuple[tuple[float, float], ...] = ((0.0, 0.1), (-0.05, 0.05), (-0.2, 0.2))  # vx, vy [m/s], yaw rate
+
+
+def real_array(value, what: str) -> np.ndarray:
+    """`value` as a float64 array; a ValueError "<what>; got ..." for complex numbers (numpy would drop their
+    imaginary part with a warning), strings, objects or ragged lists."""
+    try:
+        raw = np.asarray(value)
+        if raw.dtype.kind not in "biuf":
+            raise TypeError(raw.dtype)
+        return raw.astype(np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what}; got {' '.join(repr(value).split())[:80]}") from None  # one line
 
 
 @dataclasses.dataclass(frozen=True)
@@ -53,10 +67,27 @@ class Reward:
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):
             value = getattr(self, field.name)
-            positive = field.name.endswith("sigma")
-            if not (math.isfinite(value) and (value > 0 if positive else value >= 0)):
-                raise ValueError(f"reward {field.name} must be a finite number {'> 0' if positive else '>= 0'}; "
-                                 f"got {value!r}")  # fmt: skip
+            # A sigma below SIGMA_MIN squares to 0 (a ZeroDivisionError at the first step); a weight above WEIGHT_MAX
+            # times a power or a speed overflows the reward to -inf.
+            low, high = (SIGMA_MIN, WEIGHT_MAX) if field.name.endswith("sigma") else (0.0, WEIGHT_MAX)
+            number = not isinstance(value, bool) and isinstance(value, int | float | np.floating | np.integer)
+            if not (number and math.isfinite(value) and low <= value <= high):
+                raise ValueError(f"reward {field.name} must be a number from {low:g} to {high:g}; got {value!r}")
+
+    @classmethod
+    def of(cls, reward: Reward | dict | None) -> Reward:
+        """A Reward, or the defaults with a dict's fields changed; a ValueError naming the fields otherwise."""
+        if isinstance(reward, cls):
+            return reward
+        if reward is None:
+            return cls()
+        if not isinstance(reward, dict):
+            raise ValueError(f"reward must be a Reward, a dict of its fields or None; got {type(reward).__name__}")
+        names = [field.name for field in dataclasses.fields(cls)]
+        unknown = [key for key in reward if key not in names]
+        if unknown:
+            raise ValueError(f"unknown reward field {unknown[0]!r}; known: {', '.join(names)}")
+        return cls(**reward)
 
 
 class LeggedEnv(gymnasium.Env):
@@ -103,7 +134,7 @@ class LeggedEnv(gymnasium.Env):
         names = ("vx", "vy", "yaw rate")
         ranges = [check_range(f"command_range {n}", r, -3.0, 3.0) for n, r in zip(names, rows, strict=True)]
         self.command_range = np.array(ranges)  # (3, 2)
-        self.reward_weights = reward if isinstance(reward, Reward) else Reward(**(reward or {}))
+        self.reward_weights = Reward.of(reward)
         randomization = Randomization(randomize_friction, randomize_mass, randomize_servo_gain)
         self.frame_skip = int(frame_skip)
         self.dt = self.frame_skip * p.timestep  # [s] the control period
@@ -111,6 +142,9 @@ class LeggedEnv(gymnasium.Env):
         self.scene = EnvScene(p, terrain, slope_deg, roughness, reach, randomization)
         self.model, self.data = self.scene.model, self.scene.data
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.dt)}
+        cameras = [self.model.camera(i).name for i in range(self.model.ncam)]
+        if not isinstance(camera, str) or camera not in cameras:  # checked here, not at the first render()
+            raise ValueError(f"unknown camera {camera!r}; known: {', '.join(cameras)}")
         self.render_mode, self.width, self.height, self.camera = render_mode, width, height, camera
         self._frames: Frames | None = None
         self._addresses(p)
@@ -243,7 +277,7 @@ class LeggedEnv(gymnasium.Env):
 
     def _check_action(self, action, n: int) -> np.ndarray:
         """The action as a float array of n, or a ValueError saying what was wrong."""
-        a = np.asarray(action, dtype=np.float64)
+        a = real_array(action, f"the action must be {n} real numbers in [-1, 1]")
         if a.shape != (n,):
             raise ValueError(f"the action must be {n} numbers (shape ({n},)); got shape {a.shape}")
         if not np.isfinite(a).all():

@@ -86,6 +86,7 @@ class LeggedJointsEnv(LeggedEnv):
         self._half = 0.5 * (self.model.actuator_ctrlrange[pos, 1] - self._low)
         self._target = np.zeros(n)
         self._settle_steps = round(SETTLE_TIME / p.timestep)
+        self._started = False  # step() before the first reset() is an error, as in the command environment
 
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
         self._start(seed)
@@ -95,9 +96,12 @@ class LeggedJointsEnv(LeggedEnv):
         mujoco.mj_step(self.model, d, nstep=self._settle_steps)  # on the home targets: it lands on its feet
         d.time = 0.0
         self._warnings = int(self._warning.number)
+        self._started = True
         return self._observe(), {"command": self.command.copy()}
 
     def step(self, action) -> tuple[np.ndarray, float, bool, bool, dict]:
+        if not self._started:
+            raise RuntimeError("call reset() before step()")
         a = self._check_action(action, self.n_joints)
         # Targets over the servos' ranges; the velocity servos keep 0.
         np.clip(a, -1.0, 1.0, out=self._target)

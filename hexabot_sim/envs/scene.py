@@ -23,6 +23,11 @@ MAX_ROUGHNESS: float = 0.03  # [m] rougher patches may rise above the plate's un
 MAX_SLOPE_DEG: float = 30.0  # [deg] steeper slopes exceed the feet's friction (tan 30 deg = 0.58 < 1)
 
 
+def _number(value: object) -> bool:
+    """A real number (not a bool, not a string)."""
+    return not isinstance(value, bool) and isinstance(value, int | float | np.integer | np.floating)
+
+
 def walking_robots() -> dict[str, tuple[type[WalkParams], dict]]:
     """Every robot with a '<robot>-walk' scenario, by name: (its parameter class, that scenario's defaults).
 
@@ -99,12 +104,12 @@ class EnvScene:
         reach: float,
         randomization: Randomization,
     ) -> None:
-        if terrain not in TERRAINS:
+        if not isinstance(terrain, str) or terrain not in TERRAINS:
             raise ValueError(f"unknown terrain {terrain!r}; known: {', '.join(TERRAINS)}")
-        if terrain == "slope" and not 0.0 < slope_deg <= MAX_SLOPE_DEG:
-            raise ValueError(f"slope_deg must be > 0 and <= {MAX_SLOPE_DEG:g} deg; got {slope_deg!r}")
-        if terrain == "rough" and not 0.0 < roughness <= MAX_ROUGHNESS:
-            raise ValueError(f"roughness must be > 0 and <= {MAX_ROUGHNESS:g} m; got {roughness!r}")
+        if terrain == "slope" and not (_number(slope_deg) and 0.0 < slope_deg <= MAX_SLOPE_DEG):
+            raise ValueError(f"slope_deg must be > 0 and <= {MAX_SLOPE_DEG:g} deg (a number); got {slope_deg!r}")
+        if terrain == "rough" and not (_number(roughness) and 0.0 < roughness <= MAX_ROUGHNESS):
+            raise ValueError(f"roughness must be > 0 and <= {MAX_ROUGHNESS:g} m (a number); got {roughness!r}")
         self.p = p
         self.terrain = terrain
         self.roughness = roughness if terrain == "rough" else 0.0

@@ -11,7 +11,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from mujoco import rollout
 
-from hexabot_sim.envs.base import TOUCH_THRESHOLD
+from hexabot_sim.envs.base import TOUCH_THRESHOLD, real_array
 from hexabot_sim.envs.joints import LeggedJointsEnv
 
 STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS  # what mujoco.rollout takes and returns per step
@@ -34,6 +34,9 @@ class LeggedJointsVectorEnv(VectorEnv):
     def __init__(self, num_envs: int = 8, max_episode_steps: int = 1000, threads: int | None = None, **kwargs) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
             raise ValueError(f"num_envs must be an integer >= 1; got {num_envs!r}")
+        steps_ok = isinstance(max_episode_steps, int | np.integer) and not isinstance(max_episode_steps, bool)
+        if not steps_ok or max_episode_steps < 1:
+            raise ValueError(f"max_episode_steps must be an integer >= 1; got {max_episode_steps!r}")
         if kwargs.get("render_mode") is not None:
             raise ValueError("the rollout vector environment does not render; use render_mode=None")
         self.envs = [LeggedJointsEnv(**kwargs) for _ in range(num_envs)]
@@ -59,6 +62,7 @@ class LeggedJointsVectorEnv(VectorEnv):
         self._steps = np.zeros(n, dtype=np.int64)
         self._time = np.zeros(n)
         self._autoreset = np.zeros(n, dtype=bool)
+        self._started = False  # step() before the first reset() would run from an all-zero state
 
     def _addresses(self, env: LeggedJointsEnv) -> None:
         m = env.model
@@ -96,11 +100,14 @@ class LeggedJointsVectorEnv(VectorEnv):
             raise ValueError(f"reset needs one seed per environment ({self.num_envs}); got {len(seeds)}")
         obs = np.stack([self._reset_one(i, s) for i, s in enumerate(seeds)])
         self._autoreset[:] = False
+        self._started = True
         return obs, {"command": self._command.copy()}
 
     def step(self, actions) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
-        a = np.asarray(actions, dtype=np.float64)
+        if not self._started:
+            raise RuntimeError("call reset() before step()")
         n, nj = self.num_envs, self._n_joints
+        a = real_array(actions, f"the actions must be real numbers in [-1, 1], shape ({n}, {nj})")
         if a.shape != (n, nj):
             raise ValueError(f"the actions must be shape ({n}, {nj}); got {a.shape}")
         if not np.isfinite(a).all():

@@ -11,6 +11,7 @@ import numpy as np
 
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics.chain import Joint, SerialChain
+from hexabot_sim.kinematics.xml_text import comment_line
 from hexabot_sim.kinematics.xml_text import num as _num
 from hexabot_sim.kinematics.xml_text import nums as _nums
 from hexabot_sim.kinematics.xml_text import quat as _quat
@@ -398,7 +399,7 @@ def _write(
         "see no gravity load, so they hold any pose without sag (kinematic study model; no contacts).",
         "Home: q = 0, or the range midpoint for a joint whose range excludes 0.",
     ]
-    out = ["<!--", *[f"  {line}".rstrip() for line in header], "-->"]
+    out = ["<!--", *[f"  {comment_line(line)}".rstrip() for line in header], "-->"]
     out.append(f'<mujoco model="{chain.name}">')
     out.append('  <compiler angle="radian" autolimits="true" eulerseq="xyz"/>')
     out.append("")
@@ -438,7 +439,7 @@ def _write(
     closers = ["    </body>"]
     for body in bodies:
         joint = body.joint
-        out.append(f"{indent}<!-- {body.name}: {body.description}. -->")
+        out.append(f"{indent}<!-- {comment_line(f'{body.name}: {body.description}')}. -->")
         pose = _pose_attributes(body.local, (body.alpha, joint.theta))
         out.append(f'{indent}<body name="{body.name}"{pose} gravcomp="1">')
         inner = indent + "  "
@@ -486,4 +487,7 @@ def _geoms(solids: list[_Solid], indent: str, material: str | None = None) -> li
 
 
 def _sites(sites: list[_Site], indent: str) -> list[str]:
-    return [f'{indent}<site name="{s.name}"{_pose_attributes(s.pose, s.euler)}/>  <!-- {s.comment} -->' for s in sites]
+    return [
+        f'{indent}<site name="{s.name}"{_pose_attributes(s.pose, s.euler)}/>  <!-- {comment_line(s.comment)} -->'
+        for s in sites
+    ]

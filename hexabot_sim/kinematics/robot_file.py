@@ -6,7 +6,9 @@ import dataclasses
 import math
 import os
 import re
+import stat
 import tomllib
+import unicodedata
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
@@ -23,10 +25,13 @@ LENGTH_MIN: float = 1e-3
 LENGTH_MAX: float = 10.0
 MAX_FILE_BYTES: int = 1 << 20  # a robot file is a few hundred bytes; 1 MiB is far beyond any real table
 MAX_JOINTS: int = 7  # the joints (revolute or prismatic) of a chain; fixed rows do not count
+MAX_FIXED_ROWS: int = 8  # fixed rows after the last joint (a foot, a flange, a tool): 12,000 of them made kin hang
+MAX_LENGTHS: int = 64  # named lengths: a 7-joint table with tool and base names at most 4 x 7 + 2 x 14 + 6 of them
 DISTANCE_MAX: float = 100.0  # |a|, |d|, |prismatic limit|, |tool and base xyz| typed as numbers, in [m]
 ANGLE_MAX_DEG: float = 360.0  # |theta|, |alpha|, |revolute limit|, |rpy| in [deg] (2π rad): beyond it, a unit slip
 MASS_MAX: float = 1000.0  # [kg] a link's optional mass
-NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_.-]{0,63}")  # robot, joint and length names: XML-, URDF- and file-safe
+NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_.-]{0,63}")  # robot and joint names: XML-, URDF- and file-safe
+LENGTH_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,63}")  # length names: symbols of --symbolic too
 
 TOP_KEYS = ("name", "summary", "convention", "angles", "lengths", "joints", "tool", "base")
 JOINT_KEYS = ("name", "type", "a", "alpha", "d", "theta", "lower", "upper", "mass")
@@ -72,6 +77,7 @@ class RobotSpec:
         masses: Each joint's link mass in [kg], or None for the model's default (solid aluminium cylinders).
         source: The file it was read from, or None for a spec written in Python.
         builtin: One of the package's robots (their closed-form IK and singular sets apply).
+        file_id: The file's (device, inode), or None: `export` refuses to write over it.
     """
 
     name: str
@@ -83,6 +89,7 @@ class RobotSpec:
     masses: tuple[float | None, ...] = ()
     source: str | None = None
     builtin: bool = False
+    file_id: tuple[int, int] | None = None  # (st_dev, st_ino) of the file read: exports never write over it
 
     def values(self, overrides: Mapping[str, float] | None = None) -> dict[str, float]:
         """Every length by name in [m]: the defaults replaced by `overrides` (validated)."""
@@ -121,19 +128,31 @@ def read(path: str | os.PathLike[str], *, builtin: bool = False) -> RobotSpec:
     """
     shown = printable(os.fspath(path))
     try:
-        with open(path, "rb") as f:
-            data = f.read(MAX_FILE_BYTES + 1)
+        # Non-blocking: a FIFO opens at once (and is refused below) instead of waiting for a writer forever.
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_BINARY", 0))
     except IsADirectoryError:
         raise UsageError(f"robot file {shown}: is a folder, not a file") from None
     except OSError as e:
         raise UsageError(f"robot file {shown}: cannot be read ({e.strerror or e})") from None
+    status = os.fstat(fd)
+    if not stat.S_ISREG(status.st_mode):  # a folder, a FIFO, a device (/dev/zero), a socket: not a DH table
+        os.close(fd)
+        if stat.S_ISDIR(status.st_mode):
+            raise UsageError(f"robot file {shown}: is a folder, not a file")
+        raise UsageError(f"robot file {shown}: not a regular file (a pipe or a device); give a .toml file")
+    with open(fd, "rb") as f:
+        try:
+            data = f.read(MAX_FILE_BYTES + 1)
+        except OSError as e:
+            raise UsageError(f"robot file {shown}: cannot be read ({e.strerror or e})") from None
     if len(data) > MAX_FILE_BYTES:
         raise UsageError(f"robot file {shown}: larger than {MAX_FILE_BYTES // 1024} KiB; a robot file is a DH table")
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-8").removeprefix("\ufeff")  # a BOM from a Windows editor, as params.read_config
     except UnicodeDecodeError as e:
         raise UsageError(f"robot file {shown}: not UTF-8 text (byte {e.start})") from None
-    return parse(text, shown, builtin=builtin)
+    spec = parse(text, shown, builtin=builtin)
+    return dataclasses.replace(spec, file_id=(status.st_dev, status.st_ino))
 
 
 def parse(text: str, source: str = "<robot file>", *, builtin: bool = False) -> RobotSpec:
@@ -142,6 +161,8 @@ def parse(text: str, source: str = "<robot file>", *, builtin: bool = False) -> 
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise UsageError(f"robot file {source}: not valid TOML: {e}") from None
+    except RecursionError:  # tomllib parses nested arrays and inline tables recursively: `x = [[[[...]]]]`
+        raise UsageError(f"robot file {source}: not valid TOML: arrays or tables nested too deeply") from None
     return _Reader(source, doc).spec(builtin)
 
 
@@ -155,11 +176,13 @@ class _Reader:
     def fail(self, where: str, message: str) -> UsageError:
         return UsageError(f"robot file {self.source}: {where}{': ' if where else ''}{message}")
 
-    def keys(self, table: Any, allowed: tuple[str, ...], where: str, required: tuple[str, ...] = ()) -> dict:
+    def keys(
+        self, table: Any, allowed: tuple[str, ...], where: str, required: tuple[str, ...] = (), any_key: bool = False
+    ) -> dict:
         if not isinstance(table, dict):
             raise self.fail(where, f"must be a table; got {type(table).__name__}")
         for key in table:
-            if key not in allowed:
+            if not any_key and key not in allowed:
                 raise self.fail(where, f"unknown key '{printable(key)}'; allowed: {', '.join(allowed)}")
         for key in required:
             if key not in table:
@@ -196,7 +219,7 @@ class _Reader:
         doc = self.keys(self.doc, TOP_KEYS, "", ("name", "convention", "angles", "joints"))
         name = self.name(doc["name"], "", "'name'")
         summary = doc.get("summary", "")
-        if not isinstance(summary, str) or "\n" in summary or len(summary) > 200:
+        if not _one_line(summary) or len(summary) > 200:
             raise self.fail("", f"'summary' must be one line of text (at most 200 characters); got {_shown(summary)}")
         convention = self.choice(doc, "convention", CONVENTIONS, "")
         self.unit = self.choice(doc, "angles", ANGLE_UNITS, "")
@@ -205,12 +228,19 @@ class _Reader:
         rows = doc["joints"]
         if not isinstance(rows, list) or not rows:
             raise self.fail("", "'joints' must be one or more [[joints]] tables")
+        if len(rows) > MAX_JOINTS + MAX_FIXED_ROWS:
+            raise self.fail(
+                "",
+                f"{len(rows)} [[joints]] rows; at most {MAX_JOINTS} joints and {MAX_FIXED_ROWS} fixed rows after them",
+            )
         joints = [self.row(i, row) for i, row in enumerate(rows, start=1)]
         moving = [j for j in joints if j["type"] != "fixed"]
         if not moving:
             raise self.fail("", "no joint: a chain needs at least one revolute or prismatic joint")
         if len(moving) > MAX_JOINTS:
             raise self.fail("", f"{len(moving)} joints; at most {MAX_JOINTS} (fixed rows not counted)")
+        if len(joints) - len(moving) > MAX_FIXED_ROWS:
+            raise self.fail("", f"{len(joints) - len(moving)} fixed rows; at most {MAX_FIXED_ROWS}")
         last = max(i for i, j in enumerate(joints) if j["type"] != "fixed")
         for i, j in enumerate(joints[:last]):
             if j["type"] == "fixed":
@@ -225,8 +255,8 @@ class _Reader:
         base = self.frame(doc.get("base"), "[base]")
         rows_t = tuple(joints)
 
-        def build(values: Mapping[str, float]) -> SerialChain:
-            return _build(name, convention, rows_t, tool, base, values, self.source)
+        def build(values: Mapping[str, float]) -> SerialChain:  # checked for every set of lengths (--set too)
+            return _check_not_degenerate(_build(name, convention, rows_t, tool, base, values, self.source), self.source)
 
         def fixed(values: Mapping[str, float]) -> tuple[Joint, ...]:
             return tuple(_joint(row, values) for row in rows_t if row["type"] == "fixed")
@@ -242,24 +272,32 @@ class _Reader:
             source=self.source,
             builtin=builtin,
         )
-        _check_not_degenerate(spec, self.source)
+        spec.chain()  # the default lengths must make a tool that moves
         return spec
 
     def where(self, index: int, name: Any = None) -> str:
         return f"joint {index}" + (f" ('{name}')" if isinstance(name, str) and NAME.fullmatch(name) else "")
 
     def named_lengths(self, table: Any) -> dict[str, Length]:
-        table = self.keys(table, tuple(table) if isinstance(table, dict) else (), "[lengths]")
+        if isinstance(table, dict) and len(table) > MAX_LENGTHS:  # before any loop over them (40,000 took 24 s)
+            raise self.fail("[lengths]", f"{len(table)} lengths; at most {MAX_LENGTHS}")
+        table = self.keys(table, (), "[lengths]", any_key=True)
         out = {}
         for key, entry in table.items():
-            where = f"[lengths] {self.name(key, '[lengths]', 'a length name')}"
+            if not LENGTH_NAME.fullmatch(key):  # a symbol in --symbolic: "c1*l-1" would read as c1 l minus 1
+                raise self.fail(
+                    "[lengths]",
+                    f"a length name must be 1 to 64 letters, digits, _ (starting with a letter or _; it is a symbol in "
+                    f"--symbolic, where - and . would read as a minus and a decimal point); got {_shown(key)}",
+                )
+            where = f"[lengths] {key}"
             if isinstance(entry, dict):
                 entry = self.keys(entry, LENGTH_KEYS, where, ("value",))
             else:
                 entry = {"value": entry}
             doc = entry.get("doc", "")
             zero = entry.get("zero", False)
-            if not isinstance(doc, str) or "\n" in doc:
+            if not _one_line(doc):
                 raise self.fail(where, f"'doc' must be one line of text; got {_shown(doc)}")
             if not isinstance(zero, bool):
                 raise self.fail(where, f"'zero' must be true or false; got {_shown(zero)}")
@@ -336,6 +374,14 @@ class _Reader:
         return position, _rz(*cs[2]) @ _ry(*cs[1]) @ _rx(*cs[0]) + 0.0
 
 
+def _one_line(text: Any) -> bool:
+    """One line of printable text: it goes into the MJCF's and URDF's header comment (XML allows no control
+    characters, U+FFFE or U+FFFF, even in a comment) and onto the terminal (ESC would recolour it)."""
+    return isinstance(text, str) and not any(
+        (unicodedata.category(c) == "Cc" and c != "\t") or c in "\u2028\u2029\ufffe\uffff" for c in text
+    )
+
+
 def _shown(value: Any) -> str:
     """A TOML value for a message, short and on one line."""
     text = printable(repr(value))
@@ -408,9 +454,9 @@ def _build(
     return SerialChain(name, joints, convention, base=_transform(base, values), tool=tool_t)
 
 
-def _check_not_degenerate(spec: RobotSpec, source: str) -> None:
-    """A chain whose every link, offset, stroke and tool offset is zero cannot move its tool: refused."""
-    chain = spec.chain()
+def _check_not_degenerate(chain: SerialChain, source: str) -> SerialChain:
+    """`chain`, unless its links, offsets, strokes and tool offset are all zero (or add up to less than LENGTH_MIN):
+    then it cannot move its tool, and it is refused (with the file's lengths, or with those set by --set)."""
     size = sum(abs(j.a) + abs(j.d) for j in chain.joints) + float(np.linalg.norm(chain.tool[:3, 3]))
     size += sum(abs(j.upper or 0.0) + abs(j.lower or 0.0) for j in chain.joints if j.prismatic)
     if size == 0 and not any(j.prismatic for j in chain.joints):
@@ -418,6 +464,12 @@ def _check_not_degenerate(spec: RobotSpec, source: str) -> None:
             f"robot file {source}: every link length, offset and tool offset is 0, so the tool point never moves; "
             "give at least one 'a', 'd' or tool 'xyz' a length"
         )
+    if 0 < size < LENGTH_MIN and not any(j.prismatic for j in chain.joints):  # e.g. a = 1e-300: a point, no arm
+        raise UsageError(
+            f"robot file {source}: the link lengths, offsets and tool offset add up to {size:.3g} m, less than "
+            f"{LENGTH_MIN * 1000:g} mm: the tool point barely moves and no tolerance means anything at that scale"
+        )
+    return chain
 
 
 # --------------------------------------------------------------------------------------------- the package's

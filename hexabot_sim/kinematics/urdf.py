@@ -10,6 +10,7 @@ import numpy as np
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics.chain import SerialChain
 from hexabot_sim.kinematics.mjcf import ALUMINIUM_DENSITY, link_bodies
+from hexabot_sim.kinematics.xml_text import comment_line
 from hexabot_sim.kinematics.xml_text import num as _num
 from hexabot_sim.kinematics.xml_text import nums as _nums
 
@@ -85,7 +86,7 @@ def to_urdf(
         f"({_num(EFFORT_PLACEHOLDER)} and {_num(VELOCITY_PLACEHOLDER)}): a DH table has none; set them for your",
         "hardware.",
     ]
-    out = ['<?xml version="1.0"?>', "<!--", *[f"  {line}".rstrip() for line in header], "-->"]
+    out = ['<?xml version="1.0"?>', "<!--", *[f"  {comment_line(line)}".rstrip() for line in header], "-->"]
     out.append(f'<robot name="{chain.name}">')
     out.append('  <mujoco><compiler angle="radian" fusestatic="false" discardvisual="false"/></mujoco>')
     out.append('  <material name="base"><color rgba="0.35 0.35 0.38 1"/></material>')

@@ -35,3 +35,11 @@ def num(value: float) -> str:
 
 def nums(values: np.ndarray | list[float] | tuple[float, ...]) -> str:
     return " ".join(num(v) for v in values)
+
+
+def comment_line(text: str) -> str:
+    """`text` safe inside an XML comment, which may not contain "--": joint names such as "x--" (robot file names
+    allow letters, digits, _ . -) are written "x- -"."""
+    while "--" in text:
+        text = text.replace("--", "- -")
+    return text

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import mujoco
 import numpy as np
 import pytest
@@ -96,3 +98,72 @@ def test_the_api_exports_a_spec_and_refuses_a_folder(tmp_path):
     assert path == tmp_path / "leg.urdf" and 'name="tool"' in path.read_text()
     with pytest.raises(UsageError, match="is a folder"):
         api.export("leg", mjcf=tmp_path)
+
+
+def test_the_robot_file_itself_is_never_written_over_not_even_with_force(tmp_path, capsys):
+    robot = tmp_path / "slide.toml"
+    robot.write_text(SLIDE)
+    (tmp_path / "link.toml").symlink_to(robot)
+    (tmp_path / "hard.xml").hardlink_to(robot)
+    for source, out in (("slide.toml", "slide.toml"), ("link.toml", "slide.toml"), ("slide.toml", "link.toml"),
+                        ("slide.toml", "hard.xml")):  # fmt: skip
+        code, stdout, err = cli(capsys, "export", str(tmp_path / source), "--mjcf", str(tmp_path / out), "--force")
+        assert code == 2 and stdout == "" and err.count("\n") == 1, err
+        assert "is the robot file being exported; it is never written over" in err
+    assert robot.read_text() == SLIDE and sorted(p.name for p in tmp_path.iterdir()) == [
+        "hard.xml", "link.toml", "slide.toml"]  # fmt: skip
+
+
+@pytest.mark.parametrize("urdf", ["{d}/out.xml", "{d}/sub/../out.xml", "./out.xml"])
+def test_one_file_spelled_two_ways_is_refused_before_anything_is_written(tmp_path, capsys, monkeypatch, urdf):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "sub").mkdir()
+    for force in ([], ["--force"]):
+        code, out, err = cli(capsys, "export", "elbow", "--mjcf", "out.xml", "--urdf", urdf.format(d=tmp_path), *force)
+        assert code == 2 and out == "" and err.count("\n") == 1 and "--mjcf and --urdf name the same file" in err
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["sub"]
+
+
+def test_a_path_ending_in_a_slash_names_a_folder_not_a_file(tmp_path, capsys):
+    code, out, err = cli(capsys, "export", "elbow", "--mjcf", f"{tmp_path}/new/")
+    assert code == 2 and out == "" and "ends with '/': that names a folder; give a file name" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_exported_files_are_well_formed_xml_whatever_the_summary_says(tmp_path, capsys):
+    from xml.dom import minidom
+
+    robot = tmp_path / "slide.toml"
+    text = SLIDE.replace('name = "slide"', 'name = "slide"\nsummary = "x-->y <&> ends with-"')
+    robot.write_text(text.replace('name = "q1"', 'name = "q---1"'))  # "--" went raw into the MJCF's DH table comment
+    mjcf, urdf = tmp_path / "out.xml", tmp_path / "out.urdf"
+    code, _, err = cli(capsys, "export", str(robot), "--mjcf", str(mjcf))
+    assert code == 0, err
+    minidom.parse(str(mjcf))
+    mujoco.MjModel.from_xml_path(str(mjcf))
+    robot.write_text(robot.read_text().replace("d = 0.1\n", "d = 0.1\nlower = 0.0\nupper = 0.2\n"))
+    code, _, err = cli(capsys, "export", str(robot), "--urdf", str(urdf))
+    assert code == 0, err
+    minidom.parse(str(urdf))
+    mujoco.MjModel.from_xml_path(str(urdf))
+
+
+@pytest.mark.parametrize("stop_at", [1, 2])
+def test_ctrl_c_while_writing_leaves_neither_file(tmp_path, monkeypatch, stop_at):
+    """Ctrl-C (or SIGTERM, raised the same way by the CLI) while the second file was synced left the first
+    published: both are now written under temporary names first and renamed only when both are whole."""
+    from hexabot_sim import exporting
+
+    calls = []
+    real = os.fsync
+
+    def fsync(fd):
+        calls.append(fd)
+        if len(calls) == stop_at:
+            raise KeyboardInterrupt
+        real(fd)
+
+    monkeypatch.setattr(exporting.os, "fsync", fsync)
+    with pytest.raises(KeyboardInterrupt):
+        api.export("elbow", mjcf=tmp_path / "a.xml", urdf=tmp_path / "a.urdf")
+    assert list(tmp_path.iterdir()) == []

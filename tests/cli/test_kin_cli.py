@@ -59,6 +59,8 @@ def test_text_output(capsys):
         (["kin", "rrp", "--q", "0.1,0.2"], "rrp has 3 joints (q1 [rad], q2 [rad], d3 [m]); got 2 values"),
         (["kin", "rrp", "--q", "a,b,c"], "--q must be comma-separated numbers"),
         (["kin", "rrp", "--q", "nan,0,0"], "--q must be finite numbers"),
+        (["kin", "rrp", "--q", "1_0,0,0"], "--q must be comma-separated numbers; got '1_0,0,0'"),  # float(): 10
+        (["kin", "rrp", "--set", "d1=0_5"], "length 'd1' must be comma-separated numbers; got '0_5'"),  # was 5 m
         (["kin", "elbow", "--target", "5,5,5"], "out of reach"),
         (["kin", "rrp", "--set", "d9=1"], "unknown length 'd9' for rrp"),
         (["kin", "rrp", "--set", "d1=-1"], "length 'd1' of rrp must be 0.001 to 10 m; got -1.0"),

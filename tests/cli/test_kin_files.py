@@ -130,6 +130,30 @@ def test_symbolic_works_for_a_file_with_its_lengths_as_symbols(tmp_path, capsys)
     assert "c1*l1 + c12*l2" in t0n and "l1*s1 + l2*s12" in t0n and "z" in t0n
 
 
+@pytest.mark.skipif(importlib.util.find_spec("sympy") is None, reason="needs sympy (the 'symbolic' extra)")
+def test_symbolic_stops_in_bounded_time_when_the_closed_form_explodes(tmp_path, capsys, monkeypatch):
+    """General twists multiply the terms at every joint: 7 joints at 37 deg ran for minutes; now a one-line refusal
+    once a T0i passes symbolic.MAX_OPS operations (made small here so the test is fast)."""
+    from hexabot_sim.kinematics import symbolic
+
+    odd = PLANAR.replace("alpha = 0.0", "alpha = 37.0").replace("theta = 0.0", "theta = 11.0")
+    monkeypatch.setattr(symbolic, "MAX_OPS", 60)
+    code, out, err = cli(capsys, "kin", str(write(tmp_path, odd)), "--symbolic")
+    assert code == 2 and out == "" and err.count("\n") == 1, err
+    assert "closed form grows too large to simplify in reasonable time: T02 already has" in err
+    assert "(at most 60;" in err and "use --q for T0n and J at a configuration" in err
+
+
+@pytest.mark.skipif(importlib.util.find_spec("sympy") is None, reason="needs sympy (the 'symbolic' extra)")
+def test_the_package_robots_stay_far_below_the_symbolic_limit():
+    from hexabot_sim.kinematics import symbolic
+
+    for name in robots.ROBOTS:
+        chain = symbolic.symbolic_chain(name)
+        poses = symbolic.transforms(chain, max_ops=symbolic.MAX_OPS // 4)
+        assert len(poses) == chain.n + 1
+
+
 def test_kin_leg_lists_report_000s_foot_row(capsys):
     code, out, _ = cli(capsys, "kin", "leg", "--set", "l3=0.12")
     assert code == 0

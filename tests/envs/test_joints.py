@@ -1,6 +1,7 @@
 """The joint-level environments against Gymnasium's checker, MuJoCo's own frames and the bounds of their spaces."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -116,22 +117,50 @@ def test_target_mapping_reaches_the_servo_ranges():
         ({"terrain": "rough", "roughness": 0.5}, "roughness must be > 0 and <= 0.03 m"),
         ({"randomize_mass": (1.2, 0.8)}, "randomize_mass must be (low, high)"),
         ({"command_range": ((0, 1),)}, "command_range must be three (low, high) pairs"),
-        ({"reward": {"velocity_sigma": 0.0}}, "reward velocity_sigma must be a finite number > 0"),
+        ({"reward": {"velocity_sigma": 0.0}}, "reward velocity_sigma must be a number from 1e-06 to 1e+06"),
+        # Each of these was a TypeError, a KeyError at the first render(), a ZeroDivisionError at the first step or
+        # an infinite reward, not a ValueError naming what is allowed:
+        ({"terrain": "slope", "slope_deg": "10"}, "slope_deg must be > 0 and <= 30 deg (a number); got '10'"),
+        ({"terrain": "slope", "slope_deg": True}, "slope_deg must be > 0 and <= 30 deg (a number); got True"),
+        ({"terrain": "rough", "roughness": None}, "roughness must be > 0 and <= 0.03 m (a number); got None"),
+        ({"reward": {"slipp": 1.0}}, "unknown reward field 'slipp'; known: velocity, yaw, velocity_sigma"),
+        ({"reward": "slip"}, "reward must be a Reward, a dict of its fields or None; got str"),
+        ({"reward": {"slip": "1"}}, "reward slip must be a number from 0 to 1e+06; got '1'"),
+        ({"reward": {"velocity_sigma": 1e-300}}, "reward velocity_sigma must be a number from 1e-06 to 1e+06"),
+        ({"reward": {"energy": 1e308}}, "reward energy must be a number from 0 to 1e+06; got 1e+308"),
+        ({"camera": "nocam"}, "unknown camera 'nocam'; known: track, top"),
+        ({"camera": 3}, "unknown camera 3; known: track, top"),
         ({"render_mode": "human"}, "unknown render_mode 'human'"),
         ({"width": 0}, "width must be an integer from 1 to 8192 pixels"),
     ],
 )
 def test_bad_arguments_say_what_is_allowed(kwargs, words):
-    with pytest.raises(ValueError, match=words.replace("(", r"\(").replace(")", r"\)")):
+    with pytest.raises(ValueError, match=re.escape(words)):
         LeggedJointsEnv(**kwargs)
 
 
-@pytest.mark.parametrize(("action", "words"), [(np.zeros(17), r"shape \(18,\)"), (np.full(18, np.nan), "finite")])
+@pytest.mark.parametrize(
+    ("action", "words"),
+    [
+        (np.zeros(17), r"shape \(18,\)"),
+        (np.full(18, np.nan), "finite"),
+        (np.zeros(18) + 0.5j, "the action must be 18 real numbers in \\[-1, 1\\]; got array"),  # was: imaginary dropped
+        ([object()] * 18, "the action must be 18 real numbers"),  # was: a TypeError
+        ({"a": 1}, "the action must be 18 real numbers"),
+    ],
+)
 def test_bad_actions_say_what_is_allowed(action, words):
     env = LeggedJointsEnv()
     env.reset(seed=0)
-    with pytest.raises(ValueError, match=words):
+    with pytest.raises(ValueError, match=words) as info:
         env.step(action)
+    assert "\n" not in str(info.value)
+
+
+def test_step_before_reset_says_so():
+    """It raised AttributeError ('_command'); the command environment already said this."""
+    with pytest.raises(RuntimeError, match=r"call reset\(\) before step\(\)"):
+        LeggedJointsEnv().step(np.zeros(18))
 
 
 def test_a_step_is_frame_skip_physics_steps_and_nothing_else():

@@ -56,7 +56,13 @@ def test_episodes_restart_on_the_step_after_they_end():
 
 def test_bad_actions_and_arguments_say_what_is_allowed():
     vec = LeggedJointsVectorEnv(num_envs=2)
+    with pytest.raises(RuntimeError, match=r"call reset\(\) before step\(\)"):  # it stepped from an all-zero state
+        vec.step(np.zeros((2, 18)))
     vec.reset(seed=0)
+    with pytest.raises(ValueError, match=r"real numbers in \[-1, 1\], shape \(2, 18\)"):  # imaginary part was dropped
+        vec.step(np.zeros((2, 18)) + 1j)
+    with pytest.raises(ValueError, match="max_episode_steps must be an integer >= 1; got 0"):
+        LeggedJointsVectorEnv(num_envs=1, max_episode_steps=0)
     with pytest.raises(ValueError, match=r"shape \(2, 18\)"):
         vec.step(np.zeros(18))
     with pytest.raises(ValueError, match="finite"):

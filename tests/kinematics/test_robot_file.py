@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -155,6 +156,27 @@ def joint_block(i: int) -> str:
         ("name = [", "not valid TOML"),
         ('name = "x"\nconvention = "standard"\nangles = "deg"\n[lengths]\nL = 20.0\n' + joint_block(1),
          "[lengths] L: 'value' = 20 m is outside the allowed ±10 m"),
+        # Control characters went raw into the MJCF/URDF comment (not well-formed XML) and onto the terminal:
+        ('name = "x"\nsummary = "a\\u001b[2Jb"\nconvention = "standard"\nangles = "deg"\n' + joint_block(1),
+         "'summary' must be one line of text (at most 200 characters); got 'a\\x1b[2Jb'"),
+        ('name = "x"\nsummary = "a\\u0000b\\uffff"\nconvention = "standard"\nangles = "deg"\n' + joint_block(1),
+         "'summary' must be one line of text"),
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n[lengths]\nL = { value = 0.1, doc = "a\\u0007" }\n'
+         + joint_block(1), "[lengths] L: 'doc' must be one line of text"),
+        # 12,000 fixed rows made kin run for minutes, 40,000 lengths took 24 s (each a file under 1 MiB):
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n' + joint_block(0)
+         + "".join(joint_block(i).replace("revolute", "fixed") for i in range(1, 16)),
+         "16 [[joints]] rows; at most 7 joints and 8 fixed rows after them"),
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n' + "".join(joint_block(i) for i in range(6))
+         + "".join(joint_block(i).replace("revolute", "fixed") for i in range(6, 15)), "9 fixed rows; at most 8"),
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n[lengths]\n'
+         + "".join(f"l{i} = 0.1\n" for i in range(65)) + joint_block(1), "[lengths]: 65 lengths; at most 64"),
+        # A length named "l-1" printed as c1*l-1 in --symbolic (c1 l minus 1):
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n[lengths]\n"l-1" = 0.1\n' + joint_block(1),
+         "a length name must be 1 to 64 letters, digits, _ (starting with a letter or _; it is a symbol in"),
+        # A chain of 1e-300 m was accepted: every q "solved" every target near 0 and J was "not singular"
+        ('name = "x"\nconvention = "standard"\nangles = "deg"\n' + joint_block(1).replace("a = 0.1", "a = 1e-300"),
+         "add up to 1e-300 m, less than 1 mm: the tool point barely moves"),
     ],
 )  # fmt: skip
 def test_bad_tables(tmp_path, text, message):
@@ -208,3 +230,42 @@ def test_a_name_or_a_path_resolves(tmp_path):
     assert robots.resolve(write(tmp_path, ARM)).name == "textbook-arm"
     with pytest.raises(UsageError, match="unknown robot 'puma'; known: rrp, elbow, stanford, scara, leg, or the path"):
         robots.resolve("puma")
+
+
+def test_a_fifo_or_a_device_is_refused_at_once_not_waited_on(tmp_path):
+    fifo = tmp_path / "pipe.toml"
+    os.mkfifo(fifo)  # no writer: a blocking open would wait forever
+    for path in (fifo, Path(os.devnull)):
+        with pytest.raises(UsageError, match=r"not a regular file \(a pipe or a device\)"):
+            robot_file.read(path)
+    with pytest.raises(UsageError, match="is a folder, not a file"):
+        robot_file.read(tmp_path)
+
+
+@pytest.mark.parametrize("value", ["[" * 5000 + "]" * 5000, "{a=" * 5000 + "1" + "}" * 5000])
+def test_deeply_nested_toml_is_one_line_not_a_recursion_error(tmp_path, capsys, value):
+    path = write(tmp_path, ARM + f"x = {value}\n")
+    code, out, err = cli(capsys, "kin", str(path))
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert "not valid TOML: arrays or tables nested too deeply" in err
+
+
+def test_a_byte_order_mark_is_read_as_params_read_config_reads_it(tmp_path):
+    spec = robot_file.read(write(tmp_path, "\ufeff" + ARM))
+    assert spec.name == "textbook-arm" and spec.file_id is not None
+
+
+def test_lengths_set_to_zero_are_checked_like_the_files_own(tmp_path, capsys):
+    """--set L=0 (a length with zero = true) made a chain that is a point: kin "solved" every target with any q and
+    export wrote its model; the file's own all-zero table was already refused."""
+    text = ARM.replace("[[joints]]", "[lengths]\nL = { value = 0.3, zero = true }\n[[joints]]", 1)
+    text = text.replace("d = 0.4", 'd = "L"').replace("a = 0.3", 'a = "L"').replace("xyz = [0.0, 0.0, 0.1]", "")
+    text = text.replace('type = "prismatic"', 'type = "revolute"').replace("d = 0.1", "d = 0.0")
+    text = text.replace("lower = 0.0\nupper = 0.2\n", "")
+    path = write(tmp_path, text)
+    assert robot_file.read(path).chain({"L": 0.2}).n == 3
+    for argv in (["kin", str(path), "--set", "L=0", "--target", "0,0,0"],
+                 ["export", str(path), "--set", "L=0", "--mjcf", str(tmp_path / "out.xml")]):  # fmt: skip
+        code, out, err = cli(capsys, *argv)
+        assert code == 2 and out == "" and err.count("\n") == 1 and "the tool point never moves" in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["arm.toml"]
