@@ -195,8 +195,8 @@ def _to_float(raw: Any) -> float | None:
         return None
     if isinstance(raw, str):
         text = raw.strip()
-        if len(text) > 100:
-            return None
+        if len(text) > 100 or "_" in text or not text.isascii():
+            return None  # float() reads "1_0" as 10 and "５" as 5: a slip for "1,0" or "1.0", or not our digits
         try:
             return float(text)
         except ValueError:

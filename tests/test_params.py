@@ -43,6 +43,9 @@ def test_scenario_defaults():
         ({"mass": True}, "'mass' must be a number with 0.001 <= mass <= 1000 kg; got True"),
         ({"mass": 10**400}, "got an integer of 401 digits"),
         ({"mass": "x" * 200}, "got 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx..."),
+        # float() reads these as 10 and 5: a slip for "1,0" or "1.0", and digits of another script
+        ({"damping": "1_0"}, "'damping' must be a number with 0 <= damping <= 1e+06 N*m*s/rad; got '1_0'"),
+        ({"mass": "\uff15"}, "'mass' must be a number with 0.001 <= mass <= 1000 kg; got '\uff15'"),
     ],
 )
 def test_bad_values_name_the_problem(overrides, fragment):
