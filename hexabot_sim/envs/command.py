@@ -10,6 +10,7 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
+from hexabot_sim.control.commands import Segment
 from hexabot_sim.control.gait import Command
 from hexabot_sim.control.walker import WalkingController
 from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward
@@ -19,6 +20,30 @@ from hexabot_sim.walking.scene import acceleration_limit, make_controller
 
 TWIST_RANGE: tuple[tuple[float, float], ...] = ((-0.15, 0.15), (-0.1, 0.1), (-0.4, 0.4))  # vx, vy [m/s], yaw rate
 STEP_HEIGHT_RANGE: tuple[float, float] = (0.015, 0.045)  # [m] foot lift at mid-swing
+
+
+class ActionSource:
+    """The policy's latest action as the controller's command source (control/commands.CommandSource): its twist
+    holds for one control period; the step height ramps linearly over the period from the previous action's, so a
+    foot in mid-swing is lifted or lowered smoothly (setting the planner's step height made its target jump by up to
+    the whole range, 3 cm)."""
+
+    def __init__(self, gait: str, step_height: float, stand_height: float, period: float) -> None:
+        self.gait, self.period, self.stand_height = gait, period, stand_height
+        self.command = Command()
+        self._t0, self._from, self._to = 0.0, step_height, step_height
+
+    def act(self, t: float, command: Command, step_height: float) -> None:
+        """The action taken at run time t [s]."""
+        self._from = float(self.heights(np.array([t]))[0][0])
+        self._t0, self._to, self.command = t, step_height, command
+
+    def segment(self, t: float, pose: tuple[float, float, float]) -> Segment:
+        return Segment(self.command, t + self.period, self.gait)
+
+    def heights(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        f = np.clip((np.asarray(times, dtype=float) - self._t0) / self.period, 0.0, 1.0)
+        return self._from + (self._to - self._from) * f, np.full(f.shape, self.stand_height)
 
 
 class LeggedCommandEnv(LeggedEnv):
@@ -109,10 +134,10 @@ class LeggedCommandEnv(LeggedEnv):
         self._start(seed)
         m, d = self.model, self.data
         mujoco.mj_forward(m, d)
-        self.controller = controller = make_controller(self.p_controller, m, d)
-        # One plan per action, with the action's command, from the gait clock's start on.
-        controller.planner.max_chunk = self.frame_skip
-        controller.settings = dataclasses.replace(controller.settings, command=Command(), ramp_time=0.0)
+        p = self.p_controller
+        self.source = ActionSource(p.gait, p.step_height, p.stand_height, self.frame_skip * p.timestep)
+        self.controller = controller = make_controller(p, m, d, self.source)
+        controller.planner.max_chunk = self.frame_skip  # one plan per action, from the gait clock's start on
         for _ in range(self._settle_steps):
             controller(m, d)
             mujoco.mj_step(m, d)
@@ -127,8 +152,7 @@ class LeggedCommandEnv(LeggedEnv):
         lo, hi = self.ranges[:, 0], self.ranges[:, 1]
         vx, vy, w, h = (lo + 0.5 * (self._action + 1.0) * (hi - lo)).tolist()
         controller, m, d = self.controller, self.model, self.data
-        controller.settings = dataclasses.replace(controller.settings, command=Command(vx, vy, w))
-        controller.planner.step_height = h
+        self.source.act(d.time, Command(vx, vy, w), h)
         for _ in range(self.frame_skip):
             controller(m, d)
             mujoco.mj_step(m, d)
