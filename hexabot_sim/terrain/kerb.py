@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from hexabot_sim.terrain.limits import Limits, apart
+from hexabot_sim.terrain.limits import Limits
 
 KERB_LENGTH: float = 20.0  # [m] the pavement after the kerb (beyond any walk)
 KERB_WIDTH: float = 20.0  # [m] across the path
@@ -56,21 +56,7 @@ class Kerb:
 
     def problem(self, limits: Limits) -> str:
         """'' if the robot can climb the kerb, else why not (one line)."""
-        if self.height > limits.underside - limits.clearance:
-            kerb_mm, highest_mm = apart(self.height * 1000, (limits.underside - limits.clearance) * 1000, "down")
-            return (
-                f"a {kerb_mm} mm kerb would hit the plate: {limits.underside_why} its "
-                f"underside is {limits.underside * 1000:.0f} mm above the ground, and the kerb must stay "
-                f"{limits.clearance * 1000:g} mm below it (at most {highest_mm} mm); {limits.underside_hint}"
-            )
-        if self.height > limits.climbable:
-            # Rough ground may take all the walk can climb: then none is (it said "the largest climbable, -28 mm").
-            kerb_mm, largest_mm = apart(self.height * 1000, max(limits.climbable, 0.0) * 1000, "down")
-            return (
-                f"a {kerb_mm} mm kerb is above the largest climbable, {largest_mm} mm ({limits.climbable_why}); "
-                f"{limits.climbable_hint}"
-            )
-        return ""
+        return limits.rise_problem(self.height, "kerb", "the kerb", "the largest climbable")
 
     def label(self) -> str:
         return f"{self.height * 1000:g} mm kerb at {self.distance:g} m"

@@ -34,3 +34,22 @@ class Limits:
     underside_hint: str
     clearance: float
     max_points: int
+
+    def rise_problem(self, height: float, what: str, each: str, largest: str) -> str:
+        """'' if a step up of `height` [m] clears the body and can be climbed, else why not (one line), e.g. what
+        "kerb", each "the kerb", largest "the largest climbable"."""
+        if height > self.underside - self.clearance:
+            rise_mm, highest_mm = apart(height * 1000, (self.underside - self.clearance) * 1000, "down")
+            return (
+                f"a {rise_mm} mm {what} would hit the plate: {self.underside_why} its underside is "
+                f"{self.underside * 1000:.0f} mm above the ground, and {each} must stay "
+                f"{self.clearance * 1000:g} mm below it (at most {highest_mm} mm); {self.underside_hint}"
+            )
+        if height > self.climbable:
+            # Rough ground may take all the walk can climb: then none is (it said "the largest climbable, -28 mm").
+            rise_mm, largest_mm = apart(height * 1000, max(self.climbable, 0.0) * 1000, "down")
+            return (
+                f"a {rise_mm} mm {what} is above {largest}, {largest_mm} mm ({self.climbable_why}); "
+                f"{self.climbable_hint}"
+            )
+        return ""

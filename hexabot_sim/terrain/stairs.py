@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from hexabot_sim.terrain.kerb import KERB_LENGTH, KERB_WIDTH, box_highest_on_line
-from hexabot_sim.terrain.limits import Limits, apart
+from hexabot_sim.terrain.limits import Limits
 
 
 @dataclasses.dataclass(frozen=True)
@@ -74,20 +74,7 @@ class Stairs:
         """'' if the robot can climb every step, else why not (one line)."""
         if self.count < 1 or self.run <= 0:
             return f"stairs need at least one step and a positive run; got {self.count} steps of {self.run:g} m"
-        if self.rise > limits.underside - limits.clearance:
-            rise_mm, highest_mm = apart(self.rise * 1000, (limits.underside - limits.clearance) * 1000, "down")
-            return (
-                f"a {rise_mm} mm stair rise would hit the plate: {limits.underside_why} its underside is "
-                f"{limits.underside * 1000:.0f} mm above the ground, and a step must stay "
-                f"{limits.clearance * 1000:g} mm below it (at most {highest_mm} mm); {limits.underside_hint}"
-            )
-        if self.rise > limits.climbable:
-            rise_mm, largest_mm = apart(self.rise * 1000, max(limits.climbable, 0.0) * 1000, "down")
-            return (
-                f"a {rise_mm} mm stair rise is above the largest climbable step, {largest_mm} mm "
-                f"({limits.climbable_why}); {limits.climbable_hint}"
-            )
-        return ""
+        return limits.rise_problem(self.rise, "stair rise", "a step", "the largest climbable step")
 
     def label(self) -> str:
         return f"{self.count} stairs of {self.rise * 1000:g} mm x {self.run * 1000:g} mm at {self.distance:g} m"
