@@ -64,7 +64,7 @@ def gravity_torques(layout: legged.Layout, q: np.ndarray) -> np.ndarray:
     """Torque [N m] (3,) gravity puts on a leg's joints through its own links (body level): sum over the links
     of m g dz_centre/dq (each link a uniform rod, its centre halfway along it, as the MJCF's inertials)."""
     g = layout.geometry
-    m1, m2, m3 = layout.link_masses
+    _, m2, m3 = layout.link_masses
     tau = np.zeros(3)
     for mass, lengths in ((m2, (g.l1, g.l2 / 2, 0.0)), (m3, (g.l1, g.l2, g.l3 / 2))):  # the coxa stays level
         _, jac = leg_kin.foot_and_jacobian(*q, *lengths)

@@ -61,11 +61,11 @@ class HexabotParams(WalkParams):
     """Parameters of the walking-hexabot scenarios (body frame: x forward, y left, z up)."""
 
     robot: str = param(
-        HEXABOT.name, "", "which robot: the hexabot, or your own six-legged one (docs/robot-files.md)", name_or_file=ROBOT
+        HEXABOT.name, "", "the hexabot, or your own six-legged robot (docs/robot-files.md)", name_or_file=ROBOT
     )
 
     @property
-    def ROBOT(self) -> WalkingRobot:  # noqa: N802 (WalkParams' name for the robot a walk uses)
+    def ROBOT(self) -> WalkingRobot:  # WalkParams' name for the robot a walk uses
         try:
             return walking_robot(self.robot)
         except (UsageError, OSError) as e:  # the file changed or went away since the parameter was checked
