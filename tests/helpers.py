@@ -40,15 +40,18 @@ def quat_to_matrix(q: Any) -> np.ndarray:
     return m.reshape(3, 3)
 
 
-def foot_and_jacobian_errors(scene: str, layout: Any, samples: int) -> tuple[float, float]:
+def foot_and_jacobian_errors(scene: str, layout: Any, samples: int, xml: str | None = None) -> tuple[float, float]:
     """Worst |foot site - analytic FK| and |mj_jacSite - analytic Jacobian| of a legged model at random joint
     angles and body poses: the layout's body-frame maths (kinematics/legged.py), rotated by the body, and each
-    leg's own DH FK in its hip site (the leg's frame 0)."""
+    leg's own DH FK in its hip site (the leg's frame 0). `xml`: the model's text instead of models/<scene>.xml."""
     from hexabot_sim import models
     from hexabot_sim.kinematics import leg as leg_kin
     from hexabot_sim.kinematics import legged
 
-    model = mujoco.MjModel.from_xml_path(str(models.model_path(scene)))
+    if xml is None:
+        model = mujoco.MjModel.from_xml_path(str(models.model_path(scene)))
+    else:
+        model = mujoco.MjModel.from_xml_string(xml)
     data = mujoco.MjData(model)
     rng = np.random.default_rng(7)
     lower, upper = np.array(legged.JOINT_LOWER), np.array(legged.JOINT_UPPER)
@@ -72,7 +75,7 @@ def foot_and_jacobian_errors(scene: str, layout: Any, samples: int) -> tuple[flo
             worst_j = max(worst_j, np.abs(jacp[:, dofs] - rot @ jac_body[i]).max())
             hip = data.site(f"{leg}_hip")
             local = hip.xmat.reshape(3, 3).T @ (data.site(f"{leg}_foot").xpos - hip.xpos)
-            worst_p = max(worst_p, np.abs(local - leg_kin.fk(q[i])).max())
+            worst_p = max(worst_p, np.abs(local - leg_kin.fk(q[i], layout.geometry)).max())
     return worst_p, worst_j
 
 

@@ -160,9 +160,12 @@ def _leg_lines(layout: legged.Layout, i: int, name: str, indent: str) -> list[st
     return lines
 
 
-def robot_xml(layout: legged.Layout, model: str, comment: str, stance_legs: int) -> str:
+def robot_xml(
+    layout: legged.Layout, model: str, comment: str, stance_legs: int, torque_limit: float = SERVO_TORQUE_LIMIT
+) -> str:
     """The robot file models/<model>.xml (no floor: the scene adds it), opening with `comment` (an XML
-    comment, "<!-- ... -->"); its default class is named after the model. Servo gains: servo_gains."""
+    comment, "<!-- ... -->"); its default class is named after the model. Servo gains: servo_gains; every joint's
+    actuatorfrcrange is +-torque_limit [N m]."""
     _, kp, kv = servo_gains(layout, stance_legs)
     q0 = legged.ik_body(layout, layout.neutral_feet_body())
     px, py, pz = layout.plate
@@ -180,7 +183,7 @@ def robot_xml(layout: legged.Layout, model: str, comment: str, stance_legs: int)
         "  <default>",
         f'    <default class="{model}">',
         f'      <joint type="hinge" axis="0 0 1" armature="{num(ARMATURE)}" damping="0" '
-        f'actuatorfrcrange="{num(-SERVO_TORQUE_LIMIT)} {num(SERVO_TORQUE_LIMIT)}"/>',
+        f'actuatorfrcrange="{num(-torque_limit)} {num(torque_limit)}"/>',
         '      <geom type="capsule" contype="0" conaffinity="0" group="2" mass="0"/>',
         '      <site group="4" size="0.004"/>',
         '      <default class="foot">',

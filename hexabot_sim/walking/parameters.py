@@ -23,6 +23,8 @@ from hexabot_sim.walking import commands
 INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")
 
 
+STAND_HEIGHT_MIN: float = 0.02  # [m] the lowest stand_height a walk takes
+
 SETTLE_TIME: float = 0.5  # [s] standing on the neutral stance before the gait clock starts
 
 SPEED_MARGIN: float = 0.9  # planned joint speeds must stay below this fraction of max_joint_speed
@@ -85,12 +87,14 @@ class WalkingRobot:
         layout: Its legs and body (kinematics.legged.Layout).
         scene: The model file (models/<scene>.xml) of the robot on a floor, with cameras and a "home" keyframe.
         torque_limit: The joints' actuatorfrcrange [N m].
+        replace: Files the scene includes, replaced by MJCF text (a robot file's model, generated at run time).
     """
 
     name: str
     layout: legged.Layout
     scene: str
     torque_limit: float
+    replace: tuple[tuple[str, str], ...] = ()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -108,8 +112,8 @@ class WalkParams:
     duty: float = param(0.0, "1", "stance fraction of the cycle; 0 = the gait's own (1/2, 2/3, 5/6)", ge=0.0, lt=1.0)
     step_height: float = param(0.03, "m", "foot lift at mid-swing", ge=0.002, le=0.1, typo=("mm", 1e-3))
     stand_height: float = param(
-        0.09, "m", "foot depth below the hips while standing (body height - foot radius)", ge=0.02, le=0.19,
-        typo=("mm", 1e-3),
+        0.0, "m", "foot depth below the hips while standing (body height - foot radius); 0 = the robot's own "
+        "(the hexabot's 0.09, a robot file's [stance] height)", ge=0.0, le=0.19, typo=("mm", 1e-3),
     )  # fmt: skip
     friction: float = param(1.0, "1", "foot-floor friction coefficient", ge=0.05, le=3.0)
     heading_hold: str = param("off", "", "correct the yaw rate from the IMU's heading", choices=("off", "on"))
@@ -168,6 +172,13 @@ class WalkParams:
     path_yaw_rate: float = param(0.5, "rad/s", "the path follower's largest yaw rate (waypoints)", gt=0.0, le=3.0)
 
     def __post_init__(self) -> None:
+        if not self.stand_height:  # the robot's own (resolved here: everything downstream reads the number)
+            object.__setattr__(self, "stand_height", self.ROBOT.layout.stand_height)
+        if self.stand_height < STAND_HEIGHT_MIN:
+            raise ValueError(
+                f"parameter 'stand_height' must be 0 (the robot's own) or {STAND_HEIGHT_MIN:g} to 0.19 m; got "
+                f"{self.stand_height:g}"
+            )
         if self.duty and not self.gait_duty_range()[0] <= self.duty < 1.0:
             lo = self.gait_duty_range()[0]
             raise ValueError(

@@ -52,7 +52,9 @@ def build_xml(p: WalkParams, ground: Ground | None = None) -> str:
     `ground`: another ground than the run's `terrain(p)` (a Gymnasium environment's patch, hexabot_sim/envs).
     """
     layout = p.ROBOT.layout
-    root = models.load_tree(p.ROBOT.scene)
+    root = models.load_tree(p.ROBOT.scene, dict(p.ROBOT.replace))
+    if p.ROBOT.replace:  # a robot file's model, generated at run time, in the scene of the committed robot
+        root.set("model", f"{p.ROBOT.name} scene")
     models.find(root, "option").attrib.update(timestep=models.fmt(p.timestep), integrator=p.integrator)
     _, com, friction = _perturbations(p)
     torso = models.find(root, "body", "torso")

@@ -416,7 +416,7 @@ def test_cli_run_folder_and_metrics_recomputed_from_the_trajectory(tmp_path, cap
     assert {"velocity.png", "body.png", "slip.png"} <= names
     header = (out / "timeseries.csv").read_text().splitlines()[0].split(",")
     assert header[:7] == ["t", "x", "y", "z", "roll", "pitch", "yaw"]
-    assert len(header) == hexabot_parameters.csv_columns(HexabotParams.ROBOT)  # the run-cost estimate counts these
+    assert len(header) == hexabot_parameters.csv_columns(HexabotParams().ROBOT)  # the run-cost estimate counts these
     assert {f"contact_{leg}" for leg in LEGS} <= set(header)
     assert {f"q_{leg}_{j}" for leg in LEGS for j in hx.JOINTS} <= set(header)
 

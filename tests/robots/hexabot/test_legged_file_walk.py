@@ -1,0 +1,73 @@
+"""hexabot-walk with robot=FILE: a user's hexapod (examples/my_hexapod.toml) walks; bad or infeasible robot files are
+refused in one line before the run; the default robot is still the hexabot."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from helpers import cli, walk_params
+
+import hexabot_sim as hs
+from hexabot_sim.errors import UsageError
+from hexabot_sim.kinematics import legged_file
+from hexabot_sim.robots.hexabot.walk import HEXABOT
+
+EXAMPLE = Path(__file__).resolve().parents[3] / "examples" / "my_hexapod.toml"
+
+
+def test_the_default_robot_is_the_hexabot_at_its_own_stand_height() -> None:
+    p = walk_params()
+    assert p.robot == "hexabot" and p.ROBOT is HEXABOT and p.stand_height == 0.09
+    assert walk_params(stand_height=0.1).stand_height == 0.1
+    with pytest.raises(UsageError, match=r"'stand_height' must be 0 \(the robot's own\) or 0.02 to 0.19 m; got 0.01"):
+        walk_params(stand_height=0.01)
+
+
+def test_the_example_hexapod_walks_at_the_commanded_speed() -> None:
+    """A 3.4 s walk (settling, the 1 s ramp, two cycles measured) of the user's hexapod in its generated model."""
+    result = hs.run("hexabot-walk", robot=str(EXAMPLE), duration=3.4)
+    robot = legged_file.read(EXAMPLE)
+    model = result.raw.model
+    assert model.body_subtreemass[model.body("torso").id] == pytest.approx(robot.layout.total_mass, rel=1e-12)
+    assert model.site("lf_hip").pos.tolist() == [0.16, 0.09, 0.0]  # the file's hips, not the hexabot's
+    assert result.params["stand_height"] == 0.1  # the file's stance
+    assert result.metrics["fell"].value is False
+    assert abs(result.metrics["vx_error"].value) < 0.02  # relative: (mean_vx - vx) / |vx|
+
+
+def _variant(tmp_path: Path, old: str, new: str) -> Path:
+    text = EXAMPLE.read_text()
+    assert old in text
+    path = tmp_path / "robot.toml"
+    path.write_text(text.replace(old, new, 1))
+    return path
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        ("l2 = 0.08", "l2 = true", "[leg]: 'l2' must be a finite number [m]; got True"),
+        ("height = 0.10", "height = 0.3", "[stance]: the legs cannot reach the ground at height 0.3 m"),
+        ("torque_limit = 1.5", "torque_limit = 0.5", "[leg]: the servos are too weak to stand"),
+        ('rows = ["f", "m", "r"]', 'rows = ["f", "r"]', "4 legs; hexabot-walk walks 6-legged robots"),
+    ],
+)
+def test_bad_robot_files_exit_2_with_one_line_and_nothing_written(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], old: str, new: str, message: str
+) -> None:
+    path = _variant(tmp_path, old, new)
+    if new.startswith("rows"):  # a quadruped: two hips and two yaws per row
+        text = path.read_text().replace("[0.0, 0.10], ", "").replace("90.0, ", "")
+        path.write_text(text)
+    out = tmp_path / "out"
+    code, stdout, err = cli(capsys, "run", "hexabot-walk", "--set", f"robot={path}", "--out", str(out))
+    assert code == 2 and stdout == ""
+    assert err.count("\n") == 1 and f"parameter 'robot': robot file {path}: {message}" in err, err
+    assert not out.exists()
+
+
+def test_a_missing_file_or_unknown_name_is_refused(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    code, _, err = cli(capsys, "run", "hexabot-walk", "--set", "robot=quadbot", "--out", str(tmp_path / "o"))
+    assert code == 2 and err.count("\n") == 1
+    assert "parameter 'robot' must be one of hexabot, or the path of a legged-robot file (.toml) with six legs" in err
