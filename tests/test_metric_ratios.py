@@ -45,15 +45,16 @@ def test_the_energy_balance_of_a_real_swing_is_reported():
 
 def test_a_kerb_refusal_shows_the_value_and_the_bound_apart():
     from hexabot_sim.errors import UsageError
-    from hexabot_sim.walking import parameters as hexabot_parameters
+    from hexabot_sim.params import apart
+    from hexabot_sim.walking import ground as walking_ground
 
-    largest = hexabot_parameters.largest_climbable_kerb(_defaults())
+    largest = walking_ground.largest_climbable_kerb(_defaults())
     with pytest.raises((UsageError, ValueError)) as info:
         hs.run("hexabot-walk", kerb_height=largest * 1.00001, duration=3)
     text = str(info.value)
     shown, bound = text.split(" mm kerb is above the largest climbable, ")
     assert shown.split()[-1] != bound.split()[0], text
-    assert hexabot_parameters.apart(32.0004, 32.0, "down") == ("32.0004", "32")
+    assert apart(32.0004, 32.0, "down") == ("32.0004", "32")
 
 
 def _defaults():

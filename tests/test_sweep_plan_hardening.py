@@ -109,7 +109,7 @@ def test_checking_progress_on_the_command_line(tmp_path, capsys, monkeypatch):
 
 def test_the_walk_checks_a_gait_cycle_once_for_all_cells_that_share_it(monkeypatch):
     computed = []
-    plan_cycle = hexabot_parameters._plan_cycle
+    plan_cycle = hexabot_parameters._plan_cycle  # the gait feasibility's (walking.ground's, imported there)
     monkeypatch.setattr(
         hexabot_parameters, "_plan_cycle", lambda p, cmd, *a: computed.append(cmd) or plan_cycle(p, cmd, *a)
     )

@@ -13,7 +13,8 @@ from gymnasium import spaces
 
 from hexabot_sim.envs.scene import EPISODE_SECONDS, PLATE_SITE, EnvScene, Randomization, check_range
 from hexabot_sim.kinematics import legged
-from hexabot_sim.walking.parameters import FALL_TILT_DEG, WalkParams
+from hexabot_sim.walking.constants import FALL_TILT_DEG
+from hexabot_sim.walking.parameters import WalkParams
 
 if TYPE_CHECKING:
     from hexabot_sim.render import Frames

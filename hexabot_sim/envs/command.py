@@ -15,7 +15,7 @@ from hexabot_sim.control.gait import Command
 from hexabot_sim.control.walker import WalkingController
 from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward
 from hexabot_sim.envs.scene import check_range, robot_params
-from hexabot_sim.walking.parameters import SETTLE_TIME
+from hexabot_sim.walking.constants import SETTLE_TIME
 from hexabot_sim.walking.scene import acceleration_limit, make_controller
 
 TWIST_RANGE: tuple[tuple[float, float], ...] = ((-0.15, 0.15), (-0.1, 0.1), (-0.4, 0.4))  # vx, vy [m/s], yaw rate

@@ -12,7 +12,8 @@ from hexabot_sim import params, registry
 from hexabot_sim.kinematics import legged
 from hexabot_sim.terrain import Ground, RoughPatch, Slope
 from hexabot_sim.terrain.heightfield import CELL, MARGIN
-from hexabot_sim.walking.parameters import WalkParams, start_pose
+from hexabot_sim.walking.ground import start_pose
+from hexabot_sim.walking.parameters import WalkParams
 from hexabot_sim.walking.scene import build_xml
 
 TERRAINS: tuple[str, ...] = ("flat", "slope", "rough")

@@ -11,8 +11,9 @@ import numpy as np
 from hexabot_sim.result import ScenarioResult
 from hexabot_sim.terrain import Ground
 from hexabot_sim.walking import course
+from hexabot_sim.walking.constants import SETTLE_TIME
+from hexabot_sim.walking.ground import walking_direction
 from hexabot_sim.walking.metrics import Contacts
-from hexabot_sim.walking.parameters import SETTLE_TIME, walking_direction
 
 LEG_COLOURS = {
     "lf": "tab:blue",

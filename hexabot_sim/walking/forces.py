@@ -101,7 +101,7 @@ def force_metrics(
 
     Args:
         force: Normal force of each foot (n, n_legs) [N].
-        loaded: The feet that carry load (n, n_legs) (above walking.parameters.LOADED_FRACTION of a foot's share).
+        loaded: The feet that carry load (n, n_legs) (above walking.constants.LOADED_FRACTION of a foot's share).
         planned: The feet the gait plan has in stance (n, n_legs).
         dt: Time between rows [s].
         weight: The robot's weight [N]; a foot's static share is weight / n_legs.

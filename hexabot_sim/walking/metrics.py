@@ -11,14 +11,9 @@ import numpy as np
 from hexabot_sim.control.walker import WalkingController
 from hexabot_sim.result import Metric
 from hexabot_sim.terrain import Ground
-from hexabot_sim.walking.parameters import (
-    FALL_TILT_DEG,
-    LOADED_FRACTION,
-    SETTLE_TIME,
-    WalkParams,
-    largest_climbable_kerb,
-    walking_direction,
-)
+from hexabot_sim.walking.constants import FALL_TILT_DEG, LOADED_FRACTION, SETTLE_TIME
+from hexabot_sim.walking.ground import largest_climbable_kerb, walking_direction
+from hexabot_sim.walking.parameters import WalkParams
 
 
 def rpy_from_quat(quat: np.ndarray) -> np.ndarray:

@@ -1,4 +1,5 @@
-"""A walk's parameters and what the robot can walk: ranges, gait feasibility, terrain refusals (any legged robot)."""
+"""A walk's parameters and what the robot can walk: ranges, gait feasibility (any legged robot); the terrain's
+refusals are walking.ground's."""
 
 from __future__ import annotations
 
@@ -8,74 +9,22 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from hexabot_sim.control.gait import GAITS, Command, Gait, GaitPlanner, gaits_for
-from hexabot_sim.kinematics import leg as leg_kin
+from hexabot_sim.control.gait import GAITS, Command, Gait, gaits_for
 from hexabot_sim.kinematics import legged
-from hexabot_sim.params import allowed, apart, check_run_cost, param
+from hexabot_sim.params import allowed, check_run_cost, param
 from hexabot_sim.simulate import step_count
-from hexabot_sim.terrain import Ground, Kerb, Limits, RoughPatch, Slope, Stairs
-from hexabot_sim.terrain.heightfield import CELL as HFIELD_CELL
-from hexabot_sim.terrain.heightfield import MARGIN as HFIELD_MARGIN
-from hexabot_sim.terrain.heightfield import MAX_POINTS as HFIELD_MAX_POINTS
-from hexabot_sim.terrain.kerb import KERB_LENGTH, KERB_WIDTH
 from hexabot_sim.walking import commands
-
-INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")
-
-
-STAND_HEIGHT_MIN: float = 0.02  # [m] the lowest stand_height a walk takes
-
-SETTLE_TIME: float = 0.5  # [s] standing on the neutral stance before the gait clock starts
-
-SPEED_MARGIN: float = 0.9  # planned joint speeds must stay below this fraction of max_joint_speed
-
-LOADED_FRACTION: float = 0.05  # a foot counts as loaded above this fraction of the robot's weight
-
-
-CSV_FIXED_COLUMNS: int = 13  # columns of timeseries.csv besides the legs' (6 each: contact, 2 forces, 3 joints)
-
-# Cost of a run for params.check_run_cost, measured on the 2-core development machine (10 s vs 60 s
-# walks): seconds per physics step (controller + mj_step: 25 us in bench.py, with a margin for a loaded
-# machine), seconds per recorded row (contact replay, derived columns; the CSV is counted apart), peak
-# bytes per recorded row.
-RUN_COST: tuple[float, float, float] = (30e-6, 40e-6, 2000.0)
-
-# Seconds per physics step with terrain or the ground-finding controller (rough ground: 42-44 us in bench.py).
-TERRAIN_STEP_SECONDS: float = 50e-6
-
-KERB_PLATE_CLEARANCE: float = 0.005  # [m] a kerb stays this far below the plate's underside at the stand height
-
-MEASURE_TIME: float = 0.1  # [s] shortest walk after the ramp that the metrics are measured over
-
-FALL_TILT_DEG: float = 45.0  # body tilt beyond which the robot has fallen over
-
-# NoSlip iterations on uneven ground. MuJoCo's soft friction lets a foot under a steady tangential
-# load creep: the standing robot slid down a 10 deg slope at 0.9-1.8 mm/s with the defaults. Two
-# NoSlip passes (MuJoCo's remedy for slow slippage, run after the main solve) bring that to 0.005 mm/s
-# and 0.001-0.004 mm/s on 1 cm rough ground; impratio=100 did it too (0.009 mm/s) but its elliptic
-# cones took 6.7 Newton iterations and 73 line searches a step: bare mj_step 69 us on rough ground
-# against 31.5 us with NoSlip (median of 15 walks, 3 gaits x 5 seeds). The flat floor keeps the
-# defaults (its published results were measured with them; there is no steady tangential load there).
-TERRAIN_NOSLIP_ITERATIONS: int = 2
-
-SCENE_EXTENT: float = 2.0  # [m] <statistic extent> of a scene with terrain (what MuJoCo computes for the flat one)
-
-SLOPE_CAMERA_DISTANCE: float = 0.9  # [m] the slope video's camera: beside the body, across the slope
-
-SLOPE_CAMERA_HEIGHT: float = 0.08  # [m] above the body's centre of mass (low: the ground's tilt shows)
-
-# Limit on the commanded joint acceleration (resolved-rate step). It smooths what the position feedback
-# asks when a foot is stopped short (a kerb's edge, a bump): with 400 rad/s^2 the 3 cm kerb walk stumbled
-# (16 deg of roll), with 200 it climbs. But it must never clip the gait's own plan: the wave gait's 1/6-period
-# swing needs 266 rad/s^2 at 0.05 m/s and 364 at 0.095 m/s (period 1 s). Clipped at 200, the wave at
-# 0.095 m/s lost 5.0 % of its speed on flat ground (-0.6 % unclipped), and 6.8..8.5 % with up to 2.8 deg of
-# pitch on 1 cm rough ground (-2.0..-3.6 %, <= 1.2 deg unclipped; measured). A servo's 1.5 N*m gives a swinging leg
-# 336, 414 and 479 rad/s^2 (coxa, femur, tibia: torque over the mass-matrix diagonal, armature included).
-ACCELERATION_LIMIT: float = 200.0  # [rad/s^2] the limit, unless the planned cycle needs more
-
-REFLEX_LIFT: float = 1.0  # the elevator reflex lifts a blocked swing foot this many step heights higher
-
-ACCELERATION_HEADROOM: float = 1.2  # the limit is at least this times the planned cycle's peak joint acceleration
+from hexabot_sim.walking.constants import (
+    CSV_FIXED_COLUMNS,
+    INTEGRATORS,
+    MEASURE_TIME,
+    RUN_COST,
+    SETTLE_TIME,
+    SPEED_MARGIN,
+    STAND_HEIGHT_MIN,
+    TERRAIN_STEP_SECONDS,
+)
+from hexabot_sim.walking.ground import _plan_cycle, neutral, terrain_problem
 
 
 @dataclasses.dataclass(frozen=True)
@@ -228,25 +177,6 @@ class WalkParams:
         return self.touchdown == "sensed" or self.level_body == "on"
 
 
-def neutral(p: WalkParams) -> np.ndarray:
-    """Neutral foot centres (6, 3) in the body frame for the run's stand height."""
-    layout = dataclasses.replace(p.ROBOT.layout, stand_height=p.stand_height)
-    return layout.neutral_feet_body()
-
-
-def _plan_cycle(p: WalkParams, cmd: Command, samples: int = 240) -> tuple[np.ndarray, float]:
-    """Targets (n, 6, 3) in the hip frames over two steady gait cycles, and their time step."""
-    dt = p.period / samples
-    planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), dt)
-    chunks = [planner.plan(cmd, planner.max_chunk)]
-    while planner.time < 3 * p.period - 1e-9:
-        chunks.append(planner.plan(cmd, planner.max_chunk)[1:])
-    body = np.concatenate(chunks)[int(samples * 1.0) :]  # drop the first cycle (start-up from neutral)
-    layout = p.ROBOT.layout
-    hip = np.einsum("lji,klj->kli", layout.hip_rotations(), body - layout.hip_positions())
-    return hip, dt
-
-
 # _cycle_problem's answers by what the cycle depends on: a sweep checks each gait for each of its other values.
 _CYCLE_PROBLEMS: dict[tuple[Any, ...], str] = {}
 
@@ -313,210 +243,6 @@ def feasibility(p: WalkParams) -> str:
     return (
         f"the legs cannot deliver this command at period {p.period:g} s (stride {stride:.3g} m): {problem}; "
         f"the largest feasible in this direction is {', '.join(parts) or 'standing still'}; {advice}"
-    )
-
-
-def walking_direction(p: WalkParams) -> np.ndarray:
-    """Horizontal unit vector (2,) of the commanded walk in the world at the start (+x when standing or turning)."""
-    speed = math.hypot(p.vx, p.vy)
-    return np.array([p.vx, p.vy]) / speed if speed > 0 else np.array([1.0, 0.0])
-
-
-def terrain(p: WalkParams) -> Ground:
-    """The run's ground: slope direction from the walking direction, heightfield over the walk's area."""
-    along = walking_direction(p)
-    uphill = {"uphill": along, "downhill": -along, "across": np.array([-along[1], along[0]])}[p.slope_heading]
-    speed = math.hypot(p.vx, p.vy)
-    if p.schedule or p.waypoints:  # a box holding the course (the schedule's planned path)
-        extent = commands.extent(p, SETTLE_TIME, HFIELD_MARGIN)
-    elif p.yaw_rate:  # an arc (or turning on the spot): a box about the start holding the circle
-        half = min(speed * p.duration, 2 * speed / abs(p.yaw_rate)) + HFIELD_MARGIN
-        extent = (-half, half, -half, half)
-    else:
-        end = np.array([p.vx, p.vy]) * p.duration
-        extent = (
-            min(0.0, end[0]) - HFIELD_MARGIN, max(0.0, end[0]) + HFIELD_MARGIN,
-            min(0.0, end[1]) - HFIELD_MARGIN, max(0.0, end[1]) + HFIELD_MARGIN,
-        )  # fmt: skip
-    if p.slope_deg:  # the patch lies in the ground frame: a world distance d is d / cos(slope) along the slope
-        extent = tuple(v / math.cos(math.radians(p.slope_deg)) for v in extent)
-    extent = tuple(round(v / HFIELD_CELL) * HFIELD_CELL for v in extent)
-    along_xy = (float(along[0]), float(along[1]))
-    # The kerb's pavement runs on beyond the walk: 20 m, or as far as this walk could go (a 0.2 m/s walk of 200 s
-    # stepped down off its end at 20.5 m, where the terrain's heights still had the kerb).
-    reach = speed * p.duration / math.cos(math.radians(p.slope_deg)) + HFIELD_MARGIN
-    kerb_length, kerb_width = max(KERB_LENGTH, reach - p.kerb_distance), max(KERB_WIDTH, 2 * reach)
-    obstacles: tuple[Kerb | Stairs, ...] = ()
-    if p.kerb_height:
-        obstacles += (Kerb(p.kerb_height, p.kerb_distance, along_xy, kerb_length, kerb_width),)
-    if p.stairs_rise:
-        landing = max(KERB_LENGTH, reach - p.stairs_distance - (p.stairs_count - 1) * p.stairs_run)
-        obstacles += (
-            Stairs(p.stairs_rise, p.stairs_run, p.stairs_count, p.stairs_distance, along_xy, landing, kerb_width),
-        )
-    return Ground(
-        slope=Slope(p.slope_deg, (float(uphill[0]), float(uphill[1])), p.slope_heading),
-        rough=RoughPatch(p.roughness, p.seed, extent) if p.roughness else None,
-        obstacles=obstacles,
-    )
-
-
-def depth_range(p: WalkParams) -> tuple[float, float]:
-    """(smallest, largest) depth [m] of the stance feet below the hips that keeps every planned target reachable.
-
-    The steady cycle of the command (stance and swing, with the lift) is shifted up and down as a whole:
-    the stance depth may move by as much as every target of the cycle stays inside the reach and the
-    joint ranges (bisection to 0.1 mm).
-    """
-    hip, _ = _plan_cycle(p, p.command())
-
-    def ok(shift: float) -> bool:
-        shifted = hip.copy()
-        shifted[..., 2] += shift
-        return bool(legged.ik_hip_batch(p.ROBOT.layout, shifted)[1].all())
-
-    limits = []
-    for sign in (1.0, -1.0):
-        lo, hi = 0.0, p.stand_height + 0.2
-        while hi - lo > 1e-4:
-            mid = (lo + hi) / 2
-            lo, hi = (mid, hi) if ok(sign * mid) else (lo, mid)
-        limits.append(lo)
-    return p.stand_height - limits[0], p.stand_height + limits[1]
-
-
-def largest_climbable_kerb(p: WalkParams) -> float:
-    """Highest kerb [m] the walk can climb: a swing clears it and the legs can hold the cycle raised by it.
-
-    Clearing: the foot lifts step_height above the ground it left (with sensed touchdown and the elevator
-    reflex, a blocked foot lifts REFLEX_LIFT step heights more), and its centre must pass the kerb's
-    edge at least a foot radius above it (measured: a 30 mm kerb with step_height 0.03 m made the
-    robot stumble, 15 deg of roll; with 0.04 m it walked up cleanly). Holding: the whole planned cycle
-    raised by the kerb height stays inside the reach and the joint ranges (depth_range).
-    """
-    lift = p.step_height * (1.0 + REFLEX_LIFT) if reflex_on(p) else p.step_height
-    return min(lift - p.ROBOT.layout.foot_radius, p.stand_height - depth_range(p)[0])
-
-
-def reflex_on(p: WalkParams) -> bool:
-    """The walk's swing feet have the elevator reflex (it needs the touch sensors: sensed touchdown)."""
-    return p.touchdown == "sensed" and p.reflex == "on"
-
-
-def _climb_hint(p: WalkParams) -> str:
-    """What raises the largest climbable kerb: the lift while the swing limits it, else the legs' reach above the
-    stance (a deeper stance: it said "raise 'step_height'" where that could not help)."""
-    swing = p.step_height * (1.0 + REFLEX_LIFT if reflex_on(p) else 1.0) - p.ROBOT.layout.foot_radius
-    return "raise 'step_height'" if swing <= p.stand_height - depth_range(p)[0] else "raise 'stand_height'"
-
-
-def terrain_problem(p: WalkParams) -> str:
-    """'' if the ground can be walked as asked, else a one-line reason (the terrain types' own refusals, with
-    what this robot can take, and a level body's reach on a slope)."""
-    ground = terrain(p)
-    layout = p.ROBOT.layout
-    underside = p.stand_height + layout.foot_radius - layout.plate[2]  # the plate's underside above the ground
-    limits = Limits(
-        friction=p.friction,
-        climbable=largest_climbable_kerb(p) if ground.obstacles else math.inf,
-        climbable_why=(
-            f"the foot lifts step_height = {p.step_height:g} m"
-            + (f" and its reflex {REFLEX_LIFT:g} x more" if reflex_on(p) else "")
-            + ", less a foot radius of clearance; the legs reach "
-            f"{(p.stand_height - depth_range(p)[0]) * 1000:.0f} mm above the stance"
-        ) if ground.obstacles else "",
-        climbable_hint=_climb_hint(p) + (" or lower 'roughness'" if p.roughness else "") if ground.obstacles else "",
-        underside=underside,
-        underside_why=f"at stand_height {p.stand_height:g} m",
-        underside_hint="raise 'stand_height'",
-        clearance=KERB_PLATE_CLEARANCE,
-        max_points=HFIELD_MAX_POINTS,
-    )  # fmt: skip
-    problem = ground.problem(limits)
-    if problem:
-        return problem
-    if not (p.slope_deg and p.level_body == "on"):
-        return start_problem(p, ground)
-    # A level body on a slope: the stance feet reach down or up by x tan(slope) (x along the uphill).
-    tan = math.tan(math.radians(p.slope_deg))
-    reach = float(np.abs(neutral(p)[:, :2] @ ground.slope.uphill).max()) * tan
-    lo, hi = depth_range(p)
-    if p.stand_height - reach < lo or p.stand_height + reach > hi:
-        steepest = math.degrees(math.atan(min(p.stand_height - lo, hi - p.stand_height) / (reach / tan)))
-        slope, steepest_text = apart(p.slope_deg, steepest, "down")
-        return (
-            f"a level body on a {slope} deg slope needs the feet {reach * 1000:.0f} "
-            f"mm above and below the neutral stance, beyond the legs' workspace (stance depth {lo:.3f} to "
-            f"{hi:.3f} m with this gait); the steepest levelled slope is {steepest_text} deg "
-            "(or set level_body=off)"
-        )
-    return start_problem(p, ground)
-
-
-def start_pose(p: WalkParams, ground: Ground) -> tuple[list[float], np.ndarray]:
-    """The body's start pose (7,: position, quaternion w x y z) and joint angles (n_legs, 3) on a ground not flat.
-
-    With the ground-finding controller the body starts level, its feet on the ground under their
-    neutral points (IK). With the planned controller it starts parallel to a slope, or level on its
-    neutral stance above the highest ground under a foot (it settles onto the feet that touch).
-    """
-    layout = p.ROBOT.layout
-    feet = neutral(p)
-    q0, _ = legged.ik_hip_batch(layout, legged.body_to_hip(layout, feet))
-    r = layout.foot_radius
-    normal = ground.normal()
-    if p.on_ground() and not (ground.slope.tilted and p.level_body == "off"):
-        # Level body; every foot centre r (along the normal) above the ground under its neutral point.
-        g = ground.height(feet[:, 0], feet[:, 1]) + r / normal[2]  # (n_legs,)
-        z0 = p.stand_height + float(g.mean())
-        target = feet.copy()
-        target[:, 2] = g - z0
-        q = legged.ik_body(layout, target)
-        return [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0], q
-    if ground.slope.tilted:  # parallel to the slope, above whatever stands on it under the feet
-        lift = max(0.0, float(ground.surface(feet[:, 0], feet[:, 1]).max()))
-        pos = normal * (p.stand_height + r + lift)
-        return [*pos, *ground.slope.floor_quat()], q0
-    z0 = p.stand_height + r + float(ground.height(feet[:, 0], feet[:, 1]).max())
-    return [0.0, 0.0, z0, 1.0, 0.0, 0.0, 0.0], q0
-
-
-PLATE_SAMPLES: int = 41  # points along each side of the plate's underside checked against the ground at the start
-
-
-def start_problem(p: WalkParams, ground: Ground) -> str:
-    """'' if the plate starts above the ground, else why not (one line): a bump of rough ground, or the uphill
-    side of a slope under a levelled body, may rise above the plate's underside where the body starts."""
-    if ground.flat:
-        return ""
-    layout = p.ROBOT.layout
-    try:
-        pose, _ = start_pose(p, ground)
-    except leg_kin.IKError as e:  # a level start: a foot cannot reach the ground under its neutral point
-        hints = ["lower 'roughness'", "try another 'seed'"] if ground.rough is not None else []
-        hints += ["lower 'slope_deg'"] if ground.slope.tilted else []
-        hints = ["change 'stand_height'", *hints, "set touchdown=planned and level_body=off"]
-        return f"the legs cannot stand level on this ground at the start ({e}); {', '.join(hints[:-1])} or {hints[-1]}"
-    w, x, y, z = pose[3:]
-    rotation = np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ])  # fmt: skip
-    px, py, pz = layout.plate
-    u, v = np.meshgrid(np.linspace(-px, px, PLATE_SAMPLES), np.linspace(-py, py, PLATE_SAMPLES))
-    corners = np.stack([u.ravel(), v.ravel(), np.full(u.size, -pz)], axis=1) @ rotation.T + np.array(pose[:3])
-    gap = float((corners[:, 2] - ground.height(corners[:, 0], corners[:, 1])).min())
-    if gap >= 0:
-        return ""
-    causes = [f"the rough ground ({ground.rough.label()}) rises"] if ground.rough is not None else []
-    causes += ["the slope rises under the level body"] if ground.slope.tilted and p.level_body == "on" else []
-    hints = ["raise 'stand_height'"] + (["lower 'roughness'", "try another 'seed'"] if ground.rough else [])
-    hints += ["set level_body=off"] if ground.slope.tilted and p.level_body == "on" else []
-    hints = [", ".join(hints[:-1]), hints[-1]] if len(hints) > 1 else hints
-    return (
-        f"the body would start in the ground: {' and '.join(causes) or 'the ground rises'} {-gap * 1000:.3g} mm "
-        f"above the plate's underside (stand_height {p.stand_height:g} m); {' or '.join(hints)}"
     )
 
 

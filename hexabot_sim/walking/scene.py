@@ -17,7 +17,7 @@ from hexabot_sim.control.walker import GroundController, GroundSettings, Walking
 from hexabot_sim.kinematics import legged
 from hexabot_sim.terrain import Ground
 from hexabot_sim.walking import commands
-from hexabot_sim.walking.parameters import (
+from hexabot_sim.walking.constants import (
     ACCELERATION_HEADROOM,
     ACCELERATION_LIMIT,
     REFLEX_LIFT,
@@ -26,13 +26,9 @@ from hexabot_sim.walking.parameters import (
     SLOPE_CAMERA_DISTANCE,
     SLOPE_CAMERA_HEIGHT,
     TERRAIN_NOSLIP_ITERATIONS,
-    WalkParams,
-    _plan_cycle,
-    depth_range,
-    neutral,
-    start_pose,
-    terrain,
 )
+from hexabot_sim.walking.ground import _plan_cycle, depth_range, neutral, start_pose, terrain
+from hexabot_sim.walking.parameters import WalkParams
 
 
 def _perturbations(p: WalkParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -15,8 +15,10 @@ from hexabot_sim.kinematics import legged
 from hexabot_sim.result import Live, Metric, Progress, ScenarioResult, at_home
 from hexabot_sim.simulate import simulate, step_count
 from hexabot_sim.walking import course
+from hexabot_sim.walking.constants import SETTLE_TIME
 from hexabot_sim.walking.figures import _moving_mean, figures
 from hexabot_sim.walking.forces import force_metrics
+from hexabot_sim.walking.ground import terrain
 from hexabot_sim.walking.metrics import (
     replay_contacts,
     rpy_from_quat,
@@ -24,7 +26,7 @@ from hexabot_sim.walking.metrics import (
     terrain_metrics,
     walking_metrics,
 )
-from hexabot_sim.walking.parameters import SETTLE_TIME, WalkParams, feasibility, terrain
+from hexabot_sim.walking.parameters import WalkParams, feasibility
 from hexabot_sim.walking.scene import build_xml, make_controller
 from hexabot_sim.walking.steering import KeySteering
 

@@ -16,6 +16,8 @@ from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.robots.hexabot import model as hexabot_mjcf
 from hexabot_sim.robots.hexabot import model as hx
 from hexabot_sim.robots.hexabot.walk import HexabotParams
+from hexabot_sim.walking import constants as walking_constants
+from hexabot_sim.walking import ground as walking_ground
 from hexabot_sim.walking import parameters as hexabot_parameters
 from hexabot_sim.walking import scene as hexabot_scene
 
@@ -138,7 +140,7 @@ def test_planned_stance_moves_with_the_ramped_command_and_targets_stay_smooth(cm
     ground-fixed velocity -s(t) (v + w x p) (the body twist scaled by the ramp, by finite differences),
     and chunk boundaries leave no mark (the same walk planned in other chunks is the same)."""
     dt, settle, ramp_time = 0.002, 0.5, 1.0
-    planner = GaitPlanner(GAITS["tripod"], 1.0, 0.03, hexabot_parameters.neutral(params.resolve(HexabotParams, {}, {})),
+    planner = GaitPlanner(GAITS["tripod"], 1.0, 0.03, walking_ground.neutral(params.resolve(HexabotParams, {}, {})),
                           dt, start_time=settle)  # fmt: skip
 
     def scale(t):
@@ -186,7 +188,7 @@ def test_stance_plane_fit_is_least_squares_and_refuses_collinear_feet():
 def test_command_columns_show_the_settle_and_the_ramp():
     result = walk(vx=0.1, vy=0.05, duration=2.0, period=1.0)
     t = result.columns["t"]
-    factor = np.clip((t - hexabot_parameters.SETTLE_TIME) / 1.0, 0.0, 1.0)  # the ramp lasts one gait period
+    factor = np.clip((t - walking_constants.SETTLE_TIME) / 1.0, 0.0, 1.0)  # the ramp lasts one gait period
     np.testing.assert_allclose(result.columns["cmd_vx"], 0.1 * factor, atol=1e-12)
     np.testing.assert_allclose(result.columns["cmd_vy"], 0.05 * factor, atol=1e-12)
     assert not result.columns["cmd_yaw_rate"].any()
@@ -221,7 +223,7 @@ def test_gait_timing_matches_the_plan(forward_walk):
     assert (measured == planned).mean() > 0.95
     # A planned swing never carries load in its middle half (no foot drags through its swing).
     phase = np.mod(
-        (result.columns["t"][window, None] - hexabot_parameters.SETTLE_TIME) + np.array(GAITS["tripod"].offsets), 1.0
+        (result.columns["t"][window, None] - walking_constants.SETTLE_TIME) + np.array(GAITS["tripod"].offsets), 1.0
     )
     mid_swing = (phase > 0.625) & (phase < 0.875)
     assert not (measured & mid_swing).any()
@@ -427,7 +429,7 @@ def test_cli_run_folder_and_metrics_recomputed_from_the_trajectory(tmp_path, cap
     t, qpos, qvel, ctrl = traj["t"], traj["qpos"], traj["qvel"], traj["ctrl"]
     assert ctrl.shape == (len(t), 36)
     metrics = record["metrics"]
-    period, settle = record["params"]["period"], hexabot_parameters.SETTLE_TIME
+    period, settle = record["params"]["period"], walking_constants.SETTLE_TIME
     cycles = math.floor((t[-1] - settle - 2 * period) / period + 1e-9)
     i0 = np.searchsorted(t, settle + 2 * period - 1e-9)
     i1 = np.searchsorted(t, settle + (2 + cycles) * period - 1e-9)
@@ -462,7 +464,7 @@ def test_cli_run_folder_and_metrics_recomputed_from_the_trajectory(tmp_path, cap
             slips.append(math.hypot(v[0], v[1]))
             loads.append(force[0])
     slips, loads = np.array(slips), np.array(loads)
-    loaded = loads > hexabot_parameters.LOADED_FRACTION * weight / 6
+    loaded = loads > walking_constants.LOADED_FRACTION * weight / 6
     assert slips[loaded].mean() == pytest.approx(metrics["slip_mean"], rel=1e-6)
     assert metrics["fell"] is False and qpos[:, 2].min() > 0.05
     assert record["units"]["metrics"]["lateral_drift"] == "mm/m"

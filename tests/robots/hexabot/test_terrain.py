@@ -16,6 +16,8 @@ from hexabot_sim.robots.hexabot import model as hx
 from hexabot_sim.robots.hexabot import walk as scenario
 from hexabot_sim.terrain import Ground, RoughPatch
 from hexabot_sim.terrain.ground import SQUARE as TERRAIN_SQUARE
+from hexabot_sim.walking import constants as walking_constants
+from hexabot_sim.walking import ground as walking_ground
 from hexabot_sim.walking import metrics as hexabot_metrics
 from hexabot_sim.walking import parameters as hexabot_parameters
 from hexabot_sim.walking import scene as hexabot_scene
@@ -51,7 +53,7 @@ def test_heightfield_is_seeded_and_has_the_asked_amplitude():
     # The compiled model holds the same field (float32, normalised by MuJoCo), row 0 at the -y edge.
     p = resolve(roughness=0.01, seed=4)
     model, _ = compiled(p)
-    norm, _, size = hexabot_parameters.terrain(p).rough.hfield_levels()
+    norm, _, size = walking_ground.terrain(p).rough.hfield_levels()
     stored = model.hfield_data.reshape(model.hfield_nrow[0], model.hfield_ncol[0])
     assert np.abs(stored - norm).max() < 1e-6
     assert model.hfield_size[0][2] == pytest.approx(size)
@@ -66,7 +68,7 @@ def test_slope_normal_is_what_was_asked(heading, uphill):
     expected = np.array([-math.sin(a) * uphill[0], -math.sin(a) * uphill[1], math.cos(a)])
     assert np.abs(normal - expected).max() < 1e-12
     # The robot walks along +x: uphill rises ahead, across rises to its left.
-    ground = hexabot_parameters.terrain(p)
+    ground = walking_ground.terrain(p)
     assert ground.height(0.1, 0.0) - ground.height(0.0, 0.0) == pytest.approx(0.1 * math.tan(a) * uphill[0])
     assert ground.height(0.0, 0.1) - ground.height(0.0, 0.0) == pytest.approx(0.1 * math.tan(a) * uphill[1])
 
@@ -106,7 +108,7 @@ def test_ground_height_agrees_with_mujoco_ray_casting(overrides):
     """The height function every metric and figure uses is the ground MuJoCo collides (its own ray casting)."""
     p = resolve(**overrides)
     model, data = compiled(p)
-    ground = hexabot_parameters.terrain(p)
+    ground = walking_ground.terrain(p)
     x0, x1, y0, y1 = ground.rough.extent if ground.rough is not None else (-1.0, 1.0, -1.0, 1.0)
     rng = np.random.default_rng(11)
     terrain_only = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)  # group 0: floor, heightfield, kerb
@@ -131,7 +133,7 @@ def test_ground_height_at_a_kerbs_edge_on_a_downhill_slope_is_the_one_mujoco_col
         slope_deg=20.0, slope_heading="downhill", kerb_height=0.04, step_height=0.06, friction=2.0, roughness=roughness
     )
     model, data = compiled(p)
-    ground = hexabot_parameters.terrain(p)
+    ground = walking_ground.terrain(p)
     terrain_only = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)
     geom = np.zeros(1, dtype=np.int32)
     x = np.linspace(0.44, 0.5, 601) + 1.234e-6  # across the edge's band (kerb_height x tan(slope) wide)
@@ -167,7 +169,7 @@ def test_the_kerb_runs_on_beyond_a_long_walk_in_mujoco_and_in_the_heights():
         )
         on_kerb = distance >= 0 and mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, int(geom[0])) == "kerb"
         assert on_kerb == (top > 0) and (not on_kerb or 1.0 - distance == pytest.approx(top, abs=1e-9))
-        assert float(hexabot_parameters.terrain(p).height(x, 0.0)) == pytest.approx(top, abs=1e-9)
+        assert float(walking_ground.terrain(p).height(x, 0.0)) == pytest.approx(top, abs=1e-9)
 
 
 @pytest.mark.slow
@@ -241,10 +243,10 @@ def test_impossible_ground_is_refused_in_one_line(overrides, fragment):
 
 def test_largest_climbable_kerb_is_predicted_and_ten_percent_more_refused():
     p = resolve(kerb_height=0.03, step_height=0.04)
-    largest = hexabot_parameters.largest_climbable_kerb(p)
+    largest = walking_ground.largest_climbable_kerb(p)
     # The swing clears step_height less a foot radius; the legs can reach much higher (95 mm) at this stance.
     assert largest == pytest.approx(0.04 - hx.DEFAULT_LAYOUT.foot_radius)
-    assert hexabot_parameters.depth_range(p)[0] < p.stand_height - largest
+    assert walking_ground.depth_range(p)[0] < p.stand_height - largest
     with pytest.raises(UsageError, match=f"largest climbable, {largest * 1000:.3g} mm"):
         resolve(kerb_height=1.1 * largest, step_height=0.04)
 
@@ -300,7 +302,7 @@ def test_the_start_pose_is_above_the_ground_for_the_scenarios_and_their_smoke_ru
         entry = registry.get(name)
         for layer in ({}, entry.smoke):
             p = resolve(**{**entry.defaults, **layer})
-            assert hexabot_parameters.start_problem(p, hexabot_parameters.terrain(p)) == ""
+            assert walking_ground.start_problem(p, walking_ground.terrain(p)) == ""
 
 
 # --- walking on it --------------------------------------------------------------------------------------
@@ -415,10 +417,10 @@ def test_rough_ground_no_fall_speed_and_attitude(rough_runs, case):
 @pytest.mark.slow
 def test_the_acceleration_limit_never_clips_the_planned_gait():
     # The tripod's plan stays under the 200 rad/s^2 that smooths the feedback (a foot stopped by a kerb).
-    assert hexabot_scene.acceleration_limit(resolve()) == hexabot_parameters.ACCELERATION_LIMIT
+    assert hexabot_scene.acceleration_limit(resolve()) == walking_constants.ACCELERATION_LIMIT
     # The wave's 1/6-period swing needs more: the limit follows its plan, so the wave keeps its speed.
     p = resolve(gait="wave", vx=0.095, duration=8.0)
-    hip, dt = hexabot_parameters._plan_cycle(p, p.command())
+    hip, dt = walking_ground._plan_cycle(p, p.command())
     q, _ = hx.ik_hip_batch(hx.DEFAULT_LAYOUT, hip)
     peak = np.abs(np.diff(q, 2, axis=0)).max() / dt**2
     assert peak > 300 and hexabot_scene.acceleration_limit(p) >= peak
@@ -492,7 +494,7 @@ def test_the_cameras_near_plane_stays_at_the_robots_scale(overrides):
     """MuJoCo sizes a scene from its geoms: the 20 m kerb or floor ring made it 28-67 m and the renderer's near
     plane (znear x extent) 0.3-0.7 m, which cut away the ground in front of the chase camera (seen in a frame)."""
     model, _ = compiled(resolve(**overrides))
-    assert model.stat.extent == hexabot_parameters.SCENE_EXTENT
+    assert model.stat.extent == walking_constants.SCENE_EXTENT
     assert model.vis.map.znear * model.stat.extent <= 0.05  # [m]
 
 
@@ -521,7 +523,7 @@ def test_stairs_heights_geoms_and_refusals():
     model, _ = compiled(p)
     tops = [model.geom(f"stairs_{k}").pos[2] + model.geom(f"stairs_{k}").size[2] for k in range(3)]
     assert tops == pytest.approx([0.02, 0.04, 0.06], abs=1e-12)
-    assert hexabot_parameters.terrain(p).label() == "3 stairs of 20 mm x 250 mm at 0.5 m"
+    assert walking_ground.terrain(p).label() == "3 stairs of 20 mm x 250 mm at 0.5 m"
     with pytest.raises(UsageError, match=r"stair rise is above the largest climbable step.*raise 'step_height'"):
         resolve(stairs_rise=0.04)
     with pytest.raises(UsageError, match="stair rise would hit the plate"):
