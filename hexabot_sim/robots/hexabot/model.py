@@ -2,17 +2,18 @@
 
 The body-frame kinematics of all feet (FK, IK, Jacobians), the servos, the contacts and the MJCF writer are
 any legged robot's (kinematics/legged.py, legged_mjcf.py); they are re-exported here, so that
-`model.ik_body(model.DEFAULT_LAYOUT, feet)` reads as before. Only the layout and the files' comments are the
-hexabot's (one source of truth: the leg's modified DH table and this layout).
+`model.ik_body(model.DEFAULT_LAYOUT, feet)` reads as before. Only the robot file hexabot.toml (its layout,
+servo torque limit and stance) and the MJCF files' comments are the hexabot's (one source of truth: the leg's
+modified DH table and that file).
 """
 
 from __future__ import annotations
 
-import dataclasses
+from pathlib import Path
 
 import numpy as np
 
-from hexabot_sim.kinematics import legged, legged_mjcf
+from hexabot_sim.kinematics import legged, legged_file, legged_mjcf
 from hexabot_sim.kinematics.legged import (  # noqa: F401 (re-exported: the hexabot's kinematics is the generic one)
     JOINT_LOWER,
     JOINT_UPPER,
@@ -39,42 +40,27 @@ from hexabot_sim.kinematics.legged_mjcf import (  # noqa: F401 (re-exported: the
     nums,
 )
 
-LEGS: tuple[str, ...] = ("lf", "lm", "lr", "rf", "rm", "rr")  # left/right x front/middle/rear
+# The hexabot's legs, body, masses, servos and stance: the legged-robot file next to this module
+# (docs/robot-files.md#legged-robot-files), read once. Six legs, front and rear legs splayed by 45 deg, middle
+# legs sideways, as on most hobby hexapods.
+ROBOT: legged_file.LeggedRobot = legged_file.read(Path(__file__).with_name("hexabot.toml"))
+DEFAULT_LAYOUT: legged.Layout = ROBOT.layout
+LEGS: tuple[str, ...] = DEFAULT_LAYOUT.legs  # ("lf", "lm", "lr", "rf", "rm", "rr"): left/right x front/middle/rear
+MODEL: str = ROBOT.name  # "hexabot"
+STANCE_LEGS: int = ROBOT.stance_legs  # legs that carry the body in a tripod stance (the worst case for the servos)
 
 
-@dataclasses.dataclass(frozen=True)
-class Layout(legged.Layout):
-    """The hexabot's layout (legged.Layout with the hexabot's legs as defaults).
-
-    Six legs, front and rear legs splayed by 45 deg, middle legs sideways, as on most hobby hexapods
-    (the left row mirrored: legged.mirrored(("f", "m", "r"), left hips, (45, 90, 135)) gives the same).
-    """
-
-    legs: tuple[str, ...] = LEGS
-    hips: tuple[tuple[float, float], ...] = (
-        (0.12, 0.06), (0.0, 0.08), (-0.12, 0.06), (0.12, -0.06), (0.0, -0.08), (-0.12, -0.06),
-    )  # fmt: skip
-    yaws_deg: tuple[float, ...] = (45.0, 90.0, 135.0, -45.0, -90.0, -135.0)
-
-
-DEFAULT_LAYOUT = Layout()
-
-
-MODEL = "hexabot"
-STANCE_LEGS: int = 3  # legs that carry the body in a tripod stance (the worst case for the servos)
-
-
-def loaded_joint_inertia(layout: Layout, q: np.ndarray) -> np.ndarray:
+def loaded_joint_inertia(layout: legged.Layout, q: np.ndarray) -> np.ndarray:
     """legged_mjcf.loaded_joint_inertia of a hexabot leg, a third of the mass on it (tripod)."""
     return legged_mjcf.loaded_joint_inertia(layout, q, STANCE_LEGS)
 
 
-def servo_gains(layout: Layout) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def servo_gains(layout: legged.Layout) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """legged_mjcf.servo_gains of the hexabot's servos (sized for the tripod stance)."""
     return legged_mjcf.servo_gains(layout, STANCE_LEGS)
 
 
-def _comment(layout: Layout) -> str:
+def _comment(layout: legged.Layout) -> str:
     """The XML comment models/hexabot.xml opens with."""
     g = layout.geometry
     inertia, _, _ = servo_gains(layout)
@@ -100,7 +86,7 @@ def _comment(layout: Layout) -> str:
 
   Servos: per joint a position actuator (kp) and a velocity actuator (kv, fed the resolved-rate
   joint velocity), tau = kp (q_cmd - q) + kv (dq_cmd - dq); the joint's actuatorfrcrange clamps
-  their SUM to +-{SERVO_TORQUE_LIMIT} N m (one hobby-servo torque limit for both terms).
+  their SUM to +-{ROBOT.torque_limit} N m (one hobby-servo torque limit for both terms).
   Gains: f_n = {SERVO_BANDWIDTH_HZ:g} Hz, zeta = {SERVO_DAMPING_RATIO:g} on the inertia the servo drives in a
   tripod stance at the neutral pose: the leg's own joint-space inertia plus armature {ARMATURE} kg m^2
   plus a third of the robot's mass reflected through the leg Jacobian column
@@ -114,9 +100,9 @@ def _comment(layout: Layout) -> str:
 -->"""
 
 
-def robot_xml(layout: Layout = DEFAULT_LAYOUT) -> str:
+def robot_xml(layout: legged.Layout = DEFAULT_LAYOUT) -> str:
     """The robot file models/hexabot.xml (no floor: the scene adds it)."""
-    return legged_mjcf.robot_xml(layout, MODEL, _comment(layout), STANCE_LEGS)
+    return legged_mjcf.robot_xml(layout, MODEL, _comment(layout), STANCE_LEGS, torque_limit=ROBOT.torque_limit)
 
 
 def scene_xml() -> str:

@@ -23,7 +23,7 @@ HEXABOT = WalkingRobot(
     name="hexabot",
     layout=hx.DEFAULT_LAYOUT,
     scene="hexabot_scene",
-    torque_limit=1.5,  # [N m] the joints' actuatorfrcrange (models/hexabot.xml)
+    torque_limit=hx.ROBOT.torque_limit,  # [N m] the joints' actuatorfrcrange (hexabot.toml, models/hexabot.xml)
 )
 LEGS: int = len(hx.LEGS)  # a robot file walked here needs the hexabot's number of legs (its gaits are for six)
 

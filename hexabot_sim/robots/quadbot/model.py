@@ -1,30 +1,27 @@
 """The quadbot's body: four of the hexabot's DH legs, where they sit, and its MJCF files (models/quadbot*.xml).
 
 The legs, the servos, the contacts and the writer are the shared ones (kinematics/legged.py, legged_mjcf.py);
-only the layout and the files' comments are the quadbot's.
+only the robot file quadbot.toml (layout, servo torque limit, stance) and the MJCF files' comments are the
+quadbot's.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
-from hexabot_sim.kinematics import legged, legged_mjcf
+from hexabot_sim.kinematics import legged, legged_file, legged_mjcf
 
-MODEL = "quadbot"
-# The fewest feet that carry the body in the quadbot's gaits: two in the trot (the crawl has three). The
-# servo gains are sized for that load (legged_mjcf.servo_gains).
-STANCE_LEGS: int = 2
-
-# Left row front to rear (lf, lr); the right row mirrors it (rf, rr): the order of control.gait's quadruped gaits.
-# Hips at the corners of a 0.26 x 0.16 m plate, the legs splayed 45 deg: the neutral feet stand on a
-# 0.38 x 0.30 m rectangle. No layout puts the body strictly inside the support triangle of a
-# crawl at duty 3/4 (on its edge at worst, tests/test_legged.py): a low body (stand height 70 mm, the
-# hexabot's 90) and a slow crawl (period 1.5 s) hold the speed on rough ground; measured in docs/quadbot.md.
-LAYOUT = legged.Layout(
-    *legged.mirrored(("f", "r"), ((0.10, 0.06), (-0.10, 0.06)), (45.0, 135.0)),
-    plate=(0.13, 0.08, 0.015),
-    stand_height=0.07,
-)
+# The quadbot's legs, body, masses, servos and stance: the legged-robot file next to this module
+# (docs/robot-files.md#legged-robot-files), read once. Hips at the corners of a 0.26 x 0.16 m plate, the legs
+# splayed 45 deg, a low body (stand height 70 mm): the file says why.
+ROBOT: legged_file.LeggedRobot = legged_file.read(Path(__file__).with_name("quadbot.toml"))
+LAYOUT: legged.Layout = ROBOT.layout
+MODEL: str = ROBOT.name  # "quadbot"
+# The fewest feet that carry the body in the quadbot's gaits: two in the trot (the crawl has three), half its
+# legs as for any legged-robot file. The servo gains are sized for that load (legged_mjcf.servo_gains).
+STANCE_LEGS: int = ROBOT.stance_legs
 
 
 def _comment(layout: legged.Layout) -> str:
@@ -54,7 +51,7 @@ def _comment(layout: legged.Layout) -> str:
   {layout.stand_height} m below it.
 
   Servos, contacts and sensors as the hexabot's (kinematics/legged_mjcf.py): position + velocity servo
-  per joint, their sum clamped to +-{legged_mjcf.SERVO_TORQUE_LIMIT} N m; gains
+  per joint, their sum clamped to +-{ROBOT.torque_limit} N m; gains
   f_n = {legged_mjcf.SERVO_BANDWIDTH_HZ:g} Hz, zeta = {legged_mjcf.SERVO_DAMPING_RATIO:g} on the inertia a servo drives
   with two feet down (trot) at the neutral pose: M = {nums(np.round(inertia, 8))} kg m^2.
   Sphere feet (r = {layout.foot_radius} m) and the plate touch the ground; an IMU on the plate and a touch
@@ -64,7 +61,7 @@ def _comment(layout: legged.Layout) -> str:
 
 def robot_xml(layout: legged.Layout = LAYOUT) -> str:
     """The robot file models/quadbot.xml (no floor: the scene adds it)."""
-    return legged_mjcf.robot_xml(layout, MODEL, _comment(layout), STANCE_LEGS)
+    return legged_mjcf.robot_xml(layout, MODEL, _comment(layout), STANCE_LEGS, torque_limit=ROBOT.torque_limit)
 
 
 def scene_xml() -> str:

@@ -11,16 +11,16 @@ from typing import ClassVar
 
 from hexabot_sim.control.gait import gaits_for
 from hexabot_sim.params import param
-from hexabot_sim.robots.quadbot.model import LAYOUT, MODEL
+from hexabot_sim.robots.quadbot.model import LAYOUT, MODEL, ROBOT
 from hexabot_sim.walking.figures import figures
 from hexabot_sim.walking.parameters import WalkingRobot, WalkParams
 from hexabot_sim.walking.walk import live, run
 
 QUADBOT = WalkingRobot(
-    name="quadbot",
+    name=MODEL,
     layout=LAYOUT,
     scene=f"{MODEL}_scene",
-    torque_limit=1.5,  # [N m] the joints' actuatorfrcrange (models/quadbot.xml)
+    torque_limit=ROBOT.torque_limit,  # [N m] the joints' actuatorfrcrange (quadbot.toml, models/quadbot.xml)
 )
 
 

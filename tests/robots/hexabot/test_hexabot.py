@@ -126,7 +126,7 @@ def test_gait_tables_keep_the_robot_supported():
 
 
 def test_foot_pitch_is_q2_plus_q3_of_the_inverse_kinematics():
-    layout = hx.Layout()
+    layout = hx.DEFAULT_LAYOUT
     rng = np.random.default_rng(1)
     points = rng.uniform([-0.05, -0.2, -0.17], [0.25, 0.2, -0.03], size=(5000, 3))
     q, ok = hx.ik_hip_batch(layout, points)
