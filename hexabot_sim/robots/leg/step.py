@@ -15,7 +15,7 @@ from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.kinematics import robots
 from hexabot_sim.params import apart, check_duration, check_run_cost, param
 from hexabot_sim.result import Live, Marker, Metric, Progress, ScenarioResult
-from hexabot_sim.robots.leg.model import build_xml
+from hexabot_sim.robots.leg.model import LEG_ROBOT, MAX_LENGTH, MIN_LENGTH, build_xml, leg_geometry
 from hexabot_sim.simulate import Controller, simulate, site_trajectory, step_count
 
 if TYPE_CHECKING:
@@ -30,7 +30,6 @@ INTEGRATORS = ("RK4", "implicitfast", "Euler", "implicit")
 # Parameter ranges. Each link is 10 mm to 1 m long, so a start point is at most 3 m from the hip (the
 # cross-check then asks whether the given lengths reach it); the default leg at 5 rad/s moves its foot
 # at most ~1.2 m/s: a commanded foot speed above 1 m/s is no step (100 typed for 100 mm/s would be 100 m/s).
-MIN_LENGTH, MAX_LENGTH = 0.01, 1.0  # [m] each of l1, l2, l3
 REACH: float = 3 * MAX_LENGTH  # [m] bound on each start coordinate
 MM: tuple[str, float] = ("mm", 1e-3)  # the unit users type by mistake for a length in m
 MAX_FOOT_SPEED: float = 1.0  # [m/s]
@@ -68,9 +67,10 @@ class LegParams:
     max_damping: float = param(
         0.01, "m/rad", "DLS damping lambda reached at a singularity", ge=0.0, le=0.1, typo=("mm/rad", 1e-3)
     )
-    l1: float = param(GEOMETRY.l1, "m", "coxa: coxa axis to femur axis", ge=MIN_LENGTH, le=MAX_LENGTH, typo=MM)
-    l2: float = param(GEOMETRY.l2, "m", "femur: femur axis to knee axis", ge=MIN_LENGTH, le=MAX_LENGTH, typo=MM)
-    l3: float = param(GEOMETRY.l3, "m", "tibia: knee axis to foot", ge=MIN_LENGTH, le=MAX_LENGTH, typo=MM)
+    robot: str = param("leg", "", "the leg's DH table: leg (report 000) or a file of its form", name_or_file=LEG_ROBOT)
+    l1: float = param(0.0, "m", "coxa length; 0 = the robot's (leg: 0.05)", ge=0.0, le=MAX_LENGTH, typo=MM)
+    l2: float = param(0.0, "m", "femur length; 0 = the robot's (leg: 0.1)", ge=0.0, le=MAX_LENGTH, typo=MM)
+    l3: float = param(0.0, "m", "tibia length; 0 = the robot's (leg: 0.1)", ge=0.0, le=MAX_LENGTH, typo=MM)
     start_x: float = param(
         0.05, "m", "start foot position in the hip frame (under the femur axis)", ge=-REACH, le=REACH, typo=MM
     )
@@ -90,18 +90,27 @@ class LegParams:
                 f"parameters 'task_gain' * 'timestep' must be <= {limit} (the foot error would overshoot every control "
                 f"period); got {self.task_gain!r} 1/s * {self.timestep!r} s = {product}"
             )
+        for name in ("l1", "l2", "l3"):
+            if 0 < getattr(self, name) < MIN_LENGTH:
+                raise ValueError(
+                    f"parameter '{name}' must be 0 (the robot's) or {MIN_LENGTH:g} to {MAX_LENGTH:g} m; "
+                    f"got {getattr(self, name)!r}"
+                )
+        robot = leg_geometry(robots.resolve(self.robot))
+        geom = leg_kin.LegGeometry(*(getattr(self, n) or getattr(robot, n) for n in ("l1", "l2", "l3")))
+        object.__setattr__(self, "_geometry", geom)  # resolved once: a robot file is read here, not per use
         start = (self.start_x, self.start_y, self.start_z)
         if not reachable(np.array(start), self.geometry):
             raise ValueError(
                 f"parameters 'start_x', 'start_y', 'start_z': the start point {start} m is outside the workspace of "
-                f"the leg l1, l2, l3 = {self.l1!r}, {self.l2!r}, {self.l3!r} m or reachable only outside the joint "
+                f"the leg l1, l2, l3 = {geom.l1!r}, {geom.l2!r}, {geom.l3!r} m or reachable only outside the joint "
                 f"ranges (coxa, femur within +-90 deg, tibia 0..160 deg)"
             )
 
     @property
     def geometry(self) -> leg_kin.LegGeometry:
-        """The leg's link lengths (l1, l2, l3)."""
-        return leg_kin.LegGeometry(self.l1, self.l2, self.l3)
+        """The leg's link lengths: the robot's, each replaced by l1, l2, l3 where they are not 0."""
+        return self._geometry
 
 
 @dataclasses.dataclass(frozen=True)

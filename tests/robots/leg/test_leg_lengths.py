@@ -1,11 +1,13 @@
 """leg-step with other link lengths (l1, l2, l3): the generated MJCF against analytic FK/J, a run, refusals, sweeps."""
 
+from pathlib import Path
+
 import mujoco
 import numpy as np
 import pytest
 
 from hexabot_sim import params, registry, sweep
-from hexabot_sim.kinematics import leg
+from hexabot_sim.kinematics import leg, robot_file
 from hexabot_sim.robots.leg.model import build_xml
 from tests.helpers import cli
 
@@ -43,7 +45,7 @@ def test_generated_model_foot_site_and_mj_jacsite_are_the_analytic_fk_and_jacobi
 
 def test_default_lengths_leave_the_committed_model_untouched():
     p = leg_params()
-    assert (p.l1, p.l2, p.l3) == (0.05, 0.1, 0.1) and p.geometry == leg.DEFAULT_GEOMETRY
+    assert (p.robot, p.l1, p.l2, p.l3) == ("leg", 0.0, 0.0, 0.0) and p.geometry == leg.DEFAULT_GEOMETRY
     assert 'pos="0.05 0 0"' in build_xml(p)  # the committed text, not rewritten numbers
 
 
@@ -70,7 +72,10 @@ def test_a_run_with_other_lengths_follows_their_kinematics_and_tracks():
     [
         (["l1=0.04", "l2=0.08", "l3=0.12", "start_x=0.25"], "outside the workspace of the leg l1, l2, l3 = 0.04, 0.08"),
         (["l2=0.03", "l3=0.03"], "the start point (0.05, 0.0, -0.08) m is outside the workspace of the leg"),
-        (["l2=80"], "parameter 'l2' must be a number with 0.01 <= l2 <= 1 m; got '80'"),
+        (["l2=80"], "parameter 'l2' must be a number with 0 <= l2 <= 1 m; got '80'"),
+        (["l2=0.005"], "parameter 'l2' must be 0 (the robot's) or 0.01 to 1 m; got 0.005"),
+        (["robot=elbow"], "of the leg's form; got 'elbow' (no such name or file)"),
+        (["robot=nowhere.toml"], "got 'nowhere.toml' (no such name or file)"),
     ],
 )
 def test_refusals_one_line_exit_2_nothing_written(tmp_path, capsys, sets, fragment):
@@ -90,3 +95,45 @@ def test_a_sweep_over_l2_plans_one_leg_per_cell():
     # leg-sweep carries the lengths into every grid cell
     grid = leg_params("leg-sweep", l3=0.12, amplitudes=(0.02,), omegas=(1.0,))
     assert grid.cell(0.02, 1.0).geometry == leg.LegGeometry(0.05, 0.1, 0.12)
+
+
+def leg_file(tmp_path, replace):
+    """The package's leg.toml with text replaced, written to tmp_path."""
+    text = (Path(robot_file.ARMS_DIR) / "leg.toml").read_text()
+    for old, new in replace.items():
+        assert old in text
+        text = text.replace(old, new)
+    path = tmp_path / "my_leg.toml"
+    path.write_text(text)
+    return str(path)
+
+
+FILE_LENGTHS = {
+    "l1 = { value = 0.05": "l1 = { value = 0.04",
+    "l2 = { value = 0.10": "l2 = { value = 0.08",
+    "l3 = { value = 0.10": "l3 = { value = 0.12",
+}
+
+
+def test_a_robot_file_of_the_legs_form_gives_its_lengths_and_set_overrides_them(tmp_path):
+    path = leg_file(tmp_path, FILE_LENGTHS)
+    assert leg_params(robot=path, start_x=0.04, start_z=-0.1).geometry == GEOM
+    assert leg_params(robot=path, l3=0.1).geometry == leg.LegGeometry(0.04, 0.08, 0.1)
+    # The same leg by file or by lengths: the same MJCF.
+    by_file = build_xml(leg_params(robot=path, start_x=0.04, start_z=-0.1))
+    assert by_file == build_xml(leg_params(**LENGTHS, start_x=0.04, start_z=-0.1))
+
+
+@pytest.mark.parametrize(
+    "replace",
+    [
+        {"alpha = -90.0": "alpha = 90.0"},  # another twist
+        {"upper = 160.0": "upper = 150.0"},  # another joint range than the model's
+        {'type = "fixed"': 'type = "revolute"'},  # a fourth joint
+    ],
+)
+def test_a_robot_file_not_of_the_legs_form_is_refused_in_one_line(tmp_path, capsys, replace):
+    path = leg_file(tmp_path, replace)
+    code, _, err = cli(capsys, "run", "leg-step", "--set", f"robot={path}", "--out", str(tmp_path / "run"))
+    assert code == 2 and err.count("\n") == 1 and f"robot file {path} is not of the leg's form" in err, err
+    assert not (tmp_path / "run").exists()
