@@ -47,9 +47,9 @@ def refused(capsys, tmp_path, *argv, code=2):
         (["leg-step", "--set", "max_joint_speed=300"], ["did you mean 300 deg/s = 5.23599 rad/s?"]),
         (["pendulum", "--set", "length=300"], ["did you mean 300 mm = 0.3 m?"]),
         (["rrp-velocity", "--set", "a2=1000"], ["did you mean 1000 mm = 1 m?"]),
-        (["leg-step", "--set", "start_x=0.5"], ["-0.25 <= start_x <= 0.25 m; got '0.5'\n"]),  # no mm hint
+        (["leg-step", "--set", "start_x=5"], ["-3 <= start_x <= 3 m; got '5'\n"]),  # no mm hint
         (["leg-step", "--set", "amplitude=2"], ["-1 <= amplitude <= 1 m/s; got '2'\n"]),
-        (["leg-step", "--set", "start_x=-0.1"], ["outside the leg's workspace"]),
+        (["leg-step", "--set", "start_x=-0.1"], ["outside the workspace of the leg"]),
         (["leg-step", "--set", "timestep=0.05"], ["'task_gain' * 'timestep' must be <= 1"]),
         (["leg-step", "--set", "omega=20", "--set", "timestep=0.04", "--set", "task_gain=1"], ["'omega' * 'timestep'"]),
         (["pendulum", "--set", "integrator=rk45"], ["one of RK4, Euler, implicit, implicitfast", "got 'rk45'"]),
@@ -120,11 +120,22 @@ COMPANIONS = {
     ("LegSweepParams", "omegas", "lo"): {"amplitudes": "0.05"},
     ("LegSweepParams", "substeps", "hi"): {"mode": "dynamic", "amplitudes": "0.05", "omegas": "3", "periods": 1},
     ("LegStepParams", "substeps", "hi"): {"duration": 1},
+    **{
+        (cls, length, side): start
+        for cls in ("LegStepParams", "LegSweepParams")
+        for (length, side), start in {
+            ("l1", "hi"): {"start_x": 1.05},
+            ("l2", "hi"): {"start_x": 1.05, "start_z": 0.0},
+            ("l2", "lo"): {"start_z": -0.1},
+            ("l3", "hi"): {"start_z": -1.0},
+            ("l3", "lo"): {"start_z": -0.1},
+        }.items()
+    },  # a start point the leg of that length reaches
     ("RrpVelocityParams", "timestep", "lo"): {"duration": 1},
     ("RrpVelocityParams", "duration", "lo"): {"timestep": 1e-6},
     ("RrpVelocityParams", "duration", "hi"): {"timestep": 0.1},
 }
-# A foot start on a bound of the +-250 mm box is mostly outside the workspace: with the other two
+# A foot start on a bound of the +-3 m box is mostly outside the workspace: with the other two
 # coordinates chosen to reach it where that is possible, else it may only fail the workspace check.
 START_AT_BOUND = {
     ("start_x", "hi"): {"start_y": 0.0, "start_z": 0.0},
@@ -179,7 +190,7 @@ def test_every_parameter_range(scenario, name, info, kind):
         try:
             p = params.resolve(cls, scenario.defaults, extra, {name: repr(inside)})
         except UsageError as e:  # only a start point on the box's edge may be out of the leg's reach
-            assert name.startswith("start_") and "outside the leg's workspace" in str(e), (side, str(e))
+            assert name.startswith("start_") and "outside the workspace of the leg" in str(e), (side, str(e))
             continue
         value = getattr(p, name)
         if (cls.__name__, name, inside) == ("LegStepParams", "duration", 0.0):

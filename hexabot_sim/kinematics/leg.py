@@ -388,3 +388,25 @@ def rpy(rot: ArrayLike) -> tuple[float | np.ndarray, float | np.ndarray, float |
     roll = np.where(lock, 0.0, np.arctan2(rot[..., 2, 1], rot[..., 2, 2]))
     yaw = np.where(lock, np.arctan2(-rot[..., 0, 1], rot[..., 1, 1]), np.arctan2(rot[..., 1, 0], rot[..., 0, 0]))
     return _scalar_or_array(roll), _scalar_or_array(pitch), _scalar_or_array(yaw)
+
+
+def continuous_zyx(rot: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """ZYX angles (roll, pitch, yaw) [rad] of the foot, on the branch that is continuous in time.
+
+    The foot frame is R = Rz(q1) Rx(-pi/2) Rz(q2 + q3) = Rz(q1) Ry(q2 + q3) Rx(-pi/2): its z axis (the
+    knee axis) stays horizontal, so yaw = its heading (= q1) and pitch = the tibia's angle below the
+    horizontal in the leg's plane (= q2 + q3) are defined at every pose, also where the principal ZYX
+    angles (rpy, pitch within +-pi/2) jump by pi at q2 + q3 = pi/2; roll then follows from R (-pi/2 here).
+
+    Args:
+        rot: (n, 3, 3) foot orientations in the hip frame, in time order.
+    """
+    yaw = np.unwrap(np.arctan2(-rot[:, 0, 2], rot[:, 1, 2]))  # heading of the knee axis
+    cy, sy = np.cos(yaw), np.sin(yaw)
+    pitch = np.unwrap(np.arctan2(-rot[:, 2, 0], rot[:, 0, 0] * cy + rot[:, 1, 0] * sy))
+    # Rx(roll) = Ry(-pitch) Rz(-yaw) R; its second column is (0, cos roll, sin roll).
+    n0 = cy * rot[:, 0, 1] + sy * rot[:, 1, 1]  # second column of Rz(-yaw) R
+    n1 = -sy * rot[:, 0, 1] + cy * rot[:, 1, 1]
+    n2 = rot[:, 2, 1]
+    roll = np.unwrap(np.arctan2(np.sin(pitch) * n0 + np.cos(pitch) * n2, n1))
+    return roll, pitch, yaw

@@ -13,7 +13,7 @@ from hexabot_sim.result import ScenarioResult
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-from hexabot_sim.robots.leg.step import GEOMETRY, excursion, line_reach
+from hexabot_sim.robots.leg.step import excursion, line_reach
 
 
 def _title(result: ScenarioResult, text: str, world: bool = False) -> str:
@@ -116,7 +116,7 @@ def foot_orientation_figure(result: ScenarioResult) -> Figure:
 
     The principal ZYX angles (CSV columns roll, pitch, yaw, pitch within +-90 deg) jump by 180 deg
     where q2 + q3 crosses 90 deg although the foot turns smoothly; here yaw = q1, pitch = q2 + q3
-    and roll follows from the rotation matrix (continuous_zyx).
+    and roll follows from the rotation matrix (kinematics.leg.continuous_zyx).
     """
     from hexabot_sim import plots
 
@@ -153,14 +153,15 @@ def workspace_figure(result: ScenarioResult) -> Figure:
     from hexabot_sim import plots
 
     p, model = result.params, result.model
+    geom = p.geometry
     lower = [model.jnt_range[model.joint(j).id][0] for j in ("femur", "tibia")]
     upper = [model.jnt_range[model.joint(j).id][1] for j in ("femur", "tibia")]
     q2, q3 = np.meshgrid(np.linspace(lower[0], upper[0], 700), np.linspace(lower[1], upper[1], 700))
     q = np.stack([np.zeros_like(q2), q2, q3], axis=-1).reshape(-1, 3)  # (N, 3)
-    foot = leg_kin.fk(q, GEOMETRY)  # (N, 3)
-    det = np.abs(leg_kin.det_jacobian(q, GEOMETRY)) * 1e6  # [cm^3/rad^3]
+    foot = leg_kin.fk(q, geom)  # (N, 3)
+    det = np.abs(leg_kin.det_jacobian(q, geom)) * 1e6  # [cm^3/rad^3]
     # Rasterise: each pixel keeps the best |det J| of the configurations that reach it.
-    extent = GEOMETRY.l1 + GEOMETRY.l2 + GEOMETRY.l3
+    extent = geom.l1 + geom.l2 + geom.l3
     edges_x = np.linspace(-extent, extent, 301)
     edges_z = np.linspace(-extent, extent, 301)
     ix = np.clip(np.digitize(foot[:, 0], edges_x) - 1, 0, 299)
@@ -173,13 +174,13 @@ def workspace_figure(result: ScenarioResult) -> Figure:
     fig.colorbar(mesh, ax=ax, label="|det J| [cm³/rad³] (0 = singular)", shrink=0.8)
     ax.axvline(0, color="tab:red", linestyle=":", label="coxa axis: ρ = 0, singular (missed by report 000)")
     circle = np.linspace(0, 2 * np.pi, 400)
-    reach = GEOMETRY.l2 + GEOMETRY.l3
+    reach = geom.l2 + geom.l3
     ax.plot(
-        (GEOMETRY.l1 + reach * np.cos(circle)) * 1000, reach * np.sin(circle) * 1000, "--", color="tab:red",
+        (geom.l1 + reach * np.cos(circle)) * 1000, reach * np.sin(circle) * 1000, "--", color="tab:red",
         label="leg stretched: q3 = 0, singular",
     )  # fmt: skip
     start = np.array([p.start_x, p.start_y, p.start_z])
-    forward, backward = excursion(p) if hasattr(p, "amplitude") else (line_reach(start)[0], 0.0)
+    forward, backward = excursion(p) if hasattr(p, "amplitude") else (line_reach(start, geom)[0], 0.0)
     ax.plot(
         [(start[0] - backward) * 1000, (start[0] + forward) * 1000], [start[2] * 1000] * 2, color="tab:orange", lw=2.5,
         label="commanded line x0 .. x0 + 2A/ω" if hasattr(p, "amplitude") else "reachable part of the line",
@@ -194,7 +195,7 @@ def workspace_figure(result: ScenarioResult) -> Figure:
     ax.legend(fontsize=plots.LEGEND_FONTSIZE, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=2, frameon=False)
     ax.set_title(
         "leg workspace in its vertical plane (q1 = 0), joint ranges respected\n"
-        f"reach along the line from the start: {line_reach(start)[0] * 1000:.0f} mm",
+        f"reach along the line from the start: {line_reach(start, geom)[0] * 1000:.0f} mm",
         fontsize=plots.TITLE_FONTSIZE,
     )
     return fig

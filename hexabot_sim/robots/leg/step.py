@@ -9,28 +9,28 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
-from hexabot_sim import models
 from hexabot_sim.control.resolved_rate import ResolvedRateController, ResolvedRateGains
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.kinematics import robots
 from hexabot_sim.params import apart, check_duration, check_run_cost, param
 from hexabot_sim.result import Live, Marker, Metric, Progress, ScenarioResult
+from hexabot_sim.robots.leg.model import LEG_ROBOT, MAX_LENGTH, MIN_LENGTH, build_xml, leg_geometry
 from hexabot_sim.simulate import Controller, simulate, site_trajectory, step_count
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-GEOMETRY = leg_kin.LegGeometry()  # the lengths models/leg.xml is built with (tested against it)
+GEOMETRY = leg_kin.LegGeometry()  # the default lengths, those models/leg.xml is written with (tested against it)
 JOINTS = ("coxa", "femur", "tibia")
 # In dynamic mode the servos overshoot a commanded speed transient by ~2 % (measured with the
 # defaults driven out of the workspace): the command keeps this margin below max_joint_speed.
 SERVO_SPEED_MARGIN: float = 0.95
 INTEGRATORS = ("RK4", "implicitfast", "Euler", "implicit")
-# Parameter ranges. The leg is L1 + L2 + L3 = 250 mm long (a start point farther than that cannot
-# be reached), and at 5 rad/s its foot moves at most ~1.2 m/s: a commanded foot speed above
-# 1 m/s is no step of this leg (100 typed for the report's 100 mm/s would be 100 m/s).
-REACH: float = GEOMETRY.l1 + GEOMETRY.l2 + GEOMETRY.l3  # [m]
+# Parameter ranges. Each link is 10 mm to 1 m long, so a start point is at most 3 m from the hip (the
+# cross-check then asks whether the given lengths reach it); the default leg at 5 rad/s moves its foot
+# at most ~1.2 m/s: a commanded foot speed above 1 m/s is no step (100 typed for 100 mm/s would be 100 m/s).
+REACH: float = 3 * MAX_LENGTH  # [m] bound on each start coordinate
 MM: tuple[str, float] = ("mm", 1e-3)  # the unit users type by mistake for a length in m
 MAX_FOOT_SPEED: float = 1.0  # [m/s]
 MIN_OMEGA, MAX_OMEGA = 0.01, 20.0  # [rad/s] periods from 0.3 s to 10.5 min
@@ -67,6 +67,10 @@ class LegParams:
     max_damping: float = param(
         0.01, "m/rad", "DLS damping lambda reached at a singularity", ge=0.0, le=0.1, typo=("mm/rad", 1e-3)
     )
+    robot: str = param("leg", "", "the leg's DH table: leg (report 000) or a file of its form", name_or_file=LEG_ROBOT)
+    l1: float = param(0.0, "m", "coxa length; 0 = the robot's (leg: 0.05)", ge=0.0, le=MAX_LENGTH, typo=MM)
+    l2: float = param(0.0, "m", "femur length; 0 = the robot's (leg: 0.1)", ge=0.0, le=MAX_LENGTH, typo=MM)
+    l3: float = param(0.0, "m", "tibia length; 0 = the robot's (leg: 0.1)", ge=0.0, le=MAX_LENGTH, typo=MM)
     start_x: float = param(
         0.05, "m", "start foot position in the hip frame (under the femur axis)", ge=-REACH, le=REACH, typo=MM
     )
@@ -86,12 +90,27 @@ class LegParams:
                 f"parameters 'task_gain' * 'timestep' must be <= {limit} (the foot error would overshoot every control "
                 f"period); got {self.task_gain!r} 1/s * {self.timestep!r} s = {product}"
             )
+        for name in ("l1", "l2", "l3"):
+            if 0 < getattr(self, name) < MIN_LENGTH:
+                raise ValueError(
+                    f"parameter '{name}' must be 0 (the robot's) or {MIN_LENGTH:g} to {MAX_LENGTH:g} m; "
+                    f"got {getattr(self, name)!r}"
+                )
+        robot = leg_geometry(robots.resolve(self.robot))
+        geom = leg_kin.LegGeometry(*(getattr(self, n) or getattr(robot, n) for n in ("l1", "l2", "l3")))
+        object.__setattr__(self, "_geometry", geom)  # resolved once: a robot file is read here, not per use
         start = (self.start_x, self.start_y, self.start_z)
-        if not reachable(np.array(start)):
+        if not reachable(np.array(start), self.geometry):
             raise ValueError(
-                f"parameters 'start_x', 'start_y', 'start_z': the start point {start} m is outside the leg's "
-                f"workspace or reachable only outside the joint ranges (coxa, femur within +-90 deg, tibia 0..160 deg)"
+                f"parameters 'start_x', 'start_y', 'start_z': the start point {start} m is outside the workspace of "
+                f"the leg l1, l2, l3 = {geom.l1!r}, {geom.l2!r}, {geom.l3!r} m or reachable only outside the joint "
+                f"ranges (coxa, femur within +-90 deg, tibia 0..160 deg)"
             )
+
+    @property
+    def geometry(self) -> leg_kin.LegGeometry:
+        """The leg's link lengths: the robot's, each replaced by l1, l2, l3 where they are not 0."""
+        return self._geometry
 
 
 @dataclasses.dataclass(frozen=True)
@@ -197,7 +216,7 @@ def start_pose(p: LegStepParams, lower: np.ndarray, upper: np.ndarray) -> np.nda
     """IK of the start point on the branch inside the joint ranges (front of the coxa, knee out)."""
     target = np.array([p.start_x, p.start_y, p.start_z])
     try:
-        branches = leg_kin.ik(target, GEOMETRY, q1=0.0)  # q1 = 0 if the start is on the coxa axis
+        branches = leg_kin.ik(target, p.geometry, q1=0.0)  # q1 = 0 if the start is on the coxa axis
     except UsageError as e:
         raise UsageError(f"start pose {tuple(target.tolist())} m is outside the workspace: {e}") from None
     inside = [q for q in branches if np.all(q >= lower - 1e-12) and np.all(q <= upper + 1e-12)]
@@ -207,16 +226,6 @@ def start_pose(p: LegStepParams, lower: np.ndarray, upper: np.ndarray) -> np.nda
             f"(coxa, femur within +-90 deg, tibia 0..160 deg)"
         )
     return min(inside, key=lambda q: (-q[2] > 0, abs(q[0])))
-
-
-def build_xml(p: LegParams) -> str:
-    """The leg scene with the run's options written in."""
-    root = models.load_tree("leg_scene")
-    physics_dt = p.timestep / p.substeps
-    models.find(root, "option").attrib.update(timestep=models.fmt(physics_dt), integrator=p.integrator)
-    for name in JOINTS:
-        models.find(root, "body", name).set("gravcomp", "1" if p.gravity_compensation == "on" else "0")
-    return models.to_xml(root)
 
 
 @dataclasses.dataclass
@@ -262,7 +271,7 @@ def prepare(p: LegStepParams) -> LegLoop:
     start = np.array([p.start_x, p.start_y, p.start_z])
 
     controller = ResolvedRateController(
-        GEOMETRY,
+        p.geometry,
         ResolvedRateGains(
             p.task_gain,
             p.sigma_threshold,
@@ -323,8 +332,9 @@ def _result(name, p, model, xml, traj, start, qadr, dadr) -> ScenarioResult:
     vdes = np.zeros((len(t), 3))
     vdes[:, 0] = reference_velocity(p, t)
     vdes = vdes @ hip_rot.T
-    det_j = leg_kin.det_jacobian(q, GEOMETRY)
-    sig_min, _ = leg_kin.singular_values(q, GEOMETRY)
+    geom = p.geometry
+    det_j = leg_kin.det_jacobian(q, geom)
+    sig_min, _ = leg_kin.singular_values(q, geom)
     foot_rot = np.einsum("ij,njk->nik", hip_rot.T, foot.xmat)  # (n, 3, 3) foot orientation in the hip frame
     roll, pitch, yaw = leg_kin.rpy(foot_rot)
     near = sig_min < p.sigma_threshold
@@ -335,14 +345,14 @@ def _result(name, p, model, xml, traj, start, qadr, dadr) -> ScenarioResult:
     lateral = (foot.pos - start_world) @ y_dir
     vertical = (foot.pos - start_world) @ z_dir
     x_err = err @ x_dir
-    reach_fwd, reach_back = line_reach(start)
+    reach_fwd, reach_back = line_reach(start, geom)
     exc_fwd, exc_back = excursion(p)
 
     first = float(t[np.argmax(near)]) if near.any() else None
     family = None
     if near.any():
         i = int(np.argmax(near))
-        rho = float(np.hypot(*foot_hip(q[i])[:2]))
+        rho = float(np.hypot(*leg_kin.fk(q[i], geom)[:2]))
         family = (
             "foot on the coxa axis (rho = 0)" if rho < p.sigma_threshold else "knee stretched or folded (sin q3 = 0)"
         )
@@ -436,40 +446,13 @@ def _result(name, p, model, xml, traj, start, qadr, dadr) -> ScenarioResult:
             "near_singular": near,
             "start_world": start_world,
             "hip": hip_pos,
-            "orientation_continuous": continuous_zyx(foot_rot),
+            "orientation_continuous": leg_kin.continuous_zyx(foot_rot),
         },
     )
 
 
 # ---------------------------------------------------------------------------------------------
 # Figures (matplotlib is imported only when they are drawn: `hexabot-sim list` never loads it)
-
-
-def continuous_zyx(rot: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """ZYX angles (roll, pitch, yaw) [rad] of the foot, on the branch that is continuous in time.
-
-    The foot frame is R = Rz(q1) Rx(-pi/2) Rz(q2 + q3) = Rz(q1) Ry(q2 + q3) Rx(-pi/2): its z axis (the
-    knee axis) stays horizontal, so yaw = its heading (= q1) and pitch = the tibia's angle below the
-    horizontal in the leg's plane (= q2 + q3) are defined at every pose, also where the principal ZYX
-    angles (rpy, pitch within +-pi/2) jump by pi at q2 + q3 = pi/2; roll then follows from R (-pi/2 here).
-
-    Args:
-        rot: (n, 3, 3) foot orientations in the hip frame, in time order.
-    """
-    yaw = np.unwrap(np.arctan2(-rot[:, 0, 2], rot[:, 1, 2]))  # heading of the knee axis
-    cy, sy = np.cos(yaw), np.sin(yaw)
-    pitch = np.unwrap(np.arctan2(-rot[:, 2, 0], rot[:, 0, 0] * cy + rot[:, 1, 0] * sy))
-    # Rx(roll) = Ry(-pitch) Rz(-yaw) R; its second column is (0, cos roll, sin roll).
-    n0 = cy * rot[:, 0, 1] + sy * rot[:, 1, 1]  # second column of Rz(-yaw) R
-    n1 = -sy * rot[:, 0, 1] + cy * rot[:, 1, 1]
-    n2 = rot[:, 2, 1]
-    roll = np.unwrap(np.arctan2(np.sin(pitch) * n0 + np.cos(pitch) * n2, n1))
-    return roll, pitch, yaw
-
-
-def foot_hip(q: np.ndarray) -> np.ndarray:
-    """Foot position in the hip frame for joint angles q (3,)."""
-    return leg_kin.fk(q, GEOMETRY)
 
 
 def figures(result: ScenarioResult) -> dict[str, Figure]:

@@ -430,10 +430,10 @@ def test_joint_command_never_leaves_the_ranges(velocity, joint, bound):
         ("mode=fast", "parameter 'mode' must be one of dynamic, kinematic; got 'fast'"),
         ("max_joint_speed=-1", "parameter 'max_joint_speed' must be a number with 0.001 <= max_joint_speed"),
         ("omega=0", "parameter 'omega' must be a number with 0.01 <= omega <= 20 rad/s"),
-        ("start_x=0.5", "parameter 'start_x' must be a number with -0.25 <= start_x <= 0.25 m; got '0.5'"),
+        ("start_x=5", "parameter 'start_x' must be a number with -3 <= start_x <= 3 m; got '5'"),
         (
             "start_x=-0.1",
-            "the start point (-0.1, 0.0, -0.08) m is outside the leg's workspace or reachable only outside",
+            "the start point (-0.1, 0.0, -0.08) m is outside the workspace of the leg l1, l2, l3 = 0.05, 0.1, 0.1 m or",
         ),
     ],
 )
