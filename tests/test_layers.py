@@ -1,5 +1,6 @@
 """The package's layers are a contract (pyproject.toml [tool.importlinter]): no import runs up, no cycle."""
 
+import re
 import shutil
 import subprocess
 import sys
@@ -47,3 +48,13 @@ def test_a_broken_contract_is_caught(tmp_path, module, line, contract):
     done = lint(tmp_path)
     assert done.returncode != 0
     assert f"{contract}" in done.stdout and "BROKEN" in done.stdout, done.stdout[-3000:]
+
+
+def test_test_modules_import_the_shared_helpers_as_ci_can():
+    """tests/ is on the path as a folder (pyproject's pythonpath), not a package: `from tests.helpers import ...`
+    works only where the repository root happens to be on sys.path (an editable install), and failed on a clean
+    clone in CI; `from helpers import ...` works everywhere."""
+    tests = Path(__file__).parent
+    line = re.compile(r"^\s*(from|import) tests\.", re.MULTILINE)
+    wrong = [str(p.relative_to(tests)) for p in tests.rglob("*.py") if line.search(p.read_text(encoding="utf-8"))]
+    assert wrong == [], wrong

@@ -5,11 +5,11 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
+from helpers import cli
 
 from hexabot_sim import params, registry, sweep
 from hexabot_sim.kinematics import leg, robot_file
 from hexabot_sim.robots.leg.model import build_xml
-from tests.helpers import cli
 
 LENGTHS = {"l1": 0.04, "l2": 0.08, "l3": 0.12}
 GEOM = leg.LegGeometry(0.04, 0.08, 0.12)
