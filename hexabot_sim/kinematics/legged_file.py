@@ -12,7 +12,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-import tomllib
 from typing import Any
 
 import numpy as np
@@ -20,7 +19,7 @@ import numpy as np
 from hexabot_sim.errors import UsageError, printable
 from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.kinematics import legged, legged_mjcf
-from hexabot_sim.kinematics.robot_file import LENGTH_MAX, MASS_MAX, MAX_FILE_BYTES, NAME
+from hexabot_sim.kinematics.robot_file import LENGTH_MAX, MASS_MAX, NAME, brief, load_toml, read_text
 
 GRAVITY: float = 9.81  # [m/s^2] as MuJoCo's default
 TOP_KEYS = ("name", "summary", "leg", "body", "stance", "legs")
@@ -90,22 +89,8 @@ def standing_torque(layout: legged.Layout, stance_legs: int) -> float:
 def read(path: str | os.PathLike[str]) -> LeggedRobot:
     """The legged robot in a TOML file, checked: any problem is one UsageError line naming the file and the field."""
     shown = printable(os.fspath(path))
-    try:
-        with open(path, "rb") as f:
-            data = f.read(MAX_FILE_BYTES + 1)
-    except IsADirectoryError:
-        raise UsageError(f"robot file {shown}: is a folder, not a file") from None
-    except OSError as e:
-        raise UsageError(f"robot file {shown}: cannot be read ({e.strerror or e})") from None
-    if len(data) > MAX_FILE_BYTES:
-        raise UsageError(f"robot file {shown}: larger than {MAX_FILE_BYTES // 1024} KiB; a robot file is a few lines")
-    try:
-        doc = tomllib.loads(data.decode("utf-8"))
-    except UnicodeDecodeError as e:
-        raise UsageError(f"robot file {shown}: not UTF-8 text (byte {e.start})") from None
-    except tomllib.TOMLDecodeError as e:
-        raise UsageError(f"robot file {shown}: not valid TOML: {e}") from None
-    return _Reader(shown).robot(doc)
+    text, _ = read_text(path, "a few lines")
+    return _Reader(shown).robot(load_toml(text, shown))
 
 
 class _Reader:
@@ -123,7 +108,7 @@ class _Reader:
         if table is None:
             raise self.fail("", f"missing the table [{key}]")
         if not isinstance(table, dict):
-            raise self.fail(where, f"must be a table; got {_shown(table)}")
+            raise self.fail(where, f"must be a table; got {brief(table)}")
         for name in table:
             if name not in allowed:
                 raise self.fail(where, f"unknown key '{printable(name)}'; allowed: {', '.join(allowed)}")
@@ -134,7 +119,7 @@ class _Reader:
 
     def number(self, value: Any, where: str, key: str, unit: str, lo: float, hi: float, zero: bool = False) -> float:
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise self.fail(where, f"'{key}' must be a finite number [{unit}]; got {_shown(value)}")
+            raise self.fail(where, f"'{key}' must be a finite number [{unit}]; got {brief(value)}")
         if not ((zero and value == 0) or lo <= value <= hi):
             allowed = f"{'0 or ' if zero else ''}{lo:g} to {hi:g} {unit}"
             raise self.fail(where, f"'{key}' must be {allowed}; got {value:g}")
@@ -142,7 +127,7 @@ class _Reader:
 
     def numbers(self, value: Any, where: str, key: str, n: int, unit: str, lo: float, hi: float) -> tuple:
         if not isinstance(value, list) or len(value) != n:
-            raise self.fail(where, f"'{key}' must be a list of {n} numbers [{unit}]; got {_shown(value)}")
+            raise self.fail(where, f"'{key}' must be a list of {n} numbers [{unit}]; got {brief(value)}")
         return tuple(self.number(v, where, f"{key}[{i}]", unit, lo, hi) for i, v in enumerate(value))
 
     def robot(self, doc: dict) -> LeggedRobot:
@@ -150,10 +135,10 @@ class _Reader:
         name = top["name"]
         if not isinstance(name, str) or not NAME.fullmatch(name):
             raise self.fail("", f"'name' must be 1 to 64 letters, digits, _ . - (starting with a letter or _); "
-                            f"got {_shown(name)}")  # fmt: skip
+                            f"got {brief(name)}")  # fmt: skip
         summary = top.get("summary", "")
         if not isinstance(summary, str) or "\n" in summary or len(summary) > 200:
-            raise self.fail("", f"'summary' must be one line of text (at most 200 characters); got {_shown(summary)}")
+            raise self.fail("", f"'summary' must be one line of text (at most 200 characters); got {brief(summary)}")
         leg = self.table(doc, "leg", LEG_KEYS, LEG_KEYS)
         w = "[leg]"
         geometry = leg_kin.LegGeometry(
@@ -188,18 +173,18 @@ class _Reader:
         key = "rows" if "rows" in table else "names"
         names = table[key]
         if not isinstance(names, list) or not all(isinstance(n, str) and NAME.fullmatch(n) for n in names):
-            raise self.fail(w, f"'{key}' must be a list of names (letters, digits, _ . -); got {_shown(names)}")
+            raise self.fail(w, f"'{key}' must be a list of names (letters, digits, _ . -); got {brief(names)}")
         count = len(names) * (2 if key == "rows" else 1)
         if not legged.MIN_LEGS <= count <= MAX_LEGS or len(set(names)) != len(names):
             raise self.fail(w, f"'{key}' must give {legged.MIN_LEGS} to {MAX_LEGS} legs of distinct names; "
-                            f"got {count} ({_shown(names)})")  # fmt: skip
+                            f"got {count} ({brief(names)})")  # fmt: skip
         hips, yaws = table["hips"], table["yaws"]
         if not isinstance(hips, list) or len(hips) != len(names):
             raise self.fail(w, f"'hips' must be a list of {len(names)} [x, y] pairs [m], one per name in "
-                            f"'{key}'; got {_shown(hips)}")  # fmt: skip
+                            f"'{key}'; got {brief(hips)}")  # fmt: skip
         if not isinstance(yaws, list) or len(yaws) != len(names):
             raise self.fail(w, f"'yaws' must be a list of {len(names)} numbers [deg], one per name in '{key}'; "
-                            f"got {_shown(yaws)}")  # fmt: skip
+                            f"got {brief(yaws)}")  # fmt: skip
         xy = tuple(self.numbers(h, w, f"hips[{i}]", 2, "m", -HIP_MAX, HIP_MAX) for i, h in enumerate(hips))
         deg = tuple(self.number(v, w, f"yaws[{i}]", "deg", -360.0, 360.0) for i, v in enumerate(yaws))
         if key == "names":
@@ -233,12 +218,6 @@ class _Reader:
                 f"{robot.stance_legs} feet at the neutral stance needs {need:.3g} N m, above torque_limit = "
                 f"{robot.torque_limit:g} N m; raise 'torque_limit', lighten the robot or shorten the reach"
             )  # fmt: skip
-
-
-def _shown(value: Any) -> str:
-    """A TOML value for a message, short and on one line."""
-    text = printable(repr(value))
-    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def _comment(robot: LeggedRobot) -> str:

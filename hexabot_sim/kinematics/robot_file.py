@@ -127,6 +127,18 @@ def read(path: str | os.PathLike[str], *, builtin: bool = False) -> RobotSpec:
         UsageError: Unreadable, larger than MAX_FILE_BYTES, not UTF-8 or not TOML, or any field wrong.
     """
     shown = printable(os.fspath(path))
+    text, status = read_text(path, "a DH table")
+    spec = parse(text, shown, builtin=builtin)
+    return dataclasses.replace(spec, file_id=(status.st_dev, status.st_ino))
+
+
+def read_text(path: str | os.PathLike[str], what: str) -> tuple[str, os.stat_result]:
+    """The text of a robot file (a DH table, a legged robot) and its status: any problem one UsageError line.
+
+    Refused: a folder, a FIFO or a device (opened without blocking: a FIFO never hangs), over MAX_FILE_BYTES
+    (`what` says what a robot file is instead), not UTF-8. A byte-order mark is dropped, as params.read_config.
+    """
+    shown = printable(os.fspath(path))
     try:
         # Non-blocking: a FIFO opens at once (and is refused below) instead of waiting for a writer forever.
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_BINARY", 0))
@@ -146,24 +158,26 @@ def read(path: str | os.PathLike[str], *, builtin: bool = False) -> RobotSpec:
         except OSError as e:
             raise UsageError(f"robot file {shown}: cannot be read ({e.strerror or e})") from None
     if len(data) > MAX_FILE_BYTES:
-        raise UsageError(f"robot file {shown}: larger than {MAX_FILE_BYTES // 1024} KiB; a robot file is a DH table")
+        raise UsageError(f"robot file {shown}: larger than {MAX_FILE_BYTES // 1024} KiB; a robot file is {what}")
     try:
-        text = data.decode("utf-8").removeprefix("\ufeff")  # a BOM from a Windows editor, as params.read_config
+        return data.decode("utf-8").removeprefix("\ufeff"), status  # a BOM from a Windows editor
     except UnicodeDecodeError as e:
         raise UsageError(f"robot file {shown}: not UTF-8 text (byte {e.start})") from None
-    spec = parse(text, shown, builtin=builtin)
-    return dataclasses.replace(spec, file_id=(status.st_dev, status.st_ino))
 
 
-def parse(text: str, source: str = "<robot file>", *, builtin: bool = False) -> RobotSpec:
-    """The robot described by TOML `text`; `source` names it in messages (see `read`)."""
+def load_toml(text: str, source: str) -> dict[str, Any]:
+    """The TOML document of a robot file's text; not TOML (or nested too deeply for tomllib) is one UsageError."""
     try:
-        doc = tomllib.loads(text)
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise UsageError(f"robot file {source}: not valid TOML: {e}") from None
     except RecursionError:  # tomllib parses nested arrays and inline tables recursively: `x = [[[[...]]]]`
         raise UsageError(f"robot file {source}: not valid TOML: arrays or tables nested too deeply") from None
-    return _Reader(source, doc).spec(builtin)
+
+
+def parse(text: str, source: str = "<robot file>", *, builtin: bool = False) -> RobotSpec:
+    """The robot described by TOML `text`; `source` names it in messages (see `read`)."""
+    return _Reader(source, load_toml(text, source)).spec(builtin)
 
 
 class _Reader:
@@ -192,20 +206,20 @@ class _Reader:
     def choice(self, table: dict, key: str, options: tuple[str, ...], where: str) -> str:
         value = table[key]
         if value not in options:
-            raise self.fail(where, f"'{key}' must be one of {', '.join(options)}; got {_shown(value)}")
+            raise self.fail(where, f"'{key}' must be one of {', '.join(options)}; got {brief(value)}")
         return value
 
     def name(self, value: Any, where: str, what: str) -> str:
         if not isinstance(value, str) or not NAME.fullmatch(value):
             raise self.fail(
                 where,
-                f"{what} must be 1 to 64 letters, digits, _ . - (starting with a letter or _); got {_shown(value)}",
+                f"{what} must be 1 to 64 letters, digits, _ . - (starting with a letter or _); got {brief(value)}",
             )
         return value
 
     def number(self, value: Any, where: str, key: str, unit: str, limit: float) -> float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.fail(where, f"'{key}' must be a number [{unit}]; got {_shown(value)}")
+            raise self.fail(where, f"'{key}' must be a number [{unit}]; got {brief(value)}")
         if not math.isfinite(value):
             raise self.fail(where, f"'{key}' must be a finite number [{unit}]; got {value}")
         if abs(value) > limit:
@@ -220,7 +234,7 @@ class _Reader:
         name = self.name(doc["name"], "", "'name'")
         summary = doc.get("summary", "")
         if not _one_line(summary) or len(summary) > 200:
-            raise self.fail("", f"'summary' must be one line of text (at most 200 characters); got {_shown(summary)}")
+            raise self.fail("", f"'summary' must be one line of text (at most 200 characters); got {brief(summary)}")
         convention = self.choice(doc, "convention", CONVENTIONS, "")
         self.unit = self.choice(doc, "angles", ANGLE_UNITS, "")
         self.angle_max = ANGLE_MAX_DEG if self.unit == "deg" else math.radians(ANGLE_MAX_DEG)
@@ -288,7 +302,7 @@ class _Reader:
                 raise self.fail(
                     "[lengths]",
                     f"a length name must be 1 to 64 letters, digits, _ (starting with a letter or _; it is a symbol in "
-                    f"--symbolic, where - and . would read as a minus and a decimal point); got {_shown(key)}",
+                    f"--symbolic, where - and . would read as a minus and a decimal point); got {brief(key)}",
                 )
             where = f"[lengths] {key}"
             if isinstance(entry, dict):
@@ -298,9 +312,9 @@ class _Reader:
             doc = entry.get("doc", "")
             zero = entry.get("zero", False)
             if not _one_line(doc):
-                raise self.fail(where, f"'doc' must be one line of text; got {_shown(doc)}")
+                raise self.fail(where, f"'doc' must be one line of text; got {brief(doc)}")
             if not isinstance(zero, bool):
-                raise self.fail(where, f"'zero' must be true or false; got {_shown(zero)}")
+                raise self.fail(where, f"'zero' must be true or false; got {brief(zero)}")
             value = self.number(entry["value"], where, "value", "m", LENGTH_MAX)
             length = Length(value, doc, zero)
             if not length.accepts(value):
@@ -349,7 +363,7 @@ class _Reader:
             sign, ref = (-1.0, value[1:]) if value.startswith("-") else (1.0, value)
             if ref not in self.lengths:
                 known = ", ".join(self.lengths) or "none: the file has no [lengths]"
-                raise self.fail(where, f"'{key}' names the length {_shown(ref)}, which [lengths] lacks; known: {known}")
+                raise self.fail(where, f"'{key}' names the length {brief(ref)}, which [lengths] lacks; known: {known}")
             return (sign, ref)
         return self.number(value, where, key, "m", DISTANCE_MAX)
 
@@ -367,7 +381,7 @@ class _Reader:
         rpy = table.get("rpy", [0.0, 0.0, 0.0])
         for key, value in (("xyz", xyz), ("rpy", rpy)):
             if not isinstance(value, list) or len(value) != 3:
-                raise self.fail(where, f"'{key}' must be a list of 3 numbers; got {_shown(value)}")
+                raise self.fail(where, f"'{key}' must be a list of 3 numbers; got {brief(value)}")
         position = tuple(self.distance(v, where, f"xyz[{i}]") for i, v in enumerate(xyz))
         angles = [self.number(v, where, f"rpy[{i}]", self.unit, self.angle_max) for i, v in enumerate(rpy)]
         cs = [_cos_sin(v, self.unit) for v in angles]
@@ -382,7 +396,7 @@ def _one_line(text: Any) -> bool:
     )
 
 
-def _shown(value: Any) -> str:
+def brief(value: Any) -> str:
     """A TOML value for a message, short and on one line."""
     text = printable(repr(value))
     return text if len(text) <= 40 else text[:37] + "..."

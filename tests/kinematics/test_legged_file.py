@@ -3,6 +3,7 @@ of the torque check against MuJoCo, and one-line refusals of bad or infeasible f
 
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 
@@ -131,3 +132,19 @@ def test_unreadable_and_oversized_files_are_refused(tmp_path: Path) -> None:
     big.write_text("#" * (2 << 20))
     with pytest.raises(UsageError, match="larger than 1024 KiB"):
         legged_file.read(big)
+
+
+def test_a_pipe_a_nested_document_and_a_byte_order_mark_as_robot_files_do(tmp_path: Path) -> None:
+    """Read as robot_file reads a DH table (one reader): a FIFO is refused at once (it waited for a writer forever),
+    deep nesting is one line (a RecursionError), and a Windows editor's BOM is no error."""
+    fifo = tmp_path / "pipe.toml"
+    os.mkfifo(fifo)
+    with pytest.raises(UsageError, match="not a regular file"):
+        legged_file.read(fifo)
+    nested = tmp_path / "nested.toml"
+    nested.write_text("x = " + "[" * 5000 + "]" * 5000 + "\n")
+    with pytest.raises(UsageError, match="nested too deeply"):
+        legged_file.read(nested)
+    bom = tmp_path / "bom.toml"
+    bom.write_bytes(b"\xef\xbb\xbf" + EXAMPLE.read_bytes())
+    assert legged_file.read(bom).layout == legged_file.read(EXAMPLE).layout
