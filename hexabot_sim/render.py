@@ -311,6 +311,21 @@ def _connector(scene: mujoco.MjvScene, kind: int, width: float, start, end, rgba
     scene.ngeom += 1
 
 
+def _offscreen(
+    model: mujoco.MjModel, width: int, height: int, camera: str, preset: Quality
+) -> tuple[mujoco.MjModel, int]:
+    """A copy of the model set up for off-screen frames of this size with a quality preset (its visual options
+    edited only on the copy), and the camera's id, its vertical field of view fitted to the aspect ratio."""
+    model = copy.copy(model)
+    model.vis.quality.offsamples = preset.offsamples
+    model.vis.quality.shadowsize = preset.shadowsize
+    model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
+    model.vis.global_.offheight = max(model.vis.global_.offheight, height)
+    camera_id = model.camera(camera).id
+    model.cam_fovy[camera_id] = _fovy_for(float(model.cam_fovy[camera_id]), width / height)
+    return model, camera_id
+
+
 def render_video(
     model: mujoco.MjModel,
     t: np.ndarray,
@@ -350,13 +365,7 @@ def render_video(
         if value < 2 or value % 2:
             raise ValueError(f"video {name} must be an even number of pixels >= 2 (H.264, yuv420p); got {value}")
     preset = QUALITY[quality]
-    model = copy.copy(model)  # the presets edit visual options only on this copy
-    model.vis.quality.offsamples = preset.offsamples
-    model.vis.quality.shadowsize = preset.shadowsize
-    model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
-    model.vis.global_.offheight = max(model.vis.global_.offheight, height)
-    camera_id = model.camera(camera).id
-    model.cam_fovy[camera_id] = _fovy_for(float(model.cam_fovy[camera_id]), width / height)
+    model, camera_id = _offscreen(model, width, height, camera, preset)
     data = mujoco.MjData(model)
     indices = frame_indices(t, fps)
     atlas = glyph_atlas(overlay_px(height))
@@ -427,13 +436,7 @@ class Frames:
 
     def __init__(self, model: mujoco.MjModel, width: int, height: int, camera: str, quality: str = "preview") -> None:
         preset = QUALITY[quality]
-        model = copy.copy(model)  # the preset edits visual options only on this copy
-        model.vis.quality.offsamples = preset.offsamples
-        model.vis.quality.shadowsize = preset.shadowsize
-        model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
-        model.vis.global_.offheight = max(model.vis.global_.offheight, height)
-        self.camera = model.camera(camera).id
-        model.cam_fovy[self.camera] = _fovy_for(float(model.cam_fovy[self.camera]), width / height)
+        model, self.camera = _offscreen(model, width, height, camera, preset)
         self.renderer = mujoco.Renderer(model, height, width)
         if preset.shadowsize == 0:
             self.renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False

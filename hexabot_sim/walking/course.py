@@ -107,10 +107,7 @@ def course_figure(result: Any, follower: Any, colours: dict[str, str]) -> Any:
     ax.plot(follower.points[:, 0], follower.points[:, 1], color="0.6", lw=3, alpha=0.6, label="path (waypoints)")
     ax.plot(follower.points[1:, 0], follower.points[1:, 1], "kx", ms=6, label="waypoints")
     ax.plot(c["x"], c["y"], color="k", lw=1.2, label="body (plate centre)")
-    loaded = np.stack([c[f"contact_{leg}"] for leg in legs], axis=1) > 0.5
-    for i, leg in enumerate(legs):
-        down = np.flatnonzero(np.diff(loaded[:, i].astype(int)) == 1) + 1
-        pts = contacts.point[down, i]
+    for leg, pts in zip(legs, contacts.touchdowns(c, legs), strict=True):
         ax.plot(pts[:, 0], pts[:, 1], "o", ms=3, mfc="none", color=colours[leg], label=f"{leg} touchdowns")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x [m]")

@@ -60,10 +60,8 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     height = float(np.clip(7.0 * span_y / span_x, 3.0, 8.0))  # equal axes, a frame that fits the walk
     fig, ax = plots.figure(figsize=(10, height + 1.2))
     ax.plot(c["x"], c["y"], color="k", lw=1.5, label="body (plate centre)")
-    loaded = np.stack([c[f"contact_{leg}"] for leg in legs], axis=1) > 0.5
-    for i, leg in enumerate(legs):
-        down = np.flatnonzero(np.diff(loaded[:, i].astype(int)) == 1) + 1
-        pts = contacts.point[down, i]
+    loaded = np.stack([c[f"contact_{leg}"] for leg in legs], axis=1) > 0.5  # also the gait diagram's and slip's
+    for leg, pts in zip(legs, contacts.touchdowns(c, legs), strict=True):
         ax.plot(pts[:, 0], pts[:, 1], "o", ms=3.5, mfc="none", color=LEG_COLOURS[leg], label=f"{leg} touchdowns")
     every = max(1, round(p.period / p.timestep))
     heading = c["yaw"][::every]

@@ -36,6 +36,11 @@ class Contacts:
     torque: np.ndarray  # (n, 3 n_legs) joint actuator torque [N m]
     body_contact: np.ndarray  # (n,) the plate touches the ground
 
+    def touchdowns(self, columns: dict[str, np.ndarray], legs: tuple[str, ...]) -> list[np.ndarray]:
+        """Per leg, the contact points (k, 3) [m] at the rows where its foot became loaded (the CSV's contact_<leg>)."""
+        loaded = np.stack([columns[f"contact_{leg}"] for leg in legs], axis=1) > 0.5
+        return [self.point[np.flatnonzero(np.diff(loaded[:, i].astype(int)) == 1) + 1, i] for i in range(len(legs))]
+
     def loaded(self, total_mass: float) -> np.ndarray:
         """(n, n_legs) the feet that carry load: more than LOADED_FRACTION of their share of the robot's weight."""
         return self.load > LOADED_FRACTION * total_mass * 9.81 / self.load.shape[1]
