@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 from hexabot_sim import folders, registry, video
 from hexabot_sim import params as params_mod
-from hexabot_sim.cli.common import COMPLETED, DONE_SO_FAR, PROG, eprint
+from hexabot_sim.cli.common import COMPLETED, DONE_SO_FAR, PROG, eprint, inputs
 from hexabot_sim.cli.progress import ProgressBar
 from hexabot_sim.errors import OutputError, UsageError, printable
 
@@ -122,7 +122,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     if settings is not None:
         video.check_cost(settings, getattr(prepared.params, "duration", None))
     if args.out is not None:
-        folders.check_not_input(args.out, [args.config] if args.config is not None else [])
+        folders.check_not_input(args.out, inputs(args.config, type(prepared.params), layers))
         folders.check_out(args.out, force=args.force)  # before the simulation, not after it
     with _mujoco_warnings_to_stderr():
         return _execute(args, prepared, settings, backend, no_video_reason)

@@ -10,7 +10,7 @@ from typing import Any
 
 from hexabot_sim import params as params_mod
 from hexabot_sim import registry
-from hexabot_sim.cli.common import COMPLETED, PROG, eprint
+from hexabot_sim.cli.common import COMPLETED, PROG, eprint, inputs
 from hexabot_sim.cli.progress import SweepProgress
 from hexabot_sim.errors import UsageError
 
@@ -26,7 +26,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     checking = SweepProgress(f"{name}: checking")  # speaks only if checking the cells takes seconds
     plan = sweep.plan(args.scenario, args.grid, config, sets, checking)  # every cell validated: nothing runs before
     if args.out is not None:
-        folders.check_not_input(args.out, [args.config] if args.config is not None else [])
+        cls = registry.get(args.scenario).params_type
+        grid_values = [v for axis in plan.axes for v in axis.values]
+        folders.check_not_input(args.out, inputs(args.config, cls, [config, sets], grid_values))
         folders.check_out(args.out, force=args.force)
     if args.scheduler is not None:
         # Connects now: an unreachable scheduler writes nothing.

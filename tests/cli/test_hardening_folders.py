@@ -4,6 +4,7 @@ import os
 import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 from helpers import cli
@@ -236,3 +237,23 @@ def test_two_cleans_at_once_are_no_error(tmp_path):
     results = [(p.wait(timeout=120), p.stderr.read()) for p in procs]
     assert all(code == 0 and err == "" for code, err in results), results
     assert list(tmp_path.iterdir()) == []
+
+
+def test_run_and_sweep_never_write_over_the_files_their_parameters_name(tmp_path, capsys):
+    """--force replaced a folder holding the walk's own schedule, waypoints or robot file (found by fuzzing): each
+    file a parameter names is an input, as --config is."""
+    folder = tmp_path / "study"
+    folder.mkdir()
+    schedule = folder / "schedule.csv"
+    schedule.write_text("t, vx, vy, yaw_rate\n0, 0.1, 0, 0\n")
+    robot = folder / "robot.toml"
+    robot.write_text((Path(__file__).resolve().parents[2] / "examples" / "my_hexapod.toml").read_text())
+    walk = ["--set", "duration=2", "--no-plots", "--out", str(folder), "--force"]
+    for argv in (
+        ["run", "hexabot-walk", "--set", f"schedule={schedule}", *walk],
+        ["run", "hexabot-walk", "--set", f"robot={robot}", *walk],
+        ["sweep", "hexabot-walk", "--grid", f"robot=hexabot,{robot}", *walk],
+    ):
+        code, _, err = cli(capsys, *argv)
+        assert code == 2 and "a command never writes over what it reads" in err, (argv, err)
+    assert sorted(p.name for p in folder.iterdir()) == ["robot.toml", "schedule.csv"]
