@@ -62,7 +62,15 @@ def _quat_x(angle: float) -> np.ndarray:
 
 def link_inertia(mass: float, length: float) -> tuple[float, float, float]:
     """Diagonal inertia of a link [kg m^2] (a uniform rod along x, axial term of a tube; as leg.xml)."""
-    return (mass * LINK_RADIUS**2 / 2, mass * length**2 / 12, mass * length**2 / 12)
+    return rod_inertia(mass, length, mass * LINK_RADIUS**2 / 2)
+
+
+def rod_inertia(mass: float, length: float, axial: float) -> tuple[float, float, float]:
+    """(axial, perpendicular, perpendicular) [kg m^2] of a rod of `length` along x about its centre: m L^2 / 12
+    across it, but at least half the axial term - a link shorter than ~1.7 radii is no rod, and a thinner inertia
+    is no physical body (MuJoCo refuses A + B < C: a 1 cm coxa was an internal error, found by fuzzing)."""
+    perp = max(mass * length**2 / 12, axial / 2)
+    return (axial, perp, perp)
 
 
 def loaded_joint_inertia(layout: legged.Layout, q: np.ndarray, stance_legs: int) -> np.ndarray:

@@ -148,3 +148,10 @@ def test_a_pipe_a_nested_document_and_a_byte_order_mark_as_robot_files_do(tmp_pa
     bom = tmp_path / "bom.toml"
     bom.write_bytes(b"\xef\xbb\xbf" + EXAMPLE.read_bytes())
     assert legged_file.read(bom).layout == legged_file.read(EXAMPLE).layout
+
+
+def test_a_leg_with_a_one_millimetre_coxa_compiles(tmp_path: Path) -> None:
+    """l1 = 0.001 m (the file's smallest) was an internal error: MuJoCo refused the coxa's rod inertia."""
+    tiny = tmp_path / "tiny.toml"
+    tiny.write_text(re.sub(r"(?m)^l1 = \S+", "l1 = 0.001", EXAMPLE.read_text()))
+    mujoco.MjModel.from_xml_string(legged_file.read(tiny).robot_xml())

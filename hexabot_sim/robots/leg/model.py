@@ -10,7 +10,7 @@ import numpy as np
 from hexabot_sim import models
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import leg as leg_kin
-from hexabot_sim.kinematics import robots
+from hexabot_sim.kinematics import legged_mjcf, robots
 from hexabot_sim.params import NameOrFile
 
 if TYPE_CHECKING:
@@ -39,7 +39,7 @@ def build_xml(p: LegParams) -> str:
 def set_lengths(root: ET.Element, geom: leg_kin.LegGeometry) -> None:
     """Rewrites the leg's link lengths in the tree (models/leg.xml's layout: body frames = modified-DH frames).
 
-    Each link keeps its mass as a uniform rod along its x axis (I_perp = m L^2 / 12 about its centre, I_axial
+    Each link keeps its mass as a uniform rod along its x axis (legged_mjcf.rod_inertia: I_perp = m L^2 / 12, I_axial
     unchanged); the femur and tibia bodies move to (L1, 0, 0) and (L2, 0, 0), the foot to (L3, 0, 0). The servo
     gains and the home keyframe stay those of the default leg.
     """
@@ -49,8 +49,8 @@ def set_lengths(root: ET.Element, geom: leg_kin.LegGeometry) -> None:
         inertial = body.find("inertial")
         mass = float(inertial.get("mass"))
         axial = float(inertial.get("diaginertia").split()[0])
-        perp = mass * length**2 / 12
-        inertial.attrib.update(pos=models.fmt((length / 2, 0.0, 0.0)), diaginertia=models.fmt((axial, perp, perp)))
+        inertia = legged_mjcf.rod_inertia(mass, length, axial)
+        inertial.attrib.update(pos=models.fmt((length / 2, 0.0, 0.0)), diaginertia=models.fmt(inertia))
         models.find(root, "geom", link).set("fromto", models.fmt((0.0, 0.0, 0.0, length, 0.0, 0.0)))
     models.find(root, "body", "femur").set("pos", models.fmt((geom.l1, 0.0, 0.0)))
     models.find(root, "body", "tibia").set("pos", models.fmt((geom.l2, 0.0, 0.0)))

@@ -137,3 +137,16 @@ def test_a_robot_file_not_of_the_legs_form_is_refused_in_one_line(tmp_path, caps
     code, _, err = cli(capsys, "run", "leg-step", "--set", f"robot={path}", "--out", str(tmp_path / "run"))
     assert code == 2 and err.count("\n") == 1 and f"robot file {path} is not of the leg's form" in err, err
     assert not (tmp_path / "run").exists()
+
+
+def test_links_shorter_than_their_radius_are_still_physical_bodies():
+    """A 1 cm coxa (allowed) made MuJoCo refuse the inertia (A + B < C: the rod formula across so short a link is
+    below half its axial term), an internal error found by fuzzing; the perpendicular term is now at least that."""
+    model = mujoco.MjModel.from_xml_string(build_xml(leg_params(l1=0.01)))
+    inertia = model.body_inertia[model.body("coxa").id]
+    assert inertia[1] + inertia[2] >= inertia[0] and inertia[0] + inertia[1] >= inertia[2]
+    from hexabot_sim.kinematics import legged_mjcf
+
+    mass, axial = 0.05, 0.05 * 0.01**2 / 2
+    assert legged_mjcf.rod_inertia(mass, 0.1, axial) == (axial, mass * 0.1**2 / 12, mass * 0.1**2 / 12)  # a rod
+    assert legged_mjcf.rod_inertia(mass, 0.001, axial) == (axial, axial / 2, axial / 2)
