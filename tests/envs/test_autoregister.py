@@ -1,0 +1,103 @@
+"""The ids registered when a program imports gymnasium, without importing hexabot_sim (envs/ids.py and the .pth)."""
+
+import importlib.metadata
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("gymnasium", reason="the Gymnasium environments need gymnasium (the rl extra)")
+
+import hexabot_sim.envs.ids as ids
+
+PTH = "hexabot_sim_gymnasium.pth"
+IDS = sorted(f"{ids.NAMESPACE}/{name}" for name in ids.ENVS)
+SHOW = (
+    "import sys, gymnasium\n"
+    "print(sorted(k for k in gymnasium.registry if k.startswith('hexabot_sim/')))\n"
+    "print('hexabot_sim' in sys.modules, 'mujoco' in sys.modules)\n"
+)
+
+
+def _python(code: str, *flags: str, **env: str) -> list[str]:
+    out = subprocess.run(
+        [sys.executable, *flags, "-c", code], capture_output=True, text=True, timeout=120, env={**os.environ, **env},
+        cwd=Path(__file__).parent,
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    return out.stdout.splitlines()
+
+
+def _installed_pth() -> bool:
+    """Whether the installed distribution carries the .pth (a wheel or editable install from pyproject.toml)."""
+    try:
+        files = importlib.metadata.files("hexabot-sim") or []
+    except importlib.metadata.PackageNotFoundError:
+        return False
+    return any(f.name == PTH for f in files)
+
+
+def test_the_wheel_carries_the_pth_that_loads_ids_py():
+    source = Path(ids.__file__).with_name(PTH)
+    assert source.is_file()
+    pyproject = Path(ids.__file__).parents[2] / "pyproject.toml"
+    if pyproject.is_file():  # a source tree: the wheel's force-include puts it at site-packages' top
+        assert f'"hexabot_sim/envs/{PTH}" = "{PTH}"' in pyproject.read_text()
+
+
+@pytest.mark.skipif(not _installed_pth(), reason="hexabot-sim is not installed with its .pth (source tree on a path)")
+def test_importing_gymnasium_alone_registers_the_ids_lazily():
+    registered, imported = _python(SHOW)
+    assert registered == str(IDS)
+    assert imported == "False False"  # strings only: neither hexabot_sim nor MuJoCo is imported to register
+    out = _python(
+        "import gymnasium\nenv = gymnasium.make('hexabot_sim/HexabotJoints-v0')\nprint(env.reset(seed=0)[0].shape)"
+    )
+    assert out == ["(54,)"]
+
+
+@pytest.mark.skipif(not _installed_pth(), reason="hexabot-sim is not installed with its .pth (source tree on a path)")
+def test_the_hook_is_off_when_the_user_says_so():
+    registered, _ = _python(SHOW, **{ids.OPT_OUT: "1"})
+    assert registered == "[]"
+
+
+def test_the_hook_registers_on_import_and_leaves_gymnasium_whole():
+    """The hook as the .pth installs it, in a fresh interpreter whatever the installation: loaded from ids.py's
+    path, then gymnasium imported; gymnasium's resources still load through the wrapped loader, and the finder
+    is gone from sys.meta_path once it has fired."""
+    code = (
+        "import importlib.util, sys, importlib.resources\n"
+        f"spec = importlib.util.spec_from_file_location('ids_copy', {ids.__file__!r})\n"
+        "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m)\n"
+        "m.install_import_hook(); m.install_import_hook()  # twice, as a site dir seen twice does\n"
+        "print(sum(getattr(f, 'hexabot_sim_autoregister', False) for f in sys.meta_path))\n"
+        + SHOW
+        + "print(sum(getattr(f, 'hexabot_sim_autoregister', False) for f in sys.meta_path))\n"
+        "print(importlib.resources.files('gymnasium').joinpath('__init__.py').is_file())\n"
+    )
+    before, registered, imported, after, resources = _python(code, **{ids.OPT_OUT: "0"})
+    assert (before, after) == ("1", "0")
+    assert registered == str(IDS) and imported == "False False" and resources == "True"
+
+
+def test_gymnasium_imported_first_is_registered_at_once():
+    code = (
+        "import importlib.util, sys, gymnasium\n"
+        f"spec = importlib.util.spec_from_file_location('ids_copy', {ids.__file__!r})\n"
+        "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m)\n"
+        "m.install_import_hook()\n"
+        "print(sorted(k for k in gymnasium.registry if k.startswith('hexabot_sim/')))\n"
+    )
+    assert _python(code, **{ids.OPT_OUT: "0"}) == [str(IDS)]
+
+
+def test_ids_py_imports_no_more_than_os_and_sys():
+    """Loaded at every interpreter start: no import beyond os and sys (without site, which imports those)."""
+    code = (
+        "import sys\nbefore = set(sys.modules)\n{}\nprint(sorted(set(sys.modules) - before))\n"
+    )  # fmt: skip
+    load = f"exec(compile(open({ids.__file__!r}).read(), 'ids.py', 'exec'), {{'__name__': 'x'}})"
+    assert _python(code.format(load), "-S") == _python(code.format("import os, sys"), "-S")
