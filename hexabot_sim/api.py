@@ -135,7 +135,7 @@ def run(
     registry.get(scenario)
     _check_path("config", config)
     _check_callable("progress", progress)
-    layers = [params_mod.read_config(Path(config))] if config is not None else []
+    layers = [params_mod.read_config(Path(config), registry.get(scenario).params_type)] if config is not None else []
     prepared = prepare(scenario, *layers, {name: _plain(value) for name, value in params.items()})
     with _mujoco_warnings():
         return prepared.run(progress)

@@ -322,8 +322,13 @@ def read_bounded(
     return b"".join(chunks)
 
 
-def read_config(path: str | Path) -> dict[str, Any]:
+def read_config(path: str | Path, cls: type | None = None) -> dict[str, Any]:
     """Reads a TOML file of `name = value` lines, at the top level or in a `[params]` table (or both).
+
+    With `cls` (the scenario's parameters), a parameter of it that names a file (a schedule, waypoints, a robot
+    file) by a relative path is read from the config file's folder when the file is there, as tools that take
+    config files do (a config and its files travel together); otherwise the path stays as written (relative to
+    the working directory).
 
     Raises:
         UsageError: for a missing, unreadable, oversized or non-regular file, invalid TOML, another
@@ -361,7 +366,24 @@ def read_config(path: str | Path) -> dict[str, Any]:
             raise UsageError(
                 f"config file {shown}: unexpected table [{_show(key)[1:-1]}]; write parameters as 'name = value' lines"
             )
-    return data
+    return data if cls is None else files_beside(data, cls, path.parent)
+
+
+def files_beside(data: dict[str, Any], cls: type, folder: Path) -> dict[str, Any]:
+    """The config's values with each relative file name of a file-naming parameter resolved in `folder` when the
+    file is there (a built-in name, e.g. robot = "hexabot", is not a file name)."""
+    out = dict(data)
+    for name, (info, _) in infos(cls).items():
+        value = data.get(name)
+        if not isinstance(value, str) or value == "" or (info.table is None and info.name_or_file is None):
+            continue
+        if info.name_or_file is not None and value.lower() in (n.lower() for n in info.name_or_file.names):
+            continue
+        if not Path(value).is_absolute():
+            with contextlib.suppress(OSError, ValueError):  # a NUL byte or an over-long name: checked later
+                if (folder / value).is_file():
+                    out[name] = str(folder / value)
+    return out
 
 
 def _first_line(e: Exception) -> str:

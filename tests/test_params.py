@@ -164,3 +164,32 @@ def test_name_or_file_refusals_are_one_line(tmp_path, value, fragment):
     with pytest.raises(UsageError) as info:
         params.resolve(_name_or_file_class(), {}, {"thing": value})
     assert fragment in str(info.value) and "\n" not in str(info.value)
+
+
+def test_a_config_names_its_files_relative_to_its_own_folder(tmp_path, monkeypatch):
+    """A schedule or robot file named by a config is read beside the config (a config and its files travel
+    together); a built-in name stays a name; a file that is not there stays as written (the working folder)."""
+    cls = registry.get("hexabot-walk").params_type
+    folder = tmp_path / "study"
+    folder.mkdir()
+    (folder / "sched.csv").write_text("t, vx, vy, yaw_rate\n0, 0.05, 0, 0\n")
+    (folder / "hexabot").write_text("a file named like the built-in robot\n")
+    config = folder / "walk.toml"
+    config.write_text('schedule = "sched.csv"\nrobot = "hexabot"\nwaypoints = "elsewhere.csv"\n')
+    monkeypatch.chdir(tmp_path)
+    data = params.read_config(Path("study/walk.toml"), cls)
+    assert data == {"schedule": str(Path("study") / "sched.csv"), "robot": "hexabot", "waypoints": "elsewhere.csv"}
+    assert params.read_config(config) == {"schedule": "sched.csv", "robot": "hexabot", "waypoints": "elsewhere.csv"}
+
+
+@pytest.mark.slow
+def test_run_with_a_config_from_another_folder_reads_the_schedule_beside_it(tmp_path, monkeypatch):
+    from hexabot_sim import api
+
+    folder = tmp_path / "study"
+    folder.mkdir()
+    (folder / "sched.csv").write_text("t, vx, vy, yaw_rate\n0, 0.05, 0, 0\n2, 0.08, 0, 0\n")
+    (folder / "walk.toml").write_text('schedule = "sched.csv"\nduration = 2.5\n')
+    monkeypatch.chdir(tmp_path)  # the schedule is not in the working folder
+    result = api.run("hexabot-walk", config="study/walk.toml")
+    assert [list(row[:4]) for row in result.params["schedule"]] == [[0.0, 0.05, 0.0, 0.0], [2.0, 0.08, 0.0, 0.0]]

@@ -105,6 +105,15 @@ def _layers(args: argparse.Namespace) -> list[dict[str, Any]]:
     return [params_mod.read_config(args.config) if args.config is not None else {}, sets]
 
 
+def _beside_config(args: argparse.Namespace, layers: list[dict[str, Any]], scenario: str) -> list[dict[str, Any]]:
+    """The layers with --config's file names resolved beside it (params.files_beside). Called once MuJoCo may be
+    imported: the scenario's parameter class comes with its module."""
+    if args.config is None:
+        return layers
+    cls = registry.get(scenario).params_type
+    return [params_mod.files_beside(layers[0], cls, Path(args.config).parent), *layers[1:]]
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     registry.get(args.scenario)
     layers = _layers(args)
@@ -118,6 +127,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         backend, no_video_reason = gl.video_backend(announce=lambda notice: eprint(f"{PROG}: {notice}"))
     from hexabot_sim import api
 
+    layers = _beside_config(args, layers, args.scenario)
     prepared = api.prepare(args.scenario, *layers)
     if settings is not None:
         video.check_cost(settings, getattr(prepared.params, "duration", None))
@@ -238,7 +248,7 @@ def cmd_view(args: argparse.Namespace) -> int:
     recording = viewer.load_recording(folder) if replaying else None
     make = None
     if not replaying:
-        prepared = api.prepare(args.target, *_layers(args))
+        prepared = api.prepare(args.target, *_beside_config(args, _layers(args), args.target))
         make = viewer.live_maker(
             prepared.entry.name, prepared.params
         )  # a grid scenario is refused before the window opens

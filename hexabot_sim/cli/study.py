@@ -19,7 +19,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from hexabot_sim import dask_cluster, folders, pool, sweep
 
     sets = params_mod.parse_assignments(args.sets)
-    config = params_mod.read_config(args.config) if args.config is not None else {}
+    cls = registry.get(args.scenario).params_type
+    config = params_mod.read_config(args.config, cls) if args.config is not None else {}
     if args.scheduler is not None and args.workers is not None:
         raise UsageError("--workers is for the local pool; with --scheduler the cluster's workers run the cells")
     name = f"sweep-{registry.get(args.scenario).name}"

@@ -98,6 +98,18 @@ def test_config_file_and_set_precedence(tmp_path, capsys):
     )
 
 
+@pytest.mark.slow
+def test_a_config_reads_the_schedule_beside_it_from_any_working_folder(tmp_path, capsys, monkeypatch):
+    study = tmp_path / "study"
+    study.mkdir()
+    (study / "sched.csv").write_text("t, vx, vy, yaw_rate\n0, 0.05, 0, 0\n2, 0.08, 0, 0\n")
+    (study / "walk.toml").write_text('schedule = "sched.csv"\nduration = 2.5\n')
+    monkeypatch.chdir(tmp_path)
+    run_ok(capsys, "run", "hexabot-walk", "--config", "study/walk.toml", "--out", "r", "--no-plots")
+    record = json.loads((tmp_path / "r" / "run.json").read_text())
+    assert [row[:4] for row in record["params"]["schedule"]] == [[0.0, 0.05, 0.0, 0.0], [2.0, 0.08, 0.0, 0.0]]
+
+
 def test_default_folder_under_runs(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     run_ok(capsys, "run", "pendulum-undamped", "--no-plots", *SHORT)
