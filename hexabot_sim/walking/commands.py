@@ -146,16 +146,19 @@ def read_schedule(name: str, raw: Any) -> tuple:
 
 
 def read_waypoints(name: str, raw: Any) -> tuple:
-    """The waypoints (x, y, heading or None) [m, m, rad] from the start pose."""
+    """The waypoints (x, y, heading or None) [m, m, rad] from the start pose; a first row at the start (within
+    1 mm, no heading) is the start itself and left out."""
     out = []
     previous = (0.0, 0.0)
-    for where, (x, y, heading) in _rows(name, raw, WAYPOINT_COLUMNS, WAYPOINT_REQUIRED):
+    for k, (where, (x, y, heading)) in enumerate(_rows(name, raw, WAYPOINT_COLUMNS, WAYPOINT_REQUIRED)):
         if x is None or y is None:
             raise UsageError(f"{where}: x and y must both be given")
         px = _number(where, "x", x, -MAX_DISTANCE, MAX_DISTANCE, "m")
         py = _number(where, "y", y, -MAX_DISTANCE, MAX_DISTANCE, "m")
         h = None if heading is None else _number(where, "heading", heading, -2 * math.pi, 2 * math.pi, "rad")
         if math.hypot(px - previous[0], py - previous[1]) < 1e-3:
+            if k == 0 and h is None:  # the start itself, as a closed course written from (0, 0) begins
+                continue
             raise UsageError(f"{where}: ({px:g}, {py:g}) is within 1 mm of the point before it (or the start)")
         previous = (px, py)
         out.append((px, py, h))
@@ -253,9 +256,12 @@ def waypoints_problem(p: Any, check: Callable[[Any], str], settle: float) -> str
     for angle in range(0, 360, 45):
         for w in (-p.path_yaw_rate, p.path_yaw_rate):
             a = math.radians(angle)
-            q = dataclasses.replace(p, vx=p.path_speed * math.cos(a), vy=p.path_speed * math.sin(a), yaw_rate=w,
-                                    schedule=(), waypoints=())  # fmt: skip
-            problem = check(q)
+            try:  # replace() checks the walk it makes: its own refusal is the problem to report
+                q = dataclasses.replace(p, vx=p.path_speed * math.cos(a), vy=p.path_speed * math.sin(a), yaw_rate=w,
+                                        schedule=(), waypoints=())  # fmt: skip
+                problem = check(q)
+            except ValueError as e:
+                problem = str(e)
             if problem:
                 return (
                     f"waypoints: the follower may ask for path_speed {p.path_speed:g} m/s in any direction while "
@@ -265,9 +271,16 @@ def waypoints_problem(p: Any, check: Callable[[Any], str], settle: float) -> str
     follower = course(p, settle)
     needed = settle + p.period + follower.total / p.path_speed * 1.2 + 1.0
     if p.duration < needed:
+        # The duration's upper bound, as `hexabot-sim list` shows it.
+        limit = next(f.metadata["param"].le for f in dataclasses.fields(p) if f.name == "duration")
+        advice = (
+            "raise 'duration' to at least that"
+            if limit is None or needed <= limit
+            else f"that is longer than the longest walk ({limit:g} s): shorten the course or raise path_speed"
+        )
         return (
             f"waypoints: the course is {follower.total:.3g} m long; at path_speed {p.path_speed:g} m/s the walk needs "
-            f"about {needed:.3g} s; raise 'duration' to at least that"
+            f"about {needed:.3g} s; {advice}"
         )
     return ""
 

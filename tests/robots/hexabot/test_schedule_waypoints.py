@@ -59,12 +59,36 @@ def test_bad_waypoints_are_refused(tmp_path, capsys):
     cases = {
         "x,y\n0.3,0\n0.3,nan\n": "line 3: y must be a number",
         "x,y\n0.3,0\n0.3,0.0001\n": "within 1 mm of the point before it",
+        "x,y\n0,0\n0,0.0005\n": "line 3: (0, 0.0005) is within 1 mm of the point before it (or the start)",
+        "x,y,heading\n0,0,1\n": "line 2: (0, 0) is within 1 mm",
+        "x,y\n0.3,0\n0.3,0\n0,0\n": "line 3: (0.3, 0) is within 1 mm",
+        "x,y\n0.4,0\n5,0\n": "the course is 5 m long",
         "x,y\n5,0\n": "the course is 5 m long; at path_speed 0.1 m/s the walk needs about",
     }
     for text, words in cases.items():
         path = _write(tmp_path / "w.csv", text)
         code, _, err = cli(capsys, "run", "hexabot-walk", "--set", f"waypoints={path}", "--out", str(tmp_path / "o"))
         assert code == 2 and words in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_a_closed_course_may_start_at_the_start(tmp_path):
+    from hexabot_sim.walking.commands import read_waypoints
+
+    path = _write(tmp_path / "square.csv", "x, y\n0, 0\n0.3, 0\n0.3, 0.3\n0, 0.3\n0, 0\n")
+    assert read_waypoints("waypoints", str(path)) == ((0.3, 0.0, None), (0.3, 0.3, None), (0.0, 0.3, None),
+                                                      (0.0, 0.0, None))  # fmt: skip
+
+
+def test_waypoint_refusals_name_the_follower_s_parameters(tmp_path, capsys):
+    far = _write(tmp_path / "far.csv", "x, y\n400, 0\n")
+    fast = ("--set", "path_speed=0.5")
+    code, _, err = cli(capsys, "run", "hexabot-walk", "--set", f"waypoints={far}", *fast, "--out", str(tmp_path / "o"))
+    assert code == 2 and err.startswith("hexabot-sim: error: waypoints: the follower may ask for path_speed 0.5")
+    assert err.rstrip().endswith("lower path_speed or path_yaw_rate")
+    long = ("--set", "duration=600")
+    code, _, err = cli(capsys, "run", "hexabot-walk", "--set", f"waypoints={far}", *long, "--out", str(tmp_path / "o"))
+    assert code == 2 and "longer than the longest walk (3600 s): shorten the course or raise path_speed" in err
+    assert not (tmp_path / "o").exists()
 
 
 def test_the_api_takes_rows_as_lists_or_arrays_and_fills_what_they_leave_out(tmp_path):
