@@ -70,10 +70,11 @@ def _rows(name: str, raw: Any, columns: tuple[str, ...], required: int) -> list[
             text = data.decode("utf-8").removeprefix("\ufeff")
         except UnicodeDecodeError:
             raise UsageError(f"{name} file {shown} is not UTF-8 text") from None
-        lines = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip()]
+        # Blank lines and '#' comment lines are skipped (numpy.loadtxt's convention); line numbers are the file's.
+        lines = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip()[:1] not in ("", "#")]
         if not lines:
             raise UsageError(f"{name} file {shown} is empty; it needs a header row ({allowed}) and rows")
-        header = [h.strip().lower() for h in next(csv.reader([lines[0][1]]))]
+        header = [h.strip().lower() for h in next(csv.reader([lines[0][1]], skipinitialspace=True))]
         unknown = [h for h in header if h not in columns]
         if unknown or len(set(header)) != len(header) or not set(columns[:required]) <= set(header):
             problem = f"unknown column {unknown[0]!r}" if unknown else "a column missing or repeated"
@@ -82,7 +83,7 @@ def _rows(name: str, raw: Any, columns: tuple[str, ...], required: int) -> list[
             raise UsageError(f"{name} file {shown} has {len(lines) - 1} rows; the limit is {limit}")
         out = []
         for number, line in lines[1:]:
-            cells = [c.strip() for c in next(csv.reader([line]))]
+            cells = [c.strip() for c in next(csv.reader([line], skipinitialspace=True))]  # '0, "0.08"' too
             if len(cells) != len(header):
                 raise UsageError(
                     f"{name} file {shown}, line {number}: {len(cells)} values for the {len(header)} columns"

@@ -71,6 +71,18 @@ def test_bad_waypoints_are_refused(tmp_path, capsys):
         assert code == 2 and words in err and len(err.strip().splitlines()) == 1, err
 
 
+def test_table_files_take_comments_and_quoted_numbers_as_spreadsheets_write_them(tmp_path):
+    from hexabot_sim.walking.commands import read_schedule
+
+    path = _write(
+        tmp_path / "s.csv", '# forward, then faster\nt, vx, vy, yaw_rate\n0, 0.05, 0, 0\n  # now\n2, "0.08", 0, 0\n'
+    )
+    assert [row[:4] for row in read_schedule("schedule", str(path))] == [(0.0, 0.05, 0.0, 0.0), (2.0, 0.08, 0.0, 0.0)]
+    bad = _write(tmp_path / "b.csv", 't, vx, vy, yaw_rate\n# c\n0, "x", 0, 0\n')
+    with pytest.raises(UsageError, match="line 3: vx must be a number"):  # the file's own line number
+        read_schedule("schedule", str(bad))
+
+
 def test_a_closed_course_may_start_at_the_start(tmp_path):
     from hexabot_sim.walking.commands import read_waypoints
 
