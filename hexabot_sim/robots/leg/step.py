@@ -42,6 +42,11 @@ CSV_COLUMNS: int = 25  # columns of timeseries.csv
 RUN_COST: tuple[float, float, float] = (15e-6, 100e-6, 600.0)
 
 
+def _length_doc(link: str, default: float) -> str:
+    """`hexabot-sim list`'s line of a link length: 0 is the robot's own, else at least MIN_LENGTH."""
+    return f"{link} length; 0 = the robot's (leg: {default:g}), else {MIN_LENGTH:g} m or more"
+
+
 @dataclasses.dataclass(frozen=True)
 class LegParams:
     """Leg, controller and simulation settings shared by leg-step and leg-sweep (hip frame: x forward, z up)."""
@@ -68,9 +73,9 @@ class LegParams:
         0.01, "m/rad", "DLS damping lambda reached at a singularity", ge=0.0, le=0.1, typo=("mm/rad", 1e-3)
     )
     robot: str = param("leg", "", "the leg's DH table: leg (report 000) or a file of its form", name_or_file=LEG_ROBOT)
-    l1: float = param(0.0, "m", "coxa length; 0 = the robot's (leg: 0.05)", ge=0.0, le=MAX_LENGTH, typo=MM)
-    l2: float = param(0.0, "m", "femur length; 0 = the robot's (leg: 0.1)", ge=0.0, le=MAX_LENGTH, typo=MM)
-    l3: float = param(0.0, "m", "tibia length; 0 = the robot's (leg: 0.1)", ge=0.0, le=MAX_LENGTH, typo=MM)
+    l1: float = param(0.0, "m", _length_doc("coxa", 0.05), ge=0.0, le=MAX_LENGTH, typo=MM)
+    l2: float = param(0.0, "m", _length_doc("femur", 0.1), ge=0.0, le=MAX_LENGTH, typo=MM)
+    l3: float = param(0.0, "m", _length_doc("tibia", 0.1), ge=0.0, le=MAX_LENGTH, typo=MM)
     start_x: float = param(
         0.05, "m", "start foot position in the hip frame (under the femur axis)", ge=-REACH, le=REACH, typo=MM
     )
