@@ -1,4 +1,4 @@
-"""examples/ars_hexabot.py runs: a tiny training (one iteration of two directions) reports its returns."""
+"""examples/train_ars.py runs: a tiny training (one iteration of two directions) reports its returns."""
 
 import re
 import subprocess
@@ -9,7 +9,7 @@ import pytest
 
 pytest.importorskip("gymnasium", reason="the Gymnasium environments need gymnasium (the rl extra)")
 
-EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "ars_hexabot.py"
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "train_ars.py"
 
 
 @pytest.mark.slow

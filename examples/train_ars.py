@@ -8,7 +8,7 @@ common random numbers), keeps the b directions whose better return is highest an
 alpha / (b sigma_R) sum (r+ - r-) delta_i, sigma_R the standard deviation of those 2b returns. Rollouts run on a
 process pool (one environment per worker).
 
-    python examples/ars_hexabot.py [--iterations 30] [--workers 2] [--plot c.png] [--save p.npz] [--video a.mp4]
+    python examples/train_ars.py [--iterations 30] [--workers 2] [--plot c.png] [--save p.npz] [--video a.mp4]
 
 Before and after training it reports the mean return of the policy over the same evaluation seeds (episodes of
 --horizon steps of 0.1 s, commands drawn per episode by the environment).
