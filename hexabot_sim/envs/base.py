@@ -107,6 +107,7 @@ class LeggedEnv(gymnasium.Env):
         terrain: str,
         slope_deg: float,
         roughness: float,
+        stairs,
         command_range,
         reward: Reward | dict | None,
         randomize_friction,
@@ -140,7 +141,7 @@ class LeggedEnv(gymnasium.Env):
         self.frame_skip = int(frame_skip)
         self.dt = self.frame_skip * p.timestep  # [s] the control period
         reach = float(np.abs(self.command_range[:2]).max()) * math.sqrt(2) * EPISODE_SECONDS
-        self.scene = EnvScene(p, terrain, slope_deg, roughness, reach, randomization)
+        self.scene = EnvScene(p, terrain, slope_deg, roughness, reach, randomization, stairs)
         self.model, self.data = self.scene.model, self.scene.data
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.dt)}
         cameras = [self.model.camera(i).name for i in range(self.model.ncam)]

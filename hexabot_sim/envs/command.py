@@ -14,12 +14,15 @@ from hexabot_sim.control.commands import Segment
 from hexabot_sim.control.gait import Command
 from hexabot_sim.control.walker import WalkingController
 from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward
-from hexabot_sim.envs.scene import check_range, robot_params
+from hexabot_sim.envs.scene import STAIRS, check_range, check_stairs, robot_params
 from hexabot_sim.walking.constants import SETTLE_TIME
 from hexabot_sim.walking.scene import acceleration_limit, make_controller
 
 TWIST_RANGE: tuple[tuple[float, float], ...] = ((-0.15, 0.15), (-0.1, 0.1), (-0.4, 0.4))  # vx, vy [m/s], yaw rate
 STEP_HEIGHT_RANGE: tuple[float, float] = (0.015, 0.045)  # [m] foot lift at mid-swing
+# [m] on stairs: with the elevator reflex a swing clears 2 x step height less a foot radius, so 3 cm climbs the
+# default 4 cm rise (1.5 cm clears 22 mm)
+STAIRS_STEP_HEIGHT_RANGE: tuple[float, float] = (0.03, 0.045)
 
 
 class ActionSource:
@@ -58,16 +61,17 @@ class LeggedCommandEnv(LeggedEnv):
 
     Observation, reward, command and termination: as LeggedJointsEnv's (base.LeggedEnv). The controller is the
     walk scenarios' (walking/scene.make_controller): planned touchdown on flat ground; on a slope or rough ground
-    the ground-finding one with sensed touchdown (and on a slope a level body), as hexabot-slope and hexabot-rough.
+    the ground-finding one with sensed touchdown (and on a slope and stairs a level body), as hexabot-slope,
+    hexabot-rough and hexabot-stairs (whose elevator reflex lifts a swing foot that meets a step's face).
     Every corner of the twist and step-height ranges must be a command the legs can deliver (checked as a walk's
     parameters are: walking/parameters.feasibility). Registered with 200 steps of 0.1 s (20 s).
 
     Args:
-        robot, terrain, slope_deg, roughness, command_range, reward, randomize_*, render_mode, width, height,
-            camera: as LeggedJointsEnv's.
+        robot, terrain, slope_deg, roughness, stairs, command_range, reward, randomize_*, render_mode, width,
+            height, camera: as LeggedJointsEnv's.
         frame_skip: Physics steps (2 ms each, the controller running at each) per action.
         twist_range: (low, high) of the controller's vx, vy [m/s] and yaw rate [rad/s].
-        step_height_range: (low, high) of the step height [m].
+        step_height_range: (low, high) of the step height [m]; default (0.015, 0.045), on stairs (0.03, 0.045).
     """
 
     def __init__(
@@ -77,9 +81,10 @@ class LeggedCommandEnv(LeggedEnv):
         terrain: str = "flat",
         slope_deg: float = 10.0,
         roughness: float = 0.01,
+        stairs: tuple[float, float, int] = STAIRS,
         command_range=COMMAND_RANGE,
         twist_range=TWIST_RANGE,
-        step_height_range=STEP_HEIGHT_RANGE,
+        step_height_range=None,
         reward: Reward | dict | None = None,
         randomize_friction: tuple[float, float] | None = None,
         randomize_mass: tuple[float, float] | None = None,
@@ -97,14 +102,23 @@ class LeggedCommandEnv(LeggedEnv):
             raise ValueError(f"twist_range must be three (low, high) pairs: vx, vy, yaw rate; got {twist_range!r}")
         names = ("vx", "vy", "yaw rate")
         ranges = [check_range(f"twist_range {n}", r, -1.0, 1.0) for n, r in zip(names, rows, strict=True)]
+        if step_height_range is None:
+            step_height_range = STAIRS_STEP_HEIGHT_RANGE if terrain == "stairs" else STEP_HEIGHT_RANGE
         ranges.append(check_range("step_height_range", step_height_range, 0.002, 0.1))
         self.ranges = np.array(ranges)  # (4, 2)
-        ground = {"flat": {}, "slope": {"touchdown": "sensed", "level_body": "on"}, "rough": {"touchdown": "sensed"}}
-        base = robot_params(robot, **ground.get(terrain, {}))
+        ground = {
+            "flat": {}, "slope": {"touchdown": "sensed", "level_body": "on"}, "rough": {"touchdown": "sensed"},
+            "stairs": {"touchdown": "sensed", "level_body": "on"},  # as hexabot-stairs: the elevator reflex climbs
+        }  # fmt: skip
+        overrides = dict(ground.get(terrain, {}) if isinstance(terrain, str) else {})
+        if terrain == "stairs":  # the walk's own checks: a rise its legs and the reflex can climb
+            rise, run, count = check_stairs(stairs)
+            overrides.update(stairs_rise=rise, stairs_run=run, stairs_count=count)
+        base = robot_params(robot, **overrides)
         self.p_controller = self._controller_params(base)
         super().__init__(
-            self.p_controller, frame_skip, terrain, slope_deg, roughness, command_range, reward, randomize_friction,
-            randomize_mass, randomize_servo_gain, render_mode, width, height, camera,
+            self.p_controller, frame_skip, terrain, slope_deg, roughness, stairs, command_range, reward,
+            randomize_friction, randomize_mass, randomize_servo_gain, render_mode, width, height, camera,
         )  # fmt: skip
         self.robot = robot
         self.action_space = spaces.Box(-1.0, 1.0, (4,), np.float32)

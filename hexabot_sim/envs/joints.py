@@ -7,7 +7,7 @@ import numpy as np
 from gymnasium import spaces
 
 from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward
-from hexabot_sim.envs.scene import robot_params
+from hexabot_sim.envs.scene import STAIRS, robot_params
 
 SETTLE_TIME: float = 0.25  # [s] at a reset the robot stands on its servos' home targets this long (it lands)
 
@@ -40,10 +40,13 @@ class LeggedJointsEnv(LeggedEnv):
     Args:
         robot: "hexabot" or "quadbot" (any robot with a '<robot>-walk' scenario).
         frame_skip: Physics steps (2 ms each) per action.
-        terrain: "flat", "slope" (uphill along +x, `slope_deg`) or "rough" (`roughness`: a fresh seeded patch of
-            ~5 cm bumps at every reset, drawn from the environment's RNG, the level floor beyond it).
+        terrain: "flat", "slope" (uphill along +x, `slope_deg`), "rough" (`roughness`: a fresh seeded patch of
+            ~5 cm bumps at every reset, drawn from the environment's RNG, the level floor beyond it) or "stairs"
+            (`stairs`: steps up along +x, the first edge 0.5 m ahead of the start, then a landing).
         slope_deg: The slope's angle [deg], 0 < slope_deg <= 30.
         roughness: The bumps' peak height [m], 0 < roughness <= 0.03.
+        stairs: (rise [m], run [m], count) of the staircase: 0 < rise <= 0.1, 0.05 <= run <= 2, 1 <= count <= 50
+            (as hexabot-walk's stairs_*); default (0.04, 0.25, 3).
         command_range: (low, high) of vx [m/s], vy [m/s] and the yaw rate [rad/s].
         reward: A Reward, or a dict of its fields to change.
         randomize_friction, randomize_mass, randomize_servo_gain: (low, high) ranges of factors drawn at every
@@ -59,6 +62,7 @@ class LeggedJointsEnv(LeggedEnv):
         terrain: str = "flat",
         slope_deg: float = 10.0,
         roughness: float = 0.01,
+        stairs: tuple[float, float, int] = STAIRS,
         command_range=COMMAND_RANGE,
         reward: Reward | dict | None = None,
         randomize_friction: tuple[float, float] | None = None,
@@ -74,8 +78,8 @@ class LeggedJointsEnv(LeggedEnv):
             raise ValueError(f"reset_noise_scale must be a number from 0 to 0.5 rad; got {reset_noise_scale!r}")
         p = robot_params(robot)
         super().__init__(
-            p, frame_skip, terrain, slope_deg, roughness, command_range, reward, randomize_friction, randomize_mass,
-            randomize_servo_gain, render_mode, width, height, camera,
+            p, frame_skip, terrain, slope_deg, roughness, stairs, command_range, reward, randomize_friction,
+            randomize_mass, randomize_servo_gain, render_mode, width, height, camera,
         )  # fmt: skip
         self.robot = robot
         self.reset_noise_scale = float(reset_noise_scale)

@@ -12,11 +12,14 @@ from hexabot_sim import params, registry
 from hexabot_sim.kinematics import legged
 from hexabot_sim.terrain import Ground, RoughPatch, Slope
 from hexabot_sim.terrain.heightfield import CELL, MARGIN
+from hexabot_sim.terrain.stairs import Stairs
 from hexabot_sim.walking.ground import start_pose
 from hexabot_sim.walking.parameters import WalkParams
 from hexabot_sim.walking.scene import build_xml
 
-TERRAINS: tuple[str, ...] = ("flat", "slope", "rough")
+TERRAINS: tuple[str, ...] = ("flat", "slope", "rough", "stairs")
+STAIRS: tuple[float, float, int] = (0.04, 0.25, 3)  # rise [m], run [m], count: issue 19's staircase
+STAIRS_DISTANCE: float = 0.5  # [m] the first step's edge ahead of the start (+x), as hexabot-stairs
 EPISODE_SECONDS: float = 20.0  # [s] the registered episodes' length (max_episode_steps x control period)
 PLATE_SITE_MARGIN: float = 0.002  # [m] the plate's touch site is the plate grown by this on every side
 PLATE_SITE: str = "env_plate"  # the site and touch sensor added to the torso (the fall detector)
@@ -55,6 +58,24 @@ def robot_params(robot: str, **overrides) -> WalkParams:
     return params.resolve(cls, defaults, overrides)
 
 
+def check_stairs(stairs) -> tuple[float, float, int]:
+    """(rise [m], run [m], count) of a staircase, each in the range a walk's stairs_* parameter allows (rise > 0);
+    else ValueError naming it."""
+    try:
+        rise, run, count = stairs
+    except (TypeError, ValueError):
+        raise ValueError(f"stairs must be (rise [m], run [m], count); got {stairs!r}") from None
+    infos = params.infos(WalkParams)
+    for name, value in (("rise", rise), ("run", run), ("count", count)):
+        info = infos[f"stairs_{name}"][0]
+        integer = name != "count" or (_number(value) and float(value).is_integer())
+        if not (_number(value) and math.isfinite(value) and info.contains(value) and value > 0 and integer):
+            strict = dataclasses.replace(info, gt=0.0, ge=None) if info.ge == 0 else info  # a rise of 0 is no stairs
+            allowed = params.describe_range(strict, name) + (", an integer" if name == "count" else "")
+            raise ValueError(f"stairs {name} must be {allowed}; got {value!r}")
+    return float(rise), float(run), int(count)
+
+
 def check_range(name: str, value, low: float = 0.0, high: float = math.inf) -> tuple[float, float] | None:
     """A (lo, hi) factor or value range with low <= lo <= hi <= high, or None; else ValueError naming it."""
     if value is None:
@@ -89,7 +110,7 @@ class Randomization:
 
 
 class EnvScene:
-    """The robot's model on flat ground, a slope or a rough patch, with a touch sensor on the plate added.
+    """The robot's model on flat ground, a slope, a rough patch or stairs, with a touch sensor on the plate added.
 
     The model is compiled once; a reset writes a fresh rough patch into the heightfield (its elevation range
     fixed at +-roughness, so every patch fits the same geom), the start pose over it and the randomised
@@ -104,6 +125,7 @@ class EnvScene:
         roughness: float,
         reach: float,
         randomization: Randomization,
+        stairs: tuple[float, float, int] = STAIRS,
     ) -> None:
         if not isinstance(terrain, str) or terrain not in TERRAINS:
             raise ValueError(f"unknown terrain {terrain!r}; known: {', '.join(TERRAINS)}")
@@ -111,6 +133,7 @@ class EnvScene:
             raise ValueError(f"slope_deg must be > 0 and <= {MAX_SLOPE_DEG:g} deg (a number); got {slope_deg!r}")
         if terrain == "rough" and not (_number(roughness) and 0.0 < roughness <= MAX_ROUGHNESS):
             raise ValueError(f"roughness must be > 0 and <= {MAX_ROUGHNESS:g} m (a number); got {roughness!r}")
+        self.stairs = check_stairs(stairs) if terrain == "stairs" else None
         self.p = p
         self.terrain = terrain
         self.roughness = roughness if terrain == "rough" else 0.0
@@ -131,7 +154,12 @@ class EnvScene:
 
     def _ground(self, seed: int) -> Ground:
         rough = RoughPatch(self.roughness, seed, self.extent) if self.roughness else None
-        return Ground(slope=self.slope, rough=rough)
+        obstacles = ()
+        if self.stairs is not None:  # up along +x from 0.5 m ahead, the landing and the width beyond any episode
+            rise, run, count = self.stairs
+            reach = self.extent[1]
+            obstacles = (Stairs(rise, run, count, STAIRS_DISTANCE, (1.0, 0.0), landing=reach, width=2 * reach),)
+        return Ground(slope=self.slope, rough=rough, obstacles=obstacles)
 
     def _add_sensors(self, spec: mujoco.MjSpec) -> None:
         """A box site around the plate and a touch sensor on it (the plate's contact force: a fall), the joints'

@@ -111,3 +111,16 @@ def test_a_new_step_height_lifts_a_swinging_foot_smoothly():
     # A swing's own lift moves a foot at most pi h / T_swing (0.045 m over 0.5 s): 0.6 mm a step; the ramp of
     # 3 cm over 0.1 s adds at most 0.6 mm more.
     assert fastest < 0.002, fastest
+
+
+@pytest.mark.slow
+def test_the_gait_controller_climbs_the_stairs_with_its_reflex():
+    """Walking forward at 0.05 m/s (mid step height), the body ends two steps (8 cm) up, never having fallen."""
+    env = LeggedCommandEnv(terrain="stairs", command_range=((0.05, 0.05), (0.0, 0.0), (0.0, 0.0)))
+    env.reset(seed=0)
+    z0 = float(env.data.qpos[2])
+    forward = np.array([1 / 3, 0.0, 0.0, 0.0])  # vx = 0.05 m/s on the default twist range
+    for _ in range(220):  # 22 s: the body's centre 1.1 m ahead, past the second step's edge (0.75 m)
+        _, reward, terminated, _, info = env.step(forward)
+        assert not terminated and np.isfinite(reward)
+    assert env.data.qpos[0] > 1.0 and env.data.qpos[2] - z0 > 0.075

@@ -25,6 +25,11 @@ def test_check_env_passes_with_frames(robot, gl_backend):
     env.close()
 
 
+@pytest.mark.parametrize("terrain", ["slope", "rough", "stairs"])
+def test_check_env_passes_on_every_terrain(terrain):
+    check_env(gymnasium.make("hexabot_sim/HexabotJoints-v0", terrain=terrain).unwrapped, skip_render_check=True)
+
+
 def test_spaces_have_the_documented_sizes():
     for robot, legs in (("hexabot", 6), ("quadbot", 4)):
         env = LeggedJointsEnv(robot=robot)
@@ -110,7 +115,7 @@ def test_target_mapping_reaches_the_servo_ranges():
 @pytest.mark.parametrize(
     ("kwargs", "words"),
     [
-        ({"terrain": "stairs"}, "unknown terrain 'stairs'; known: flat, slope, rough"),
+        ({"terrain": "lava"}, "unknown terrain 'lava'; known: flat, slope, rough, stairs"),
         ({"frame_skip": -1}, "frame_skip must be an integer >= 1"),
         ({"frame_skip": 0}, "frame_skip must be an integer >= 1"),
         ({"robot": "octobot"}, "unknown robot 'octobot'; known: hexabot, quadbot"),

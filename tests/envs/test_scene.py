@@ -1,5 +1,7 @@
 """An environment's ground and randomisation: a fresh rough patch per reset as MuJoCo collides it, factors in range."""
 
+import re
+
 import mujoco
 import numpy as np
 import pytest
@@ -67,3 +69,26 @@ def test_randomised_factors_are_drawn_in_range_from_the_nominal_model():
                                                              - m0.body_mass[sc.torso])  # fmt: skip
         draws.append(mass)
     assert len(set(draws)) == 3
+
+
+def test_stairs_are_where_mujoco_collides_them():
+    env = LeggedJointsEnv(terrain="stairs", stairs=(0.05, 0.3, 4))
+    env.reset(seed=0)
+    x = np.linspace(-0.3, 2.5, 57)
+    y = np.full(x.size, 0.2)
+    # Closed form: 0 before 0.5 m, then 5 cm more every 0.3 m, the fourth step's top the landing beyond.
+    expected = 0.05 * np.clip(np.floor((x - 0.5) / 0.3) + 1, 0, 4)
+    inside = np.abs((x - 0.5) / 0.3 - np.round((x - 0.5) / 0.3)) > 1e-6  # not on an edge
+    assert np.allclose(ray_heights(env, x, y)[inside], expected[inside], rtol=0, atol=1e-9)
+    assert np.allclose(env.scene.ground.surface(x, y)[inside], expected[inside], rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("stairs", "words"),
+    [((0.0, 0.25, 3), "stairs rise must be 0 < rise <= 0.1 m; got 0.0"), ((0.04, 0.25, 2.5), "an integer"),
+     ((0.04, 0.01, 3), "stairs run must be 0.05 <= run <= 2 m"), ("steps", "stairs must be (rise [m], run [m], count)"),
+     ((float("nan"), 0.25, 3), "got nan"), ((0.04, 0.25), "stairs must be")],
+)  # fmt: skip
+def test_bad_stairs_are_refused_naming_what_is_allowed(stairs, words):
+    with pytest.raises(ValueError, match=re.escape(words)):
+        LeggedJointsEnv(terrain="stairs", stairs=stairs)
