@@ -121,6 +121,6 @@ def test_the_gait_controller_climbs_the_stairs_with_its_reflex():
     z0 = float(env.data.qpos[2])
     forward = np.array([1 / 3, 0.0, 0.0, 0.0])  # vx = 0.05 m/s on the default twist range
     for _ in range(220):  # 22 s: the body's centre 1.1 m ahead, past the second step's edge (0.75 m)
-        _, reward, terminated, _, info = env.step(forward)
+        _, reward, terminated, _, _ = env.step(forward)
         assert not terminated and np.isfinite(reward)
     assert env.data.qpos[0] > 1.0 and env.data.qpos[2] - z0 > 0.075
