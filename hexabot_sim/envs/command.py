@@ -110,7 +110,7 @@ class LeggedCommandEnv(LeggedEnv):
             "flat": {}, "slope": {"touchdown": "sensed", "level_body": "on"}, "rough": {"touchdown": "sensed"},
             "stairs": {"touchdown": "sensed", "level_body": "on"},  # as hexabot-stairs: the elevator reflex climbs
         }  # fmt: skip
-        overrides = dict(ground.get(terrain, {}) if isinstance(terrain, str) else {})
+        overrides: dict[str, object] = dict(ground.get(terrain, {}) if isinstance(terrain, str) else {})
         if terrain == "stairs":  # the walk's own checks: a rise its legs and the reflex can climb
             rise, run, count = check_stairs(stairs)
             overrides.update(stairs_rise=rise, stairs_run=run, stairs_count=count)

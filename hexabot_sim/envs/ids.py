@@ -76,7 +76,7 @@ class _Finder:
         except Exception:
             return None
         if spec is not None and spec.loader is not None and hasattr(spec.loader, "exec_module"):
-            spec.loader = _Loader(spec.loader)
+            spec.loader = _Loader(spec.loader)  # type: ignore[assignment]  # duck-typed: exec_module and the rest
         return spec
 
 

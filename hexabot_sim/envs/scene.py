@@ -154,7 +154,7 @@ class EnvScene:
 
     def _ground(self, seed: int) -> Ground:
         rough = RoughPatch(self.roughness, seed, self.extent) if self.roughness else None
-        obstacles = ()
+        obstacles: tuple[Stairs, ...] = ()
         if self.stairs is not None:  # up along +x from 0.5 m ahead, the landing and the width beyond any episode
             rise, run, count = self.stairs
             reach = self.extent[1]
