@@ -193,7 +193,7 @@ CYCLE_CACHE_SIZE: int = 1 << 14
 
 def _cycle_problem(p: WalkParams, cmd: Command) -> str:
     """'' if every leg can follow the planned cycle, else why not (reach, joint range or joint speed)."""
-    key = (p.ROBOT, p.gait, p.duty, p.period, p.step_height, p.stand_height, p.max_joint_speed, cmd)
+    key = (p.ROBOT, p.gait, p.duty, p.period, p.step_height, p.stand_height, p.max_joint_speed, p.swing, cmd)
     problem = _CYCLE_PROBLEMS.get(key)
     if problem is None:
         if len(_CYCLE_PROBLEMS) >= CYCLE_CACHE_SIZE:

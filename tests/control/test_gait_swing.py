@@ -45,3 +45,18 @@ def test_swing_leaves_and_meets_the_stance_path_without_acceleration():
             assert near < 0.05 * peak, (leg, k, near, peak)
             checked += 1
     assert checked >= 30
+
+
+def test_the_quintic_swing_is_checked_with_its_own_peak_speed():
+    """The quintic's swing peaks at 1.875x its mean speed (the cubic's 1.5x): the feasibility check plans the cycle
+    with the walk's own profile, whichever was checked first (its answers are cached)."""
+    import pytest
+
+    from hexabot_sim import params
+    from hexabot_sim.errors import UsageError
+    from hexabot_sim.robots.hexabot.walk import HexabotParams
+
+    params.resolve(HexabotParams, {}, {"gait": "ripple", "vx": 0.2})
+    with pytest.raises(UsageError, match=r"the largest feasible in this direction is vx = 0\.16"):
+        params.resolve(HexabotParams, {}, {"gait": "ripple", "vx": 0.2, "swing": "quintic"})
+    params.resolve(HexabotParams, {}, {"gait": "ripple", "vx": 0.2})
