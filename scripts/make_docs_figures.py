@@ -103,17 +103,27 @@ def terrain_figures() -> None:
         (DOCS / f"terrain_slope_level_off{suffix}.png").write_bytes((off / f"{name}.png").read_bytes())
 
 
-def force_figures() -> None:
+FORCE_MODES: dict[str, tuple[str, ...]] = {  # the force figures' stance modes: their --set values
+    "off": ("load_sharing=off",),
+    "admittance": ("load_sharing=admittance",),
+    "pad": ("feet=pad", "swing=quintic"),
+}
+
+
+def force_figures(modes: tuple[str, ...] = tuple(FORCE_MODES), stairs: bool = True) -> None:
     """The feet's forces against the gait plan (issue 19): each gait at the issue's speed with stiff stance legs
-    (the default) and with the admittance (load_sharing=admittance), and the stairs."""
+    (the default), with the admittance (load_sharing=admittance) and with the foot pad and quintic swing, and the
+    stairs."""
     for gait, vx in (("tripod", "0.1"), ("ripple", "0.1"), ("wave", "0.05")):
-        for mode in ("off", "admittance"):
-            folder = run("hexabot-walk", "--set", f"gait={gait}", "--set", f"vx={vx}", "--set", "duration=8",
-                         "--set", f"load_sharing={mode}")  # fmt: skip
+        for mode in modes:
+            sets = [word for value in FORCE_MODES[mode] for word in ("--set", value)]
+            folder = run("hexabot-walk", "--set", f"gait={gait}", "--set", f"vx={vx}", "--set", "duration=8", *sets)
             (DOCS / f"forces_{gait}_{mode}.png").write_bytes((folder / "foot_forces.png").read_bytes())
-    stairs = run("hexabot-stairs", "--video")
-    (DOCS / "terrain_stairs.png").write_bytes((stairs / "terrain.png").read_bytes())
-    save_frame(stairs / "video.mp4", 270, DOCS / "terrain_stairs_frame.png")  # t = 9 s, on the second step
+    if not stairs:
+        return
+    folder = run("hexabot-stairs", "--video")
+    (DOCS / "terrain_stairs.png").write_bytes((folder / "terrain.png").read_bytes())
+    save_frame(folder / "video.mp4", 270, DOCS / "terrain_stairs_frame.png")  # t = 9 s, on the second step
 
 
 if __name__ == "__main__":

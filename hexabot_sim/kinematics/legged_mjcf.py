@@ -29,6 +29,17 @@ LINK_RADIUS: float = 0.01  # [m] tube radius of the axial inertia m r^2 / 2 (as 
 FOOT_SOLREF: tuple[float, float] = (0.006, 1.0)
 FOOT_SOLIMP: tuple[float, float, float] = (0.9, 0.97, 0.001)
 FOOT_FRICTION: float = 1.0  # rubber foot on a hard floor
+# The compliant foot pad (a walk's feet=pad, written into the scene: walking/scene.py; docs/hexabot.md, issue 19).
+# The rigid foot above sinks 5-70 um, so a few um of body motion at another foot's touchdown unload a stance foot
+# for a 2 ms step (the ripple and wave gaits' "bounces"). The pad: solref 4 ms with damping ratio 1.5 keeps that
+# normal stiffness (1 / (timeconst dampratio)^2) and shortens the friction's time constant to 4 ms (2x the step;
+# MuJoCo's friction only damps slip, b = 2 / (dmax timeconst), so the feet creep less); the impedance 0.4 -> 0.95
+# over 2 mm softens the first millimetre, so a loaded foot compresses ~0.8 mm; the margin (the pad's thickness)
+# puts that compression outside the sphere, so the loaded foot rests where the rigid one does. It needs the
+# quintic swing (swing=quintic): a cubic's foot skids over the ground while the pad is loaded before touchdown.
+FOOT_PAD_SOLREF: tuple[float, float] = (0.004, 1.5)
+FOOT_PAD_SOLIMP: tuple[float, float, float] = (0.4, 0.95, 0.002)
+FOOT_PAD_MARGIN: float = 0.0008  # [m]
 
 
 TRACK_EYE = np.array([-0.45, -0.75, 0.42])  # [m] chase camera, relative to the body (world-aligned, follows the CoM)

@@ -225,7 +225,7 @@ def switch_problem(p: Any, neutral: np.ndarray, settle: float) -> str:
     schedule = Schedule(rows, settle, p.period, p.step_height, p.stand_height)
     gaits = p.gaits()
     first = p.the_gait() if rows[0].gait == p.gait else gaits[rows[0].gait]  # as walking.scene.make_controller
-    planner = GaitPlanner(first, p.period, p.step_height, neutral, dt, start_time=settle)
+    planner = GaitPlanner(first, p.period, p.step_height, neutral, dt, start_time=settle, profile=p.swing)
     layout = p.ROBOT.layout
     rot, hips = layout.hip_rotations(), layout.hip_positions()
     while planner.time < p.duration - 1e-9:

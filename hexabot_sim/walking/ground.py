@@ -37,7 +37,7 @@ def neutral(p: WalkParams) -> np.ndarray:
 def _plan_cycle(p: WalkParams, cmd: Command, samples: int = 240) -> tuple[np.ndarray, float]:
     """Targets (n, 6, 3) in the hip frames over two steady gait cycles, and their time step."""
     dt = p.period / samples
-    planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), dt)
+    planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), dt, profile=p.swing)
     chunks = [planner.plan(cmd, planner.max_chunk)]
     while planner.time < 3 * p.period - 1e-9:
         chunks.append(planner.plan(cmd, planner.max_chunk)[1:])

@@ -11,6 +11,7 @@ import numpy as np
 from hexabot_sim.control.walker import WalkingController
 from hexabot_sim.result import Metric
 from hexabot_sim.terrain import Ground
+from hexabot_sim.walking import forces
 from hexabot_sim.walking.constants import FALL_TILT_DEG, LOADED_FRACTION, SETTLE_TIME
 from hexabot_sim.walking.ground import largest_climbable_kerb, walking_direction
 from hexabot_sim.walking.parameters import WalkParams
@@ -172,7 +173,9 @@ def walking_metrics(
     loaded = contacts.loaded(total_mass)
     slip_loaded = contacts.slip[window][loaded[window]]
     slip_distance = float((contacts.slip[window] * loaded[window]).sum() * dt)
-    touchdowns = int((np.diff(loaded[window].astype(int), axis=0) == 1).sum())
+    # Touchdowns: the stances' starts with the bounces bridged (forces.stances); counted as loaded rising edges,
+    # every bounce was a stance, and a walk whose feet bounced showed a fraction of its slip per stance.
+    touchdowns = sum(start > 0 for leg in loaded[window].T for start, _ in forces.stances(leg, dt, whole=False))
     # Energy: positive and negative joint work both cost (hobby servos do not recover energy).
     power = np.abs(contacts.torque * qvel[:, 6 : 6 + contacts.torque.shape[1]]).sum(axis=1)
     work = float(power[window].sum() * dt)
@@ -219,7 +222,9 @@ def walking_metrics(
             "95th percentile of the loaded feet's contact-point speed",
         ),
         "slip_per_stance": Metric(
-            slip_distance / touchdowns * 1000 if touchdowns else 0.0, "mm", "contact-point sliding distance per stance"
+            slip_distance / touchdowns * 1000 if touchdowns else 0.0,
+            "mm",
+            "contact-point sliding distance per stance (a bounce is not a stance)",
         ),
         "cost_of_transport": _null_why(
             Metric(

@@ -9,7 +9,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from hexabot_sim.control.gait import GAITS, Command, Gait, gaits_for
+from hexabot_sim.control.gait import GAITS, PROFILES, Command, Gait, gaits_for
 from hexabot_sim.kinematics import legged
 from hexabot_sim.params import allowed, check_run_cost, param
 from hexabot_sim.simulate import step_count
@@ -112,6 +112,14 @@ class WalkParams:
         "off", "", "stance legs yield to their touch sensors' force error, sharing the load (admittance), or hold "
         "their planned height (off)", choices=("admittance", "off"),
     )  # fmt: skip
+    feet: str = param(
+        "rigid", "", "the feet's contact: rigid, or a compliant 0.8 mm pad (no contact bounces; use with "
+        "swing=quintic)", choices=("rigid", "pad"),
+    )  # fmt: skip
+    swing: str = param(
+        "cubic", "", "the swing's horizontal arc: cubic Hermite, or quintic (zero acceleration at lift-off and "
+        "touchdown; ~20 % lower top speeds)", choices=PROFILES,
+    )  # fmt: skip
     schedule: tuple = param((), "", commands.SCHEDULE_DOC, table=(commands.SCHEDULE_ALLOWED, commands.read_schedule))
     waypoints: tuple = param(
         (), "", commands.WAYPOINTS_DOC, table=(commands.WAYPOINTS_ALLOWED, commands.read_waypoints)
@@ -185,7 +193,7 @@ CYCLE_CACHE_SIZE: int = 1 << 14
 
 def _cycle_problem(p: WalkParams, cmd: Command) -> str:
     """'' if every leg can follow the planned cycle, else why not (reach, joint range or joint speed)."""
-    key = (p.ROBOT, p.gait, p.duty, p.period, p.step_height, p.stand_height, p.max_joint_speed, cmd)
+    key = (p.ROBOT, p.gait, p.duty, p.period, p.step_height, p.stand_height, p.max_joint_speed, p.swing, cmd)
     problem = _CYCLE_PROBLEMS.get(key)
     if problem is None:
         if len(_CYCLE_PROBLEMS) >= CYCLE_CACHE_SIZE:

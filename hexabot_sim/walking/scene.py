@@ -15,6 +15,7 @@ from hexabot_sim.control.gait import GaitPlanner
 from hexabot_sim.control.resolved_rate import ResolvedRateGains
 from hexabot_sim.control.walker import GroundController, GroundSettings, WalkingController, WalkSettings
 from hexabot_sim.kinematics import legged
+from hexabot_sim.kinematics.legged_mjcf import FOOT_PAD_MARGIN, FOOT_PAD_SOLIMP, FOOT_PAD_SOLREF
 from hexabot_sim.terrain import Ground
 from hexabot_sim.walking import commands
 from hexabot_sim.walking.constants import (
@@ -66,6 +67,9 @@ def build_xml(p: WalkParams, ground: Ground | None = None) -> str:
     for leg, factor in zip(layout.legs, friction, strict=True):
         foot = models.find(root, "geom", f"{leg}_foot")
         foot.set("friction", models.fmt([p.friction * factor, 0.005, 0.0001]))
+        if p.feet == "pad":  # the compliant foot pad (legged_mjcf.FOOT_PAD_SOLREF explains)
+            pad = {"solref": FOOT_PAD_SOLREF, "solimp": FOOT_PAD_SOLIMP, "margin": FOOT_PAD_MARGIN}
+            foot.attrib.update({name: models.fmt(value) for name, value in pad.items()})
     key = models.find(root, "key", "home")
     key.set("qpos", models.fmt([*pose, *q0.ravel()]))
     key.set("ctrl", models.fmt([*q0.ravel(), *np.zeros(q0.size)]))
@@ -138,7 +142,9 @@ def make_controller(
     gait = p.the_gait()
     if p.schedule and commands.setpoints(p)[0].gait != p.gait:  # the walk starts in the first row's gait
         gait = p.gaits()[commands.setpoints(p)[0].gait]
-    planner = GaitPlanner(gait, p.period, p.step_height, neutral(p), p.timestep, start_time=SETTLE_TIME)
+    planner = GaitPlanner(
+        gait, p.period, p.step_height, neutral(p), p.timestep, start_time=SETTLE_TIME, profile=p.swing
+    )
     source = commands.source(p, SETTLE_TIME) if source is None else source
     settings = WalkSettings(
         p.command(), settle_time=SETTLE_TIME, ramp_time=p.period if source is None else 0.0,

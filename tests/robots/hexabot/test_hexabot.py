@@ -444,6 +444,7 @@ def test_cli_run_folder_and_metrics_recomputed_from_the_trajectory(tmp_path, cap
     # Slip: the foot's material-point velocity from the foot site's 6-D velocity (mj_objectVelocity).
     weight = model.body_subtreemass[model.body("torso").id] * 9.81
     slips, loads = [], []
+    foot_slip, foot_load = np.zeros((i1 + 1 - i0, 6)), np.zeros((i1 + 1 - i0, 6))  # per row and foot
     force, vel = np.zeros(6), np.zeros(6)
     for k in range(i0, i1 + 1):
         data.qpos[:], data.qvel[:], data.ctrl[:] = qpos[k], qvel[k], ctrl[min(k + 1, len(t) - 1)]
@@ -463,9 +464,18 @@ def test_cli_run_folder_and_metrics_recomputed_from_the_trajectory(tmp_path, cap
             v = vel[3:] + np.cross(vel[:3], contact.pos - data.site_xpos[site])
             slips.append(math.hypot(v[0], v[1]))
             loads.append(force[0])
+            foot_slip[k - i0, LEGS.index(name[:2])] = slips[-1]
+            foot_load[k - i0, LEGS.index(name[:2])] += force[0]
     slips, loads = np.array(slips), np.array(loads)
     loaded = loads > walking_constants.LOADED_FRACTION * weight / 6
     assert slips[loaded].mean() == pytest.approx(metrics["slip_mean"], rel=1e-6)
+    # Slip per stance: the loaded feet's sliding distance over the stances of the gait plan in the window (its
+    # touchdowns, from the legs' phases); a foot that bounces does not make more stances.
+    planned = GaitPlanner(GAITS["tripod"], period, 0.03, np.zeros((6, 3)), 0.002, start_time=settle)
+    stance = planned.in_stance(t[i0 : i1 + 1])
+    touchdowns = int((np.diff(stance.astype(int), axis=0) == 1).sum())
+    distance = (foot_slip * (foot_load > walking_constants.LOADED_FRACTION * weight / 6)).sum() * (t[1] - t[0])
+    assert metrics["slip_per_stance"] == pytest.approx(distance / touchdowns * 1000, rel=1 / touchdowns)
     assert metrics["fell"] is False and qpos[:, 2].min() > 0.05
     assert record["units"]["metrics"]["lateral_drift"] == "mm/m"
 
