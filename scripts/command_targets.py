@@ -11,8 +11,8 @@ Usage: python scripts/command_targets.py [--seeds N] [--quick]
               a period) across each switch, and the feet's bounces (foot_bounces' definition, walking.forces:
               a loaded foot unloading for under 60 ms) in the 2.5 s from each switch against 2.5 s of the
               steady gait after that                                                target dip <= 10 %
-              the same with load_sharing=admittance (issue 19), and on 1 cm rough ground (hexabot-rough,
-              sensed touchdown), seeds 0 and 1
+              the same with load_sharing=admittance and with feet=pad swing=quintic (issue 19), and on 1 cm
+              rough ground (hexabot-rough, sensed touchdown), seeds 0 and 1
 
 Prints one line per measurement; --quick runs the figure-eight on flat ground only.
 """
@@ -70,10 +70,12 @@ def eight(scenario: str, seed: int) -> None:
     )
 
 
-def switch(scenario: str = "hexabot-walk", seed: int = 0, load_sharing: str = "off") -> None:
+def switch(scenario: str = "hexabot-walk", seed: int = 0, **options: str) -> None:
+    """The tripod -> wave -> tripod change; `options`: walk parameters, e.g. load_sharing, feet, swing."""
     rows = [[0, 0.05, 0, 0, "tripod"], [5, 0.05, 0, 0, "wave"], [11, 0.05, 0, 0, "tripod"]]
-    r = hs.run(scenario, schedule=rows, duration=17.0, seed=seed, load_sharing=load_sharing)
-    print(f"switch {scenario} seed {seed} load_sharing {load_sharing}:")
+    r = hs.run(scenario, schedule=rows, duration=17.0, seed=seed, **options)
+    shown = " ".join(f"{k}={v}" for k, v in options.items()) or "defaults"
+    print(f"switch {scenario} seed {seed} {shown}:")
     raw = r.raw
     t = raw.columns["t"]
     loaded = raw.extras["contacts"].loaded(float(raw.model.body_subtreemass[raw.model.body("torso").id]))
@@ -103,6 +105,7 @@ def main(argv: list[str] | None = None) -> int:
     schedule()
     switch()
     switch(load_sharing="admittance")
+    switch(feet="pad", swing="quintic")  # issue 19's bounce-free option
     for seed in range(min(args.seeds, 2)):
         switch("hexabot-rough", seed)
     return 0
