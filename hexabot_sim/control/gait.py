@@ -324,7 +324,8 @@ class GaitPlanner:
         if scale is not None:  # the ramp's factor at the rows and at the times the segments ask for it
             s = np.ascontiguousarray(scale(times), dtype=float)
             queries = seg[:, : int(count.max()), K.QUERY : K.QUERY + 2]
-            factors = np.ascontiguousarray(np.broadcast_to(scale(queries), queries.shape), dtype=float)
+            factors = np.empty(queries.shape)  # (n_legs, segments, 2)
+            factors[...] = scale(queries)
         out = np.empty((n_steps + 1, self.n_legs, 3))
         command = np.array([cmd.vx, cmd.vy, cmd.yaw_rate], dtype=float)
         K.targets(command, times, s, scale is not None, clock, self.timing, self.neutral, seg, count,

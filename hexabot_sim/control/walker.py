@@ -146,7 +146,7 @@ class WalkingController:
         # Rolling state carried between chunks: last row's offset and offset at lift-off (n, 4), in stance (n,).
         self._rolling = (np.zeros((n, 4)), np.ones(n, dtype=bool))
         g = layout.geometry
-        self._foot_geo = np.array([g.l1, g.l2, g.l3, layout.foot_radius])  # plan_kernels.hip_targets' geo
+        self._foot_geo = np.array([g.l1, g.l2, g.l3, self.foot_radius])  # plan_kernels.hip_targets' geo
         self._no_dz = np.zeros(n)
         self._chunk = 0  # steps in the current chunk (0: plan one first)
         # Heading: desired yaw (integral of the commanded yaw rate) and the unwrapped measured yaw.
@@ -208,8 +208,10 @@ class WalkingController:
         # Body -> hip frame of each leg, R^T (p - hip), and the rolling feet's offsets.
         hip = np.empty_like(targets)  # (n + 1, legs, 3)
         offsets, was = self._rolling
-        self.plan_kernels.hip_targets(targets, self.rot, self.hips, self._pitch_dz(), stance, swing_s, self._foot_geo,
-                                      offsets, was, hip)  # fmt: skip
+        geo = self._foot_geo
+        geo[3] = self.foot_radius  # the attribute rules (0: plan as for a point foot)
+        self.plan_kernels.hip_targets(targets, self.rot, self.hips, self._pitch_dz(), stance, swing_s, geo, offsets,
+                                      was, hip)  # fmt: skip
         self._publish(hip.reshape(n + 1, -1), stance)
         self._chunk = n
         self._k = 0
