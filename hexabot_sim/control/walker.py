@@ -171,6 +171,11 @@ class WalkingController:
             return np.where(np.asarray(t) <= s.settle_time, 0.0, 1.0)
         return np.clip((np.asarray(t) - s.settle_time) / s.ramp_time, 0.0, 1.0)
 
+    def _ramping(self, t: float) -> bool:
+        """scale(t) < 1 (in floats): the chunk starting at t starts inside the ramp or while settling."""
+        s = self.settings
+        return t <= s.settle_time if s.ramp_time <= 0 else (t - s.settle_time) / s.ramp_time < 1.0
+
     def _replan(self, t: float) -> None:
         """Plans the next chunk of targets with the command in force now (and the heading correction).
 
@@ -198,7 +203,7 @@ class WalkingController:
             # The commanded heading advances by the yaw rate times the integral of the ramp over the chunk.
             self._yaw_des += base.yaw_rate * float(np.sum(0.5 * (ramp[1:] + ramp[:-1]))) * self.dt
         self.commands.append((t, cmd.vx, cmd.vy, cmd.yaw_rate))
-        ramped = self.scale(t) < 1.0  # the chunk starts inside the ramp (or while settling)
+        ramped = self._ramping(t)
         targets = self.planner.plan(cmd, n, self.scale if ramped else None)  # (n + 1, legs, 3) body frame
         times = self.planner.time - self.dt * np.arange(n, -1, -1)  # (n + 1,)
         stance, swing_s = self.planner.flags(times)  # (n + 1, legs) each
