@@ -34,8 +34,9 @@ class ActionSource:
         self._t0, self._from, self._to = 0.0, step_height, step_height
 
     def act(self, t: float, command: Command, step_height: float) -> None:
-        """The action taken at run time t [s]."""
-        self._from = float(self.heights(np.array([t]))[0][0])
+        """The action taken at run time t [s]: the step height ramps on from where it is at t."""
+        f = min(max((t - self._t0) / self.period, 0.0), 1.0)  # heights()' ramp at t, in floats (one number)
+        self._from = self._from + (self._to - self._from) * f
         self._t0, self._to, self.command = t, step_height, command
 
     def segment(self, t: float, pose: tuple[float, float, float]) -> Segment:
@@ -151,11 +152,11 @@ class LeggedCommandEnv(LeggedEnv):
         # Clipped to [-1, 1], mapped onto the ranges (in floats: four numbers cost less than numpy's calls).
         ranges = zip(a, self._ranges, strict=True)
         vx, vy, w, h = (lo + 0.5 * (min(max(x, -1.0), 1.0) + 1.0) * (hi - lo) for x, (lo, hi) in ranges)
-        controller, m, d = self.controller, self.model, self.data
+        controller, m, d, physics = self.controller, self.model, self.data, mujoco.mj_step
         self.source.act(d.time, Command(vx, vy, w), h)
         for _ in range(self.frame_skip):
             controller(m, d)
-            mujoco.mj_step(m, d)
+            physics(m, d)
         obs = self._observe()
         reward, terminated, info = self._reward(obs)
         info["twist"] = (vx, vy, w)
