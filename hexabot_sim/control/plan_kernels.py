@@ -184,8 +184,10 @@ def segments(times, clock, timing, seg, count):
         mode = in_stance(times[0], clock, timing, leg)
         first, t_state, j = 1, times[0], 0
         for end in range(1, n1 + 1):
-            if end < n1 and in_stance(times[end], clock, timing, leg) == mode:
-                continue
+            if end < n1:
+                t = times[end]
+                if _stance(t, phase(t, clock, timing, leg), clock, timing, leg) == mode:  # in_stance, inlined
+                    continue
             row = seg[leg, j]
             row[FIRST], row[END], row[STANCE], row[T_STATE] = first, end, mode, t_state
             if not mode:  # a swing: to its touchdown, over the swing time of its own gait
