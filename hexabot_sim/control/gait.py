@@ -169,9 +169,6 @@ class GaitPlanner:
         self.timing = np.full((n, NTIMING), -np.inf)
         self.timing[:, OFFSET] = self.gait.offsets
         self.timing[:, TOUCHDOWN] = self.start_time
-        self.offsets = self.timing[:, OFFSET]  # views of the columns
-        self._finish_lift, self._finish = self.timing[:, FINISH_LIFT], self.timing[:, FINISH]
-        self._no_lift_before, self._touchdown = self.timing[:, NO_LIFT], self.timing[:, TOUCHDOWN]
         # State of every foot target at the planner's time: position (n, 3), planar velocity (n, 2).
         self.time = 0.0
         self.pos = self.neutral.copy()
@@ -184,6 +181,11 @@ class GaitPlanner:
         # (scripts/bench.py's env line plans chunks of 50 steps).
         self.max_chunk = max(1, round(CHUNK_TIME / self.dt))
         self.switches: list[tuple[float, str]] = []  # (time, gait) of each switch
+
+    @property
+    def offsets(self) -> np.ndarray:
+        """The gait's phase offsets (n_legs,) [cycles] in force (a view of `timing`)."""
+        return self.timing[:, OFFSET]
 
     @property
     def swing_targets(self) -> list[np.ndarray | None]:
@@ -237,7 +239,7 @@ class GaitPlanner:
 
     def switch_swing(self, leg: int) -> tuple[float, float]:
         """(lift-off, touchdown) [s] of the leg's swing under way at the last switch (-inf, -inf: none)."""
-        return float(self._finish_lift[leg]), float(self._finish[leg])
+        return float(self.timing[leg, FINISH_LIFT]), float(self.timing[leg, FINISH])
 
     def switch(self, gait: Gait, min_down: int = 3, candidates: int = 48) -> None:
         """Walks with another gait (same period) from the planner's time on (the next chunk).
@@ -255,12 +257,12 @@ class GaitPlanner:
         # The planner's own clock (its phases and events agree on it), and no earlier than the gait clock's start.
         n, t = self.n_legs, max(self.time, self.start_time)
         stance = self.in_stance(np.array(t))
-        finish, lift = self._finish.copy(), self._finish_lift.copy()
+        finish, lift = self.timing[:, FINISH].copy(), self.timing[:, FINISH_LIFT].copy()
         for leg in np.flatnonzero(~stance).tolist():
             if not lift[leg] <= t < finish[leg]:  # a swing of the current gait
                 finish[leg] = self._next_touchdown(leg, t)
                 lift[leg] = finish[leg] - self.swing_time
-        landed = np.where(stance, self._touchdown, finish)  # (n,) each foot's latest (or coming) touchdown
+        landed = np.where(stance, self.timing[:, TOUCHDOWN], finish)  # (n,) each foot's latest (or coming) touchdown
         no_lift = np.full(n, max(float(finish.max()), t))  # the new gait lifts no foot before the last has landed
         offsets = np.array(gait.offsets)
         samples = t + self.period * np.arange(0, 2 * 96) / 96  # the next two periods
@@ -282,10 +284,10 @@ class GaitPlanner:
             if best is None or key < best[0]:
                 best = (key, start)
         self.gait = gait
-        self.offsets[:] = offsets
+        self.timing[:, OFFSET] = offsets
         self.stance_time, self.swing_time = gait.duty * self.period, (1 - gait.duty) * self.period
         self.start_time = best[1]  # type: ignore[index]
-        self._finish[:], self._finish_lift[:], self._no_lift_before[:] = finish, lift, no_lift
+        self.timing[:, FINISH], self.timing[:, FINISH_LIFT], self.timing[:, NO_LIFT] = finish, lift, no_lift
         self.switches.append((t, gait.name))
         self.clock_from = float(no_lift[0])  # [s] the old gait's swings have landed: the new gait's may begin
 
