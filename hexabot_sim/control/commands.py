@@ -191,12 +191,15 @@ def add_heights(targets, source, heights0, times, stance, swing_s, stand: bool =
     """Adds a source's change of step height (from heights0's) to the swings' lift h sin^2(pi s) of the targets
     (n + 1, legs, 3) at `times` (n + 1,), and with `stand` its change of stand height to every foot (a higher stand:
     the feet deeper below the hips); returns its stand heights (n + 1,) [m]."""
+    from hexabot_sim.control import plan_kernels  # numba: imported on first use (its kernels compiled by the walker)
+
     step, stand_heights = source.heights(times)
-    lift = np.where(stance, 0.0, np.sin(np.pi * swing_s) ** 2)  # (n + 1, legs)
-    targets[..., 2] += (step - heights0[0])[:, None] * lift
-    if stand:
-        targets[..., 2] -= (stand_heights - heights0[1])[:, None]
+    lower = np.asarray(stand_heights - heights0[1], dtype=float) if stand else _NO_CHANGE
+    plan_kernels.add_heights(targets, np.asarray(step - heights0[0], dtype=float), lower, stance, swing_s)
     return stand_heights
+
+
+_NO_CHANGE = np.zeros(0)
 
 
 class StanceLog:

@@ -10,20 +10,23 @@ path to second order while it is within a millimetre of the ground, where a comp
 (a cubic's foot moves over the ground there at a third of its mean swing speed); its peak speed is 1.875x the
 mean, the cubic's 1.5x, so the joint-speed limit refuses ~20 % lower commands.
 
-Targets are planned in chunks (numpy over all the legs and every step of the chunk); between chunks
-the command may change (heading hold), and every leg continues from where its target is, so the
-targets stay continuous in position and velocity.
+Targets are planned in chunks (compiled: control/plan_kernels.py holds the maths, this module the planner's
+state); between chunks the command may change (heading hold), and every leg continues from where its target
+is, so the targets stay continuous in position and velocity.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Callable
 
 import numpy as np
 
 CHUNK_TIME: float = 1.0  # [s] targets planned at once
+# Columns of GaitPlanner.timing (plan_kernels' `timing`): phase offset [cycles], the swing under way at the last
+# switch [lift-off, touchdown) [s], no lift-off before [s], latest touchdown [s].
+OFFSET, FINISH_LIFT, FINISH, NO_LIFT, TOUCHDOWN = range(5)
+NTIMING = 5
 
 
 @dataclasses.dataclass(frozen=True)
@@ -100,108 +103,40 @@ class Command:
         return Command(self.vx * factor, self.vy * factor, self.yaw_rate * factor)
 
 
-def stance_velocity(cmd: Command, p: np.ndarray) -> np.ndarray:
-    """Body-frame velocity (..., 2) of ground-fixed points p (..., >=2): -v - w x p."""
-    return np.stack([-cmd.vx + cmd.yaw_rate * p[..., 1], -cmd.vy - cmd.yaw_rate * p[..., 0]], axis=-1)
+def _kernels():
+    """control/plan_kernels.py, imported on first use and compiled with the walking kernels (importing numba takes
+    ~0.15 s, which `hexabot-sim list` should not pay: it imports this module for the gait tables)."""
+    if _KERNELS:
+        return _KERNELS[0]
+    from hexabot_sim.control import kernels, plan_kernels
+    from hexabot_sim.signals import signals_held
+
+    with signals_held():  # a Ctrl-C inside numba's compiler would break the kernels (see kernels.warm_up)
+        kernels.warm_up()
+    _KERNELS.append(plan_kernels)
+    return plan_kernels
+
+
+_KERNELS: list = []
 
 
 def stance_path(cmd: Command, start: np.ndarray, tau: np.ndarray) -> np.ndarray:
     """Body-frame positions (..., n, 2) of ground-fixed points that are at `start` (..., 2), tau [s] (n,) later.
 
-    p(tau) = R(-w tau) p0 - [[S, C], [-C, S]] v with S = sin(w tau) / w and C = (1 - cos(w tau)) / w: the
-    solution of dp/dtau = -v - w x p written without the centre of rotation (-vy / w, vx / w), which is
-    ill-conditioned for the tiny yaw rates heading hold can ask for (w = 1e-19 put it 1e18 m away).
-    S and C are evaluated as tau sinc(w tau) and (w tau^2 / 2) sinc^2(w tau / 2), with no division by w:
-    where w tau underflows to 0 (w = 5e-324) they are the straight-line tau and 0, not 0 and 0.
+    The closed form is plan_kernels.stance_point's: p(tau) = R(-w tau) p0 - [[S, C], [-C, S]] v with
+    S = sin(w tau) / w and C = (1 - cos(w tau)) / w, without a division by w.
     """
-    start = np.asarray(start, dtype=float)[..., None, :]  # (..., 1, 2)
-    vx, vy, w = cmd.vx, cmd.vy, cmd.yaw_rate
-    if w == 0.0:
-        return start - np.stack([vx * tau, vy * tau], axis=-1)
-    angle = w * tau
-    c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]  # (n, 1)
-    big_s = (tau * np.sinc(angle / np.pi))[:, None]  # numpy's sinc(x) = sin(pi x) / (pi x)
-    big_c = (0.5 * w * tau**2 * np.sinc(angle / (2 * np.pi)) ** 2)[:, None]
-    x0, y0 = start[..., :1], start[..., 1:]
-    x = c * x0 + s * y0 - (big_s * vx + big_c * vy)
-    y = -s * x0 + c * y0 + (big_c * vx - big_s * vy)
-    return np.concatenate([x, y], -1)
-
-
-def touchdown_point(cmd: Command, neutral: np.ndarray, stance_time: float) -> np.ndarray:
-    """Where a foot must land (..., 2) so that its stance is centred on `neutral` (..., 2)."""
-    return stance_path(cmd, neutral, np.array([-stance_time / 2]))[..., 0, :]
-
-
-def hermite(p0, v0, p1, v1, duration: float, s: np.ndarray) -> np.ndarray:
-    """Cubic Hermite (n, 2) from (p0, v0) to (p1, v1) over `duration` [s] at fractions s (n,).
-
-    h00 p0 + h10 T v0 + h01 p1 + h11 T v1 with h00 = 1 - h01, h01 = 3 s^2 - 2 s^3, h10 = s^3 - 2 s^2 + s,
-    h11 = s^3 - s^2 (written with few array operations: this runs for every swing of every chunk).
-    """
-    p0, v0, p1, v1 = (np.asarray(v, dtype=float) for v in (p0, v0, p1, v1))
-    s = s[:, None]
-    s2 = s * s
-    h11 = s2 * (s - 1.0)
-    h01 = s2 - 2.0 * h11  # 3 s^2 - 2 s^3
-    h10 = h11 - s2 + s  # s^3 - 2 s^2 + s
-    return p0 + h01 * (p1 - p0) + (duration * h10) * v0 + (duration * h11) * v1
-
-
-def quintic(u):
-    """Quintic Hermite basis at fractions u (floats or arrays): the weights of (p1 - p0, T v0, T v1, T^2 a0) in
-    the position, and their first and second derivatives in u; zero acceleration at u = 1."""
-    u2 = u * u
-    u3 = u2 * u
-    h = (u3 * (10 - 15 * u + 6 * u2), u - u3 * (6 - 8 * u + 3 * u2), -u3 * (4 - 7 * u + 3 * u2))
-    h = (*h, 0.5 * u2 - u3 * (1.5 - 1.5 * u + 0.5 * u2))
-    d = (30 * u2 * (1 - u) ** 2, 1 - u2 * (18 - 32 * u + 15 * u2), -u2 * (12 - 28 * u + 15 * u2))
-    d = (*d, u - u2 * (4.5 - 6 * u + 2.5 * u2))
-    dd = (60 * u - u2 * (180 - 120 * u), -36 * u + u2 * (96 - 60 * u), -24 * u + u2 * (84 - 60 * u))
-    dd = (*dd, 1 - 9 * u + u2 * (18 - 10 * u))
-    return h, d, dd
-
-
-def hermite5(p0, v0, a0, p1, v1, duration: float, s: np.ndarray) -> np.ndarray:
-    """Quintic Hermite (n, 2) from (p0, v0, a0) to (p1, v1, zero acceleration) over `duration` [s] at fractions
-    s (n,)."""
-    p0, v0, a0, p1, v1 = (np.asarray(v, dtype=float) for v in (p0, v0, a0, p1, v1))
-    (h01, h10, h11, h20), _, _ = quintic(s[:, None])
-    return p0 + h01 * (p1 - p0) + (duration * h10) * v0 + (duration * h11) * v1 + (duration**2 * h20) * a0
+    start = np.asarray(start, dtype=float)
+    tau = np.ascontiguousarray(tau, dtype=float).reshape(-1)
+    points = np.ascontiguousarray(start.reshape(-1, 2))
+    out = np.empty((points.shape[0], tau.shape[0], 2))
+    _kernels().stance_points(float(cmd.vx), float(cmd.vy), float(cmd.yaw_rate), points, tau, out)
+    return out.reshape(start.shape[:-1] + out.shape[1:])
 
 
 PROFILES: tuple[str, ...] = ("cubic", "quintic")  # the swing's horizontal arc (GaitPlanner.profile)
 
-
 Scale = Callable[[np.ndarray], np.ndarray]  # t [s] (array) -> fraction of the command in force
-
-
-class _Warp:
-    """Warped time tau(t) = integral of s dt over a chunk (trapezoids on its rows: exact for s linear between rows)."""
-
-    def __init__(self, times: np.ndarray, scale: Scale | None) -> None:
-        self.t0, self.dt = float(times[0]), float(times[1] - times[0]) if len(times) > 1 else 1.0
-        self._scale = scale
-        if scale is None:
-            self.rows = times - times[0]
-            self._s = None
-        else:
-            s = np.asarray(scale(times), dtype=float)
-            self.rows = np.concatenate([[0.0], np.cumsum(0.5 * (s[1:] + s[:-1]) * self.dt)])
-            self._s = s
-
-    def factor(self, t: float) -> float:
-        """s(t): the fraction of the command in force at t (any t, also beyond the chunk)."""
-        return 1.0 if self._scale is None else float(self._scale(np.asarray(t, dtype=float)))
-
-    def __call__(self, t: float) -> float:
-        """tau(t) for t inside the chunk, relative to its first row."""
-        if self._s is None:
-            return t - self.t0
-        k = min(max(int((t - self.t0) / self.dt), 0), len(self.rows) - 2)
-        f = t - (self.t0 + k * self.dt)
-        s_t = self._s[k] + (self._s[k + 1] - self._s[k]) * f / self.dt
-        return float(self.rows[k] + 0.5 * f * (self._s[k] + s_t))
 
 
 @dataclasses.dataclass
@@ -236,63 +171,87 @@ class GaitPlanner:
         self.n_legs = n = self.neutral.shape[0]
         if len(self.gait.offsets) != n:
             raise ValueError(f"the {self.gait.name} gait is for {len(self.gait.offsets)} legs; the robot has {n}")
-        self.offsets = np.array(self.gait.offsets)
         self.stance_time = self.gait.duty * self.period
         self.swing_time = (1 - self.gait.duty) * self.period
+        # The legs' clocks (plan_kernels' `timing`): the gait's phase offsets; after a gait switch (switch()), the
+        # previous gait's swings under way, [lift-off, touchdown) [s], and the time before which a leg does not lift
+        # under the new gait's clock (-inf: none); each leg's latest touchdown [s].
+        self.timing = np.full((n, NTIMING), -np.inf)
+        self.timing[:, OFFSET] = self.gait.offsets
+        self.timing[:, TOUCHDOWN] = self.start_time
         # State of every foot target at the planner's time: position (n, 3), planar velocity and acceleration
-        # (n, 2) (a stance's acceleration, which turning gives, is taken as zero: the swing starts from it).
+        # (n, 2) (a stance's acceleration, which turning gives, is taken as zero: a quintic swing starts from it).
         self.time = 0.0
         self.pos = self.neutral.copy()
         self.vel = np.zeros((n, 2))
         self.acc = np.zeros((n, 2))
-        self.swing_targets: list[np.ndarray | None] = [None] * n  # touchdown point of each swing under way
-        # Steps planned at once: planning costs ~0.4 ms a chunk plus ~4 us a step (numpy over the legs and
-        # the rows), and the command (heading hold) changes between chunks. With 1 s chunks the loop is ~1 us
-        # a step cheaper than with 0.5 s, and heading hold keeps an imperfect robot as straight (measured).
+        # The touchdown point (n, 2) of each swing under way, chosen at its lift-off, where `landing_set` is True.
+        self.landing = np.zeros((n, 2))
+        self.landing_set = np.zeros(n, dtype=bool)
+        # Steps planned at once. The command (heading hold) changes between chunks; with 1 s chunks heading hold
+        # keeps an imperfect robot as straight as with 0.5 s (measured); a chunk costs ~20 us plus ~1 us a step
+        # (scripts/bench.py's env line plans chunks of 50 steps).
         self.max_chunk = max(1, round(CHUNK_TIME / self.dt))
-        self._warp = _Warp(np.zeros(1), None)
-        # After a gait switch (switch()): the previous gait's swings under way, [lift-off, touchdown) [s], and the
-        # time before which a leg does not lift under the new gait's clock; -inf: none.
-        self._finish_lift = np.full(n, -np.inf)
-        self._finish = np.full(n, -np.inf)
-        self._no_lift_before = np.full(n, -np.inf)
-        self._touchdown = np.full(n, self.start_time)  # [s] each leg's latest touchdown
         self.switches: list[tuple[float, str]] = []  # (time, gait) of each switch
 
+    @property
+    def offsets(self) -> np.ndarray:
+        """The gait's phase offsets (n_legs,) [cycles] in force (a view of `timing`)."""
+        return self.timing[:, OFFSET]
+
+    @property
+    def swing_targets(self) -> list[np.ndarray | None]:
+        """The touchdown point (2,) of each leg's swing under way (the latest chosen), None where none was yet."""
+        return [self.landing[i].copy() if self.landing_set[i] else None for i in range(self.n_legs)]
+
+    def _clock(self) -> np.ndarray:
+        """plan_kernels' `clock`: the gait clock's start, period, duty, whether it switched, the step height, the
+        stance and swing times."""
+        return np.array([
+            self.start_time, self.period, self.gait.duty, 1.0 if self.switches else 0.0, self.step_height,
+            self.stance_time, self.swing_time,
+        ])  # fmt: skip
+
+    def _times(self, t: np.ndarray | float) -> tuple[np.ndarray, tuple[int, ...]]:
+        t = np.asarray(t, dtype=float)
+        return np.ascontiguousarray(t.reshape(-1)), (*t.shape, self.n_legs)
+
     def phase(self, t: np.ndarray | float) -> np.ndarray:
-        """Gait phase in [0, 1) of each leg (..., n_legs); stance while phase < duty. Before start_time: stance."""
-        cycles = (np.asarray(t, dtype=float) - self.start_time) / self.period
-        return np.mod(np.asarray(cycles)[..., None] + self.offsets, 1.0)
+        """Gait phase in [0, 1) of each leg (..., n_legs); stance while phase < duty."""
+        times, shape = self._times(t)
+        out = np.empty((times.size, self.n_legs))
+        _kernels().fractions(times, np.empty((0, self.n_legs), dtype=bool), self._clock(), self.timing, out)
+        return out.reshape(shape)
 
     def in_stance(self, t: np.ndarray | float) -> np.ndarray:
         """True where the plan has the foot on the ground (..., n_legs).
 
         Every foot is down before start_time, and a swing whose lift-off would have come before it is
-        skipped (that foot stays down until its next lift-off): no foot is snatched up mid-swing.
+        skipped (that foot stays down until its next lift-off): no foot is snatched up mid-swing. After a gait
+        switch, the previous gait's swings finish and the new gait's that would lift before they have landed are
+        skipped.
         """
-        t = np.asarray(t, dtype=float)
-        frac = self.phase(t)
-        lift_time = t[..., None] - (frac - self.gait.duty) * self.period
-        swing = (frac >= self.gait.duty) & (lift_time >= self.start_time - 1e-9)
-        if self.switches:  # the previous gait's swings finish; the new gait's that would lift before are skipped
-            swing &= lift_time >= self._no_lift_before - 1e-9
-            swing |= (t[..., None] >= self._finish_lift) & (t[..., None] < self._finish)
-        return ~swing
+        return self.flags(t, fractions=False)[0]
 
     def swing_fraction(self, t: np.ndarray, stance: np.ndarray) -> np.ndarray:
         """How far each swing has come (..., n_legs) in [0, 1) at times t (...,); 0 in stance."""
-        duty = self.gait.duty
-        s = np.where(stance, 0.0, (self.phase(t) - duty) / (1.0 - duty))
-        if self.switches:
-            t = np.asarray(t, dtype=float)[..., None]
-            old = (t >= self._finish_lift) & (t < self._finish)
-            with np.errstate(invalid="ignore"):  # legs without such a swing: -inf - -inf (not used)
-                s = np.where(old, (t - self._finish_lift) / np.where(old, self._finish - self._finish_lift, 1.0), s)
-        return s
+        times, shape = self._times(t)
+        out = np.empty((times.size, self.n_legs))
+        flags = np.ascontiguousarray(np.broadcast_to(stance, shape).reshape(times.size, self.n_legs), dtype=bool)
+        _kernels().fractions(times, flags, self._clock(), self.timing, out)
+        return out.reshape(shape)
+
+    def flags(self, t: np.ndarray | float, fractions: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """(in_stance(t), swing_fraction(t, in_stance(t))) (each (..., n_legs)) at once."""
+        times, shape = self._times(t)
+        stance = np.empty((times.size, self.n_legs), dtype=bool)
+        swing_s = np.empty((times.size if fractions else 0, self.n_legs))
+        _kernels().flags(times, self._clock(), self.timing, stance, swing_s)
+        return stance.reshape(shape), swing_s.reshape(shape) if fractions else swing_s
 
     def switch_swing(self, leg: int) -> tuple[float, float]:
         """(lift-off, touchdown) [s] of the leg's swing under way at the last switch (-inf, -inf: none)."""
-        return float(self._finish_lift[leg]), float(self._finish[leg])
+        return float(self.timing[leg, FINISH_LIFT]), float(self.timing[leg, FINISH])
 
     def switch(self, gait: Gait, min_down: int = 3, candidates: int = 48) -> None:
         """Walks with another gait (same period) from the planner's time on (the next chunk).
@@ -310,12 +269,12 @@ class GaitPlanner:
         # The planner's own clock (its phases and events agree on it), and no earlier than the gait clock's start.
         n, t = self.n_legs, max(self.time, self.start_time)
         stance = self.in_stance(np.array(t))
-        finish, lift = self._finish.copy(), self._finish_lift.copy()
+        finish, lift = self.timing[:, FINISH].copy(), self.timing[:, FINISH_LIFT].copy()
         for leg in np.flatnonzero(~stance).tolist():
             if not lift[leg] <= t < finish[leg]:  # a swing of the current gait
                 finish[leg] = self._next_touchdown(leg, t)
                 lift[leg] = finish[leg] - self.swing_time
-        landed = np.where(stance, self._touchdown, finish)  # (n,) each foot's latest (or coming) touchdown
+        landed = np.where(stance, self.timing[:, TOUCHDOWN], finish)  # (n,) each foot's latest (or coming) touchdown
         no_lift = np.full(n, max(float(finish.max()), t))  # the new gait lifts no foot before the last has landed
         offsets = np.array(gait.offsets)
         samples = t + self.period * np.arange(0, 2 * 96) / 96  # the next two periods
@@ -336,24 +295,29 @@ class GaitPlanner:
             key = (down < min(min_down, n), longest, -shortest)  # shortest longest stance; then no stutter step
             if best is None or key < best[0]:
                 best = (key, start)
-        self.gait, self.offsets = gait, offsets
+        self.gait = gait
+        self.timing[:, OFFSET] = offsets
         self.stance_time, self.swing_time = gait.duty * self.period, (1 - gait.duty) * self.period
         self.start_time = best[1]  # type: ignore[index]
-        self._finish, self._finish_lift, self._no_lift_before = finish, lift, no_lift
+        self.timing[:, FINISH], self.timing[:, FINISH_LIFT], self.timing[:, NO_LIFT] = finish, lift, no_lift
         self.switches.append((t, gait.name))
         self.clock_from = float(no_lift[0])  # [s] the old gait's swings have landed: the new gait's may begin
 
     def plan(self, cmd: Command, n_steps: int, scale: Scale | None = None) -> np.ndarray:
         """Targets (n_steps + 1, n_legs, 3) at time, time + dt, ..., time + n_steps dt; advances the planner n_steps dt.
 
-        Row 0 equals the last row of the previous chunk (continuity); n_steps <= max_chunk.
+        Row 0 equals the last row of the previous chunk (continuity); n_steps <= max_chunk. A foot in stance stays
+        fixed on the ground; a swing's landing point is chosen from the command at lift-off and kept for the whole
+        swing (re-aiming a foot late in its swing, when the command changes, would take a jolt), its landing velocity
+        follows the command (plan_kernels.targets).
 
         Args:
             cmd: Body twist of the chunk.
             n_steps: Steps to plan.
             scale: Fraction of `cmd` in force at time t (vectorised over t; default 1): a command that ramps
                 inside the chunk. The body twist s(t) cmd moves ground-fixed points along the same paths as
-                cmd does, in the warped time tau = integral of s dt, so stances are exact for any s(t).
+                cmd does, in the warped time tau = integral of s dt, so stances are exact for any s(t) linear
+                between the rows.
         """
         if not 1 <= n_steps <= self.max_chunk:
             raise ValueError(f"a chunk must have 1 to {self.max_chunk} steps; got {n_steps}")
@@ -362,136 +326,32 @@ class GaitPlanner:
             standing = self.plan(Command(), before)
             return np.concatenate([standing, self.plan(cmd, n_steps - before, scale)[1:]])
         times = self.time + self.dt * np.arange(n_steps + 1)  # (n+1,)
-        out = np.repeat(self.pos[None], n_steps + 1, axis=0)  # (n+1, n_legs, 3)
         if times[-1] <= self.start_time:  # standing still before the gait starts
             self.time = float(times[-1])
-            return out
-        self._warp = _Warp(times, scale)
-        new_vel, new_acc = np.zeros((self.n_legs, 2)), np.zeros((self.n_legs, 2))
-        stance_all = self.in_stance(times)  # (n+1, n_legs)
-        for leg in range(self.n_legs):
-            stance = stance_all[:, leg]
-            p0, v0, a0 = self.pos[leg, :2], self.vel[leg], self.acc[leg]
-            xy = np.empty((n_steps + 1, 2))
-            z = np.full(n_steps + 1, self.neutral[leg, 2])
-            z[0] = self.pos[leg, 2]
-            # Row 0 is the current state; rows after a mode change restart from the state at the event.
-            k = 1
-            xy[0] = p0
-            t_state, p_state, v_state, a_state = times[0], p0, v0, a0
-            mode = bool(stance[0])
-            # Segments of one mode: rows k .. end - 1, end being the next row whose mode differs (or n + 1).
-            for end in [*(np.flatnonzero(stance[1:] != stance[:-1]) + 1).tolist(), n_steps + 1]:
-                rows = slice(k, end)
-                if mode:  # stance: ground-fixed point, from the state at t_state
-                    xy[rows] = stance_path(cmd, p_state, self._warp.rows[rows] - self._warp(t_state))
-                else:  # swing: Hermite from the current state to the touchdown point
-                    touchdown_t = self._next_touchdown(leg, t_state)
-                    target, target_v = self._swing_target(cmd, leg, touchdown_t, lifting=t_state > times[0])
-                    duration = touchdown_t - t_state
-                    s = (times[rows] - t_state) / duration
-                    if self.profile == "cubic":
-                        xy[rows] = hermite(p_state, v_state, target, target_v, duration, s)
-                    else:
-                        xy[rows] = hermite5(p_state, v_state, a_state, target, target_v, duration, s)
-                    swing_time = self.swing_time
-                    if touchdown_t == self._finish[leg]:  # a swing of the gait before a switch
-                        swing_time = self._finish[leg] - self._finish_lift[leg]
-                    swing_s = (times[rows] - (touchdown_t - swing_time)) / swing_time
-                    z[rows] += self.step_height * np.sin(np.pi * np.clip(swing_s, 0.0, 1.0)) ** 2
-                state = (p_state, v_state, a_state)
-                if end <= n_steps:  # a phase event between end-1 and end: state at the event time
-                    t_event = self._event_time(leg, times[end - 1], times[end])
-                    p_state, v_state, a_state = self._state_at(cmd, leg, mode, t_state, state, t_event)
-                    t_state, mode = t_event, not mode
-                    if mode:
-                        self._touchdown[leg] = t_event
-                k = end
-            # State at the chunk's last time, for the next chunk.
-            state = (p_state, v_state, a_state)
-            p_last, new_vel[leg], new_acc[leg] = self._state_at(cmd, leg, mode, t_state, state, times[-1])
-            xy[-1] = p_last
-            out[:, leg, :2] = xy
-            out[:, leg, 2] = z
-        self.pos = out[-1].copy()
-        self.vel, self.acc = new_vel, new_acc
+            return np.repeat(self.pos[None], n_steps + 1, axis=0)
+        K = _kernels()
+        clock = self._clock()
+        rows = (self.n_legs, n_steps + 1, K.NSEG)
+        seg, count = np.empty(rows) if scale is None else np.zeros(rows), np.empty(self.n_legs, dtype=np.int64)
+        K.segments(times, clock, self.timing, seg, count)
+        s, factors = times, seg  # unused without a ramp
+        if scale is not None:  # the ramp's factor at the rows and at the times the segments ask for it
+            s = np.ascontiguousarray(scale(times), dtype=float)
+            queries = seg[:, : int(count.max()), K.QUERY : K.QUERY + 2]
+            factors = np.empty(queries.shape)  # (n_legs, segments, 2)
+            factors[...] = scale(queries)
+        out = np.empty((n_steps + 1, self.n_legs, 3))
+        command = np.array([cmd.vx, cmd.vy, cmd.yaw_rate], dtype=float)
+        K.targets(command, times, s, scale is not None, clock, self.timing, self.neutral, seg, count,
+                  factors, self.pos, self.vel, self.acc, self.profile == "quintic", self.landing, self.landing_set,
+                  out)  # fmt: skip
         self.time = float(times[-1])
         return out
-
-    def _swing_target(self, cmd: Command, leg: int, touchdown_t: float, lifting: bool) -> tuple[np.ndarray, np.ndarray]:
-        """Touchdown point of a swing and the stance velocity there.
-
-        Chosen from the command at lift-off and kept for the whole swing (re-aiming a foot late in its
-        swing, when the command changes, would take a jolt); the landing velocity follows the command.
-        The point is where the stance that follows is centred on the neutral point: half a stance of
-        warped time before it, s(t) being linear over the first half (s at its midpoint times T/2).
-        """
-        factor = self._warp.factor
-        if lifting or self.swing_targets[leg] is None:
-            half = factor(touchdown_t + 0.25 * self.stance_time) * self.stance_time
-            self.swing_targets[leg] = touchdown_point(cmd, self.neutral[leg, :2], half)
-        target = self.swing_targets[leg]
-        return target, stance_velocity(cmd.scaled(factor(touchdown_t)), target)
 
     def _next_touchdown(self, leg: int, t: float) -> float:
         """First time > t at which the leg's phase wraps to 0 (touchdown), or the touchdown of a swing of the
         gait before a switch."""
-        if self._finish_lift[leg] <= t < self._finish[leg]:
-            return float(self._finish[leg])
-        cycles = (t - self.start_time) / self.period + self.offsets[leg]
-        return self.start_time + (math.floor(cycles + 1e-12) + 1 - self.offsets[leg]) * self.period
-
-    def _event_time(self, leg: int, t0: float, t1: float) -> float:
-        """Time of the lift-off (phase = duty) or touchdown (phase = 0) between t0 and t1."""
-        if t0 < self._finish[leg] <= t1 + 1e-12:  # a swing of the gait before a switch lands
-            return float(self._finish[leg])
-        base = (t0 - self.start_time) / self.period + self.offsets[leg]
-        for boundary in (self.gait.duty, 1.0):
-            k = math.floor(base - boundary) + 1  # next crossing of phase == boundary (mod 1)
-            t_cross = self.start_time + (k + boundary - self.offsets[leg]) * self.period
-            if t0 < t_cross <= t1 + 1e-12:
-                return t_cross
-        return max(t0, self.start_time)  # the gait clock starting inside the step
-
-    def _state_at(self, cmd, leg, stance, t_state, state, t):
-        """(position, velocity, acceleration) of the leg's target at t, continuing the segment that started at
-        t_state in `state` (the same three; a stance's acceleration is taken as zero).
-
-        The same closed forms as `stance_path` and `hermite`, in plain floats (called a few times a chunk).
-        """
-        p_state, v_state, a_state = state
-        px, py = float(p_state[0]), float(p_state[1])
-        vx, vy, w = cmd.vx, cmd.vy, cmd.yaw_rate
-        if stance:
-            tau = self._warp(t) - self._warp(t_state)
-            if w == 0.0:
-                x, y = px - vx * tau, py - vy * tau
-            else:  # as stance_path, without the centre of rotation or a division by w
-                angle = w * tau
-                c, s = math.cos(angle), math.sin(angle)
-                half = 0.5 * angle
-                sinc_half = math.sin(half) / half if half else 1.0
-                big_s = tau * (s / angle if angle else 1.0)
-                big_c = 0.5 * w * tau * tau * sinc_half * sinc_half
-                x = c * px + s * py - (big_s * vx + big_c * vy)
-                y = -s * px + c * py + (big_c * vx - big_s * vy)
-            f = self._warp.factor(t)
-            return np.array([x, y]), np.array([f * (-vx + w * y), f * (-vy - w * x)]), np.zeros(2)
-        touchdown_t = self._next_touchdown(leg, t_state)
-        duration = touchdown_t - t_state
-        target, target_v = self._swing_target(cmd, leg, touchdown_t, lifting=False)
-        u = (t - t_state) / duration
-        if self.profile == "cubic":
-            h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
-            d00, d10, d01, d11 = 6 * u**2 - 6 * u, 3 * u**2 - 4 * u + 1, -6 * u**2 + 6 * u, 3 * u**2 - 2 * u
-            p = h00 * p_state + h10 * duration * v_state + h01 * target + h11 * duration * target_v
-            v = (d00 * p_state + d01 * target) / duration + d10 * v_state + d11 * target_v
-            return p, v, np.zeros(2)
-        h, d, dd = quintic(u)
-        terms = (target - p_state, duration * v_state, duration * target_v, duration**2 * a_state)
-        p = p_state + sum(k * x for k, x in zip(h, terms, strict=True))
-        v = sum(k * x for k, x in zip(d, terms, strict=True)) / duration
-        return p, v, sum(k * x for k, x in zip(dd, terms, strict=True)) / duration**2
+        return float(_kernels().next_touchdown(float(t), self._clock(), self.timing, leg))
 
 
 __all__ = ["GAITS", "GAITS_BY_LEGS", "Command", "Gait", "GaitPlanner", "gaits_for"]

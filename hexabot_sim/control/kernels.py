@@ -2,9 +2,9 @@
 
 A walking controller runs before every 2 ms physics step. In pure Python its per-step work (a
 resolved-rate step per leg, the touchdown state machine, the stance plane) cost as much as MuJoCo's
-step itself; compiled it costs a few microseconds (scripts/bench.py). Everything that happens once
-per chunk (the gait plan, rolling offsets, heading hold) stays in Python, in control/walker.py,
-which owns the state arrays these kernels update in place.
+step itself; compiled it costs a few microseconds (scripts/bench.py). What happens once per chunk is
+driven from Python (control/walker.py, which owns the state arrays these kernels update in place; heading
+hold), its heavy parts compiled too (plan_kernels.py: the gait plan, the rolling feet's offsets).
 
 No kernel knows how many legs there are: it comes from the shapes of the arrays (n legs: 3 n joint
 angles and targets, n rows of `legs`, `flags` and `geo`). numba compiles a kernel per argument types,
@@ -375,18 +375,20 @@ def warm_up() -> None:
 
 
 def _all_kernels() -> tuple:
-    """Every compiled kernel of the walking controllers: these and the legs' admittance (compliance_kernels.py)."""
-    from hexabot_sim.control import compliance_kernels
+    """Every compiled kernel of the walking controllers: these, the legs' admittance (compliance_kernels.py) and the
+    gait plan's (plan_kernels.py)."""
+    from hexabot_sim.control import compliance_kernels, plan_kernels
 
-    return _KERNELS + compliance_kernels.KERNELS
+    return _KERNELS + compliance_kernels.KERNELS + plan_kernels.KERNELS
 
 
 def _compile_all() -> None:
     """Calls each kernel the controllers call from Python once, on arrays of the types they pass (for six
     legs; the types, hence the compiled code, are the same for any leg count)."""
-    from hexabot_sim.control import compliance_kernels
+    from hexabot_sim.control import compliance_kernels, plan_kernels
 
     compliance_kernels.compile_all()
+    plan_kernels.compile_all()
     par = np.zeros(NPAR)
     par[UPDATE_EVERY], par[DT], par[SWING_TIME] = 1.0, 0.002, 1.0
     gains = resolved_rate.ResolvedRateGains(max_joint_acceleration=200.0)

@@ -127,6 +127,9 @@ class WalkingController:
         self.quat_adr = int(model.sensor_adr[model.sensor("imu_quat").id])
         lower, upper = legged.JOINT_LOWER, legged.JOINT_UPPER
         self.kernels = kernels()
+        from hexabot_sim.control import plan_kernels  # compiled with the kernels (kernels.warm_up)
+
+        self.plan_kernels = plan_kernels
         self.consts = np.array(step_constants(layout.geometry, gains, lower, upper))
         self.trims = np.array(settings.trims, dtype=float) if settings.trims else np.zeros(nq)
         if self.trims.shape != (nq,):
@@ -140,8 +143,11 @@ class WalkingController:
         # Targets of the current chunk in each hip frame, one flat row of 3 n floats per step, and stance flags.
         self._feed = np.zeros((0, nq))  # per step: the rate_steps feed (v_des + K x_des)
         self._k = 0
-        # Rolling state carried between chunks: last row's offset (n, 2), offset at lift-off (n, 2), in stance.
-        self._rolling = (np.zeros((n, 2)), np.zeros((n, 2)), np.ones(n, dtype=bool))
+        # Rolling state carried between chunks: last row's offset and offset at lift-off (n, 4), in stance (n,).
+        self._rolling = (np.zeros((n, 4)), np.ones(n, dtype=bool))
+        g = layout.geometry
+        self._foot_geo = np.array([g.l1, g.l2, g.l3, self.foot_radius])  # plan_kernels.hip_targets' geo
+        self._no_dz = np.zeros(n)
         self._chunk = 0  # steps in the current chunk (0: plan one first)
         # Heading: desired yaw (integral of the commanded yaw rate) and the unwrapped measured yaw.
         self._yaw_des = 0.0
@@ -165,6 +171,11 @@ class WalkingController:
             return np.where(np.asarray(t) <= s.settle_time, 0.0, 1.0)
         return np.clip((np.asarray(t) - s.settle_time) / s.ramp_time, 0.0, 1.0)
 
+    def _ramping(self, t: float) -> bool:
+        """scale(t) < 1 (in floats): the chunk starting at t starts inside the ramp or while settling."""
+        s = self.settings
+        return t <= s.settle_time if s.ramp_time <= 0 else (t - s.settle_time) / s.ramp_time < 1.0
+
     def _replan(self, t: float) -> None:
         """Plans the next chunk of targets with the command in force now (and the heading correction).
 
@@ -180,9 +191,8 @@ class WalkingController:
             n = min(n, max(1, round((segment.until - t) / self.dt))) if math.isfinite(segment.until) else n
             if segment.gait != self.planner.gait.name:  # swings under way finish; the new clock takes over
                 self.planner.switch(gaits_for(self.layout.n_legs)[segment.gait])
-        times = t + self.dt * np.arange(n + 1)
-        ramp = self.scale(times)
         if s.heading_hold:
+            ramp = self.scale(t + self.dt * np.arange(n + 1))
             # Unwrap the IMU yaw next to the last one, compare with the commanded heading.
             quat = self._sensordata[self.quat_adr : self.quat_adr + 4]
             yaw = yaw_of(quat)
@@ -193,16 +203,20 @@ class WalkingController:
             # The commanded heading advances by the yaw rate times the integral of the ramp over the chunk.
             self._yaw_des += base.yaw_rate * float(np.sum(0.5 * (ramp[1:] + ramp[:-1]))) * self.dt
         self.commands.append((t, cmd.vx, cmd.vy, cmd.yaw_rate))
-        targets = self.planner.plan(cmd, n, None if ramp[0] >= 1.0 else self.scale)  # (n + 1, legs, 3) body frame
+        ramped = self._ramping(t)
+        targets = self.planner.plan(cmd, n, self.scale if ramped else None)  # (n + 1, legs, 3) body frame
         times = self.planner.time - self.dt * np.arange(n, -1, -1)  # (n + 1,)
-        stance = self.planner.in_stance(times)  # (n + 1, legs)
-        swing_s = self.planner.swing_fraction(times, stance)
+        stance, swing_s = self.planner.flags(times)  # (n + 1, legs) each
         if self.source is not None:
             self._heights(targets, times, stance, swing_s)
             self.stance_log.append(times, stance)
-        # Body -> hip frame of each leg: R^T (p - hip).
-        hip = np.einsum("lji,klj->kli", self.rot, targets - self.hips)  # (n + 1, legs, 3)
-        hip += self._rolling_offsets(hip, stance, swing_s)
+        # Body -> hip frame of each leg, R^T (p - hip), and the rolling feet's offsets.
+        hip = np.empty_like(targets)  # (n + 1, legs, 3)
+        offsets, was = self._rolling
+        geo = self._foot_geo
+        geo[3] = self.foot_radius  # the attribute rules (0: plan as for a point foot)
+        self.plan_kernels.hip_targets(targets, self.rot, self.hips, self._pitch_dz(), stance, swing_s, geo, offsets,
+                                      was, hip)  # fmt: skip
         self._publish(hip.reshape(n + 1, -1), stance)
         self._chunk = n
         self._k = 0
@@ -228,51 +242,17 @@ class WalkingController:
         self._feed = rates.reshape(rows.shape[0] - 1, rows.shape[1])
         self._rows, self._stance = rows, stance
 
-    def _rolling_offsets(self, hip: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
-        """Offsets (n + 1, legs, 3) of the foot-centre targets for feet that roll without slipping.
+    def _pitch_dz(self) -> np.ndarray:
+        """How far (n_legs,) [m] below the planned height each foot stands, for the rolling feet's pitch (none here).
 
-        A sphere foot rolling without slip moves its centre over the ground by r dtheta along the leg's
-        radial direction e_r, theta = q2 + q3 its pitch. So in stance the centre target is shifted by
-        the sum of r dtheta e_r since touchdown (theta of the shifted target, iterated once since the
-        shift changes theta a little; summed step by step because e_r turns with the coxa); in the
-        swing, the shift reached at lift-off fades out over the first half. The state at the end of a
-        chunk carries over to the next one, whose row 0 repeats the previous chunk's last row.
+        The rolling feet (plan_kernels.hip_targets): a sphere foot rolling without slip moves its centre over
+        the ground by r dtheta along the leg's radial direction e_r, theta = q2 + q3 its pitch. So in stance the
+        centre target is shifted by the sum of r dtheta e_r since touchdown (theta of the shifted target, iterated
+        once since the shift changes theta a little; summed step by step because e_r turns with the coxa); in the
+        swing, the shift reached at lift-off fades out over the first half. The state at the end of a chunk carries
+        over to the next one, whose row 0 repeats the previous chunk's last row.
         """
-        n, n_legs = hip.shape[0] - 1, hip.shape[1]
-        offset0, lift0, was0 = self._rolling
-        # Which rows roll, and the latest touchdown / lift-off row at every row (0: none in this chunk).
-        st = stance[1:]  # (n, legs); row 0 is the previous chunk's last row
-        before = np.vstack([was0[None], st[:-1]])
-        rows = np.arange(1, n + 1)[:, None]  # (n, 1)
-        last_td = np.maximum.accumulate(np.where(st & ~before, rows, 0), axis=0)  # (n, legs)
-        last_lo = np.maximum.accumulate(np.where(~st & before, rows, 0), axis=0)
-        legs = np.arange(n_legs)
-        td_row = np.maximum(last_td - 1, 0) * n_legs + legs  # flat (row, leg)
-        lo_row = np.maximum(last_lo - 1, 0) * n_legs + legs
-        after_td, after_lo = (last_td > 0)[..., None], (last_lo > 0)[..., None]
-        # r e_r at the middle of every rolling step (0 elsewhere), and the swing's fade (smoothstep 1 -> 0).
-        radial = hip[..., :2] / np.hypot(hip[..., 0], hip[..., 1])[..., None]  # (n + 1, legs, 2)
-        e_mid = radial[1:] + radial[:-1]
-        e_mid *= (self.foot_radius / np.hypot(e_mid[..., 0], e_mid[..., 1]))[..., None]
-        r_e = np.where((st & before)[..., None], e_mid, 0.0)  # (n, legs, 2)
-        fade = 1.0 - np.clip(2.0 * swing_s[1:], 0.0, 1.0)
-        fade = (fade * fade * (3.0 - 2.0 * fade))[..., None]  # (n, legs, 1)
-        offset = np.repeat(lift0[None], n + 1, axis=0)  # (n + 1, legs, 2) [m] first guess
-        stance3 = st[..., None]
-        shifted = hip.copy()
-        for _ in range(2):
-            shifted[..., :2] = hip[..., :2] + offset
-            theta = legged.foot_pitch(self.layout, shifted)  # (n + 1, legs)
-            total = np.cumsum(r_e * np.diff(theta, axis=0)[..., None], axis=0)  # (n, legs, 2)
-            at_td = total.reshape(-1, 2)[td_row]  # total at each leg's latest touchdown
-            stance_offset = np.where(after_td, total - at_td, offset0 + total)
-            full = np.concatenate([offset0[None], np.where(stance3, stance_offset, 0.0)])  # (n + 1, legs, 2)
-            lift = np.where(after_lo, full.reshape(-1, 2)[lo_row], lift0)
-            offset = np.concatenate([offset0[None], np.where(stance3, stance_offset, lift * fade)])
-        self._rolling = (offset[-1], lift[-1], st[-1])
-        out = np.zeros_like(hip)
-        out[..., :2] = offset
-        return out
+        return self._no_dz
 
     def __call__(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
         """Sets data.ctrl for the step from data.time to data.time + dt."""
@@ -426,21 +406,18 @@ class GroundController(WalkingController):
         K = self.kernels
         self._rows = np.ascontiguousarray(rows)
         self._stance = np.ascontiguousarray(stance)
-        for i, landing in enumerate(self.planner.swing_targets):
-            if landing is not None:
-                self.legs[i, K.NEXT_LANDING : K.NEXT_LANDING + 2] = landing[:2]
+        chosen = self.planner.landing_set
+        self.legs[chosen, K.NEXT_LANDING : K.NEXT_LANDING + 2] = self.planner.landing[chosen]
 
     def _heights(self, targets: np.ndarray, times: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> None:
         """The source's step height on the swings' lift; its stand height drives the stance plane (which ramps it)."""
         stand = add_heights(targets, self.source, self._heights0, times, stance, swing_s, stand=False)
         self.par[self.kernels.STAND_HEIGHT] = float(stand[-1])
 
-    def _rolling_offsets(self, hip: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> np.ndarray:
-        """The rolling offsets of the feet at the heights they stand at now (not the planned flat-ground height)."""
+    def _pitch_dz(self) -> np.ndarray:
+        """The rolling feet's pitch at the heights the feet stand at now (not the planned flat-ground height)."""
         K = self.kernels
-        shifted = hip.copy()
-        shifted[..., 2] += self.legs[:, K.Z] - self.geo[:, K.NEUTRAL_Z]
-        return super()._rolling_offsets(shifted, stance, swing_s)
+        return self.legs[:, K.Z] - self.geo[:, K.NEUTRAL_Z]
 
     def _record(self, n: int) -> None:
         """Keeps the n swings that ended in the last kernel call.

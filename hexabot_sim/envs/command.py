@@ -37,15 +37,16 @@ class ActionSource:
         self._t0, self._from, self._to = 0.0, step_height, step_height
 
     def act(self, t: float, command: Command, step_height: float) -> None:
-        """The action taken at run time t [s]."""
-        self._from = float(self.heights(np.array([t]))[0][0])
+        """The action taken at run time t [s]: the step height ramps on from where it is at t."""
+        f = min(max((t - self._t0) / self.period, 0.0), 1.0)  # heights()' ramp at t, in floats (one number)
+        self._from = self._from + (self._to - self._from) * f
         self._t0, self._to, self.command = t, step_height, command
 
     def segment(self, t: float, pose: tuple[float, float, float]) -> Segment:
         return Segment(self.command, t + self.period, self.gait)
 
     def heights(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        f = np.clip((np.asarray(times, dtype=float) - self._t0) / self.period, 0.0, 1.0)
+        f = np.minimum(np.maximum((np.asarray(times, dtype=float) - self._t0) / self.period, 0.0), 1.0)
         return self._from + (self._to - self._from) * f, np.full(f.shape, self.stand_height)
 
 
@@ -122,7 +123,7 @@ class LeggedCommandEnv(LeggedEnv):
         )  # fmt: skip
         self.robot = robot
         self.action_space = spaces.Box(-1.0, 1.0, (4,), np.float32)
-        self._action = np.zeros(4)
+        self._ranges = [tuple(r) for r in self.ranges.tolist()]
         # Settle on the home stance up to the gait clock's start, in whole control periods.
         self._settle_steps = math.ceil(round(SETTLE_TIME / self.p_controller.timestep) / self.frame_skip) * frame_skip
         self.controller: WalkingController | None = None
@@ -161,15 +162,15 @@ class LeggedCommandEnv(LeggedEnv):
     def step(self, action) -> tuple[np.ndarray, float, bool, bool, dict]:
         if self.controller is None:
             raise RuntimeError("call reset() before step()")
-        a = self._check_action(action, 4)
-        np.clip(a, -1.0, 1.0, out=self._action)
-        lo, hi = self.ranges[:, 0], self.ranges[:, 1]
-        vx, vy, w, h = (lo + 0.5 * (self._action + 1.0) * (hi - lo)).tolist()
-        controller, m, d = self.controller, self.model, self.data
+        a = self._check_action(action, 4).tolist()
+        # Clipped to [-1, 1], mapped onto the ranges (in floats: four numbers cost less than numpy's calls).
+        ranges = zip(a, self._ranges, strict=True)
+        vx, vy, w, h = (lo + 0.5 * (min(max(x, -1.0), 1.0) + 1.0) * (hi - lo) for x, (lo, hi) in ranges)
+        controller, m, d, physics = self.controller, self.model, self.data, mujoco.mj_step
         self.source.act(d.time, Command(vx, vy, w), h)
         for _ in range(self.frame_skip):
             controller(m, d)
-            mujoco.mj_step(m, d)
+            physics(m, d)
         obs = self._observe()
         reward, terminated, info = self._reward(obs)
         info["twist"] = (vx, vy, w)

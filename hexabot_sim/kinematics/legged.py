@@ -191,16 +191,22 @@ def ik_hip_batch(layout: Layout, points: ArrayLike) -> tuple[np.ndarray, np.ndar
 
 
 def foot_pitch(layout: Layout, points: ArrayLike) -> np.ndarray:
-    """Pitch q2 + q3 [rad] of the tibia at foot centres (..., 3) in a hip frame, on ik_hip_batch's branch (q3 >= 0).
+    """Pitch q2 + q3 [rad] of the tibia at foot centres (..., 3) in a hip frame, on ik_hip_batch's branch (q3 >= 0)."""
+    p = np.asarray(points, dtype=float)
+    g = layout.geometry
+    return pitch_of(p[..., 0], p[..., 1], p[..., 2], g.l1, g.l2, g.l3)
+
+
+def pitch_of(x, y, z, l1: float, l2: float, l3: float):
+    """Pitch q2 + q3 [rad] of the tibia at a foot centre (x, y, z) in a hip frame [m] (arrays or floats; numba
+    compiles it for the rolling feet, control/plan_kernels.py), on ik_hip_batch's branch (q3 >= 0).
 
     Cheaper than the whole IK (no coxa angle, two arctangents): q2 = atan2(h, r) - atan2(l3 s3, l2 + l3 c3)
     and q3 - atan2(l3 s3, l2 + l3 c3) = atan2(l2 s3, l3 + l2 c3) (the argument of e^{i q3} conj(l2 + l3 e^{i q3})).
     Points out of reach get the pitch of the nearest reachable stretch (c3 clipped to [-1, 1]).
     """
-    p = np.asarray(points, dtype=float)
-    g = layout.geometry
-    r = np.hypot(p[..., 0], p[..., 1]) - g.l1
-    h = -p[..., 2]
-    c3 = np.clip((r * r + h * h - g.l2 * g.l2 - g.l3 * g.l3) / (2 * g.l2 * g.l3), -1.0, 1.0)
+    r = np.hypot(x, y) - l1
+    h = -z
+    c3 = np.minimum(np.maximum((r * r + h * h - l2 * l2 - l3 * l3) / (2 * l2 * l3), -1.0), 1.0)
     s3 = np.sqrt(1.0 - c3 * c3)
-    return np.arctan2(h, r) + np.arctan2(g.l2 * s3, g.l3 + g.l2 * c3)
+    return np.arctan2(h, r) + np.arctan2(l2 * s3, l3 + l2 * c3)

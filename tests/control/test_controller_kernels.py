@@ -98,7 +98,10 @@ def test_warm_up_compiles_what_a_walk_uses():
         p = params.resolve(scenario.params_type, scenario.defaults, {"duration": 3.0})
         model, data = at_home(hexabot_scene.build_xml(p))
         simulate(model, data, 50, controller=hexabot_scene.make_controller(p, model, data))
-    for kernel in (kernels.servo, kernels.targets, kernels.ground_step):
+    from hexabot_sim.control import plan_kernels as plan
+
+    for kernel in (kernels.servo, kernels.targets, kernels.ground_step, plan.segments, plan.targets, plan.flags,
+                   plan.hip_targets):  # fmt: skip
         assert len(kernel.signatures) == 1, (kernel, kernel.signatures)
 
 

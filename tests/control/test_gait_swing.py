@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from hexabot_sim.control.gait import GAITS, Command, GaitPlanner, quintic
+from hexabot_sim.control.gait import GAITS, Command, GaitPlanner
+from hexabot_sim.control.plan_kernels import quintic
 from hexabot_sim.robots.hexabot.model import DEFAULT_LAYOUT
 
 
