@@ -39,19 +39,27 @@ def register(gymnasium) -> None:  # no annotations needing __future__: this file
 
 
 class _Loader:
-    """gymnasium's own loader, which registers our ids once it has executed gymnasium (every other attribute is the
-    original loader's, so resources and the like are found as before)."""
+    """gymnasium's own loader, which registers our ids once it has executed gymnasium. A wrapper for the import
+    only: exec_module gives the module and its spec back their own loader first, so nothing afterwards (resources,
+    copy, pickle, isinstance) sees this one; until then every other attribute is the original loader's."""
 
     def __init__(self, loader) -> None:
         self._loader = loader
 
     def __getattr__(self, name: str):
+        if name == "_loader":  # not set (an instance made without __init__): no endless recursion
+            raise AttributeError(name)
         return getattr(self._loader, name)
 
     def create_module(self, spec):
         return self._loader.create_module(spec)
 
     def exec_module(self, module) -> None:
+        if getattr(module, "__loader__", None) is self:
+            module.__loader__ = self._loader
+        spec = getattr(module, "__spec__", None)
+        if spec is not None and spec.loader is self:
+            spec.loader = self._loader
         self._loader.exec_module(module)
         try:
             register(module)

@@ -101,3 +101,24 @@ def test_ids_py_imports_no_more_than_os_and_sys():
     )  # fmt: skip
     load = f"exec(compile(open({ids.__file__!r}).read(), 'ids.py', 'exec'), {{'__name__': 'x'}})"
     assert _python(code.format(load), "-S") == _python(code.format("import os, sys"), "-S")
+
+
+def test_gymnasium_keeps_its_own_loader_once_imported():
+    """The registering loader is a wrapper for the import only: gymnasium's module and spec carry its own loader
+    afterwards, so copying, pickling and isinstance checks of them behave as without the hook (the wrapper's
+    __getattr__ made copy.deepcopy(gymnasium.__spec__) recurse without end)."""
+    code = (
+        "import copy, importlib.machinery, importlib.util, pickle, sys\n"
+        f"spec = importlib.util.spec_from_file_location('ids_copy', {ids.__file__!r})\n"
+        "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m); m.install_import_hook()\n"
+        "import gymnasium\n"
+        "loader = gymnasium.__loader__\n"
+        "print(isinstance(loader, importlib.machinery.SourceFileLoader), gymnasium.__spec__.loader is loader)\n"
+        "print(type(copy.deepcopy(gymnasium.__spec__).loader).__name__, type(copy.copy(loader)).__name__)\n"
+        "print(type(pickle.loads(pickle.dumps(loader))).__name__)\n"
+    )
+    assert _python(code, **{ids.OPT_OUT: "0"}) == [
+        "True True",
+        "SourceFileLoader SourceFileLoader",
+        "SourceFileLoader",
+    ]
