@@ -7,8 +7,9 @@ choosing MuJoCo's OpenGL backend; it imports nothing more than the interpreter a
 `install_import_hook`: when a program first imports gymnasium, the hook registers our ids right after gymnasium's
 own, as strings (entry points Gymnasium imports on `make`). So after `pip install "hexabot-sim[rl]"`,
 `gymnasium.make("hexabot_sim/HexabotJoints-v0")` works without importing hexabot_sim first, and a program that
-never imports gymnasium pays nothing but this file's load. HEXABOT_SIM_NO_AUTOREGISTER=1 turns the hook off (the
-"hexabot_sim.envs:" prefix and `import hexabot_sim.envs` register the ids in any case).
+never imports gymnasium pays nothing but this file's load. HEXABOT_SIM_NO_AUTOREGISTER=1 (any value but 0, false,
+no, off or empty) turns the hook off (the "hexabot_sim.envs:" prefix and `import hexabot_sim.envs` register the
+ids in any case).
 """
 
 import os
@@ -25,6 +26,7 @@ ENVS: dict[str, tuple[str, str | None, dict, int]] = {
     "HexabotCommand-v0": ("hexabot_sim.envs.command:LeggedCommandEnv", None, {"robot": "hexabot"}, 200),
 }
 OPT_OUT: str = "HEXABOT_SIM_NO_AUTOREGISTER"
+_OPT_OUT_OFF = ("", "0", "false", "no", "off")  # values that leave the hook on (any other turns it off)
 
 
 def register(gymnasium) -> None:  # no annotations needing __future__: this file loads at interpreter start
@@ -94,7 +96,7 @@ def _remove() -> None:
 
 def install_import_hook() -> None:
     """Registers the ids with gymnasium now if it is imported, else when it first is (see the module's docstring)."""
-    if os.environ.get(OPT_OUT, "") not in ("", "0"):
+    if os.environ.get(OPT_OUT, "").strip().lower() not in _OPT_OUT_OFF:
         return
     gymnasium = sys.modules.get("gymnasium")
     if gymnasium is not None:

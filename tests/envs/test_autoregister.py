@@ -122,3 +122,14 @@ def test_gymnasium_keeps_its_own_loader_once_imported():
         "SourceFileLoader SourceFileLoader",
         "SourceFileLoader",
     ]
+
+
+@pytest.mark.parametrize(("value", "on"), [("", True), ("0", True), ("false", True), ("No", True), (" off ", True),
+                                           ("1", False), ("true", False), ("yes", False)])  # fmt: skip
+def test_the_opt_out_reads_its_value_as_a_switch(value, on, monkeypatch):
+    """HEXABOT_SIM_NO_AUTOREGISTER=false (or no, off, 0, empty) leaves the hook on; any other value turns it off."""
+    monkeypatch.setattr(sys, "meta_path", list(sys.meta_path))
+    monkeypatch.delitem(sys.modules, "gymnasium", raising=False)  # install_import_hook then installs the finder
+    monkeypatch.setenv(ids.OPT_OUT, value)
+    ids.install_import_hook()
+    assert any(getattr(f, "hexabot_sim_autoregister", False) for f in sys.meta_path) == on
