@@ -74,7 +74,7 @@ def _rows(name: str, raw: Any, columns: tuple[str, ...], required: int) -> list[
         lines = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip()[:1] not in ("", "#")]
         if not lines:
             raise UsageError(f"{name} file {shown} is empty; it needs a header row ({allowed}) and rows")
-        header = [h.strip().lower() for h in next(csv.reader([lines[0][1]], skipinitialspace=True))]
+        header = [h.strip().lower() for h in _cells(name, shown, *lines[0])]
         unknown = [h for h in header if h not in columns]
         if unknown or len(set(header)) != len(header) or not set(columns[:required]) <= set(header):
             problem = f"unknown column {unknown[0]!r}" if unknown else "a column missing or repeated"
@@ -83,7 +83,7 @@ def _rows(name: str, raw: Any, columns: tuple[str, ...], required: int) -> list[
             raise UsageError(f"{name} file {shown} has {len(lines) - 1} rows; the limit is {limit}")
         out = []
         for number, line in lines[1:]:
-            cells = [c.strip() for c in next(csv.reader([line], skipinitialspace=True))]  # '0, "0.08"' too
+            cells = [c.strip() for c in _cells(name, shown, number, line)]
             if len(cells) != len(header):
                 raise UsageError(
                     f"{name} file {shown}, line {number}: {len(cells)} values for the {len(header)} columns"
@@ -110,6 +110,14 @@ def _rows(name: str, raw: Any, columns: tuple[str, ...], required: int) -> list[
             )
         out.append((where, [*row, *[None] * (len(columns) - len(row))]))
     return out
+
+
+def _cells(name: str, shown: str, number: int, line: str) -> list[str]:
+    """The cells of one line of a table file ('0, "0.08"' too), or a UsageError naming the line."""
+    try:
+        return next(csv.reader([line], skipinitialspace=True))
+    except csv.Error as e:  # e.g. a cell above csv's field size limit (128 KiB)
+        raise UsageError(f"{name} file {shown}, line {number}: {e}") from None
 
 
 def _number(where: str, column: str, value: Any, low: float, high: float, unit: str) -> float:

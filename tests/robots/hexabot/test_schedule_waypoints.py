@@ -49,7 +49,9 @@ def test_unreadable_and_huge_tables_are_refused(tmp_path, capsys):
     huge.write_text("t,vx,vy,yaw_rate\n" + "0,0,0,0\n" * (MAX_TABLE_BYTES // 8 + 1))
     many = tmp_path / "many.csv"
     many.write_text("t,vx,vy,yaw_rate\n" + "".join(f"{i},0.05,0,0\n" for i in range(1001)))
-    for value, words in ((huge, "is larger than 1024 KiB"), (tmp_path, "is a directory"),
+    wide = tmp_path / "wide.csv"
+    wide.write_text("t,vx,vy,yaw_rate\n0,0,0,0\n1," + "1" * 200_000 + ",0,0\n")  # a cell above csv's field limit
+    for value, words in ((huge, "is larger than 1024 KiB"), (tmp_path, "is a directory"), (wide, "line 3: "),
                          (tmp_path / "none.csv", "not found"), (many, "has 1001 rows; the limit is 1000")):  # fmt: skip
         code, _, err = cli(capsys, "run", "hexabot-walk", "--set", f"schedule={value}", "--out", str(tmp_path / "o"))
         assert code == 2 and words in err and len(err.strip().splitlines()) == 1
