@@ -159,7 +159,8 @@ def read_waypoints(name: str, raw: Any) -> tuple:
     1 mm, no heading) is the start itself and left out."""
     out = []
     previous = (0.0, 0.0)
-    for k, (where, (x, y, heading)) in enumerate(_rows(name, raw, WAYPOINT_COLUMNS, WAYPOINT_REQUIRED)):
+    rows = _rows(name, raw, WAYPOINT_COLUMNS, WAYPOINT_REQUIRED)
+    for k, (where, (x, y, heading)) in enumerate(rows):
         if x is None or y is None:
             raise UsageError(f"{where}: x and y must both be given")
         px = _number(where, "x", x, -MAX_DISTANCE, MAX_DISTANCE, "m")
@@ -171,6 +172,8 @@ def read_waypoints(name: str, raw: Any) -> tuple:
             raise UsageError(f"{where}: ({px:g}, {py:g}) is within 1 mm of the point before it (or the start)")
         previous = (px, py)
         out.append((px, py, h))
+    if rows and not out:  # only the start: not a walk without waypoints (the fixed command) in disguise
+        raise UsageError(f"{rows[0][0]}: the start itself is the only waypoint; the course needs a point away from it")
     return tuple(out)
 
 

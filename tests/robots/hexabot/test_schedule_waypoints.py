@@ -66,6 +66,8 @@ def test_bad_waypoints_are_refused(tmp_path, capsys):
         "x,y\n0.3,0\n0.3,0\n0,0\n": "line 3: (0.3, 0) is within 1 mm",
         "x,y\n0.4,0\n5,0\n": "the course is 5 m long",
         "x,y\n5,0\n": "the course is 5 m long; at path_speed 0.1 m/s the walk needs about",
+        "x,y\n0,0\n": "line 2: the start itself is the only waypoint",  # not a walk without waypoints
+        "# a course\nx, y\n0, 0.0005\n": "line 3: the start itself is the only waypoint; the course needs a point",
     }
     for text, words in cases.items():
         path = _write(tmp_path / "w.csv", text)
