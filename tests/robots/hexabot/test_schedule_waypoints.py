@@ -249,3 +249,17 @@ def test_bounces_and_the_speed_dip_are_counted_as_defined():
     v = np.where((t >= 0.8) & (t < 1.3), 0.05, 0.1)
     assert course.speed_dip(t, v, 0.1, 0.5, 0.0, 2.0) == pytest.approx(0.5)
     assert course.speed_dip(t, v, 0.1, 0.5, 0.0, 0.7) == pytest.approx(0.0)
+
+
+def test_vx_vy_and_yaw_rate_that_a_schedule_or_waypoints_replace_are_not_checked():
+    """With a schedule or waypoints the walk's own twist is never commanded (standing before the first row, the
+    follower's after), so a wave walk is not refused for the default vx = 0.1 m/s its gait cannot deliver; the
+    rows, the follower and stepping in place are still checked."""
+    rows = [[0, 0.05, 0, 0]]
+    assert walk_params(gait="wave", schedule=rows, duration=6).schedule[0][1] == 0.05
+    course = walk_params(gait="wave", waypoints=[[0.3, 0]], path_speed=0.04, path_yaw_rate=0.2, duration=30)
+    assert course.waypoints == ((0.3, 0.0, None),)
+    with pytest.raises(ValueError, match=r"^schedule row 1 \(t = 0 s\): the legs cannot deliver"):
+        walk_params(gait="wave", schedule=[[0, 0.1, 0, 0]], duration=6)
+    with pytest.raises(ValueError, match="even stepping in place is infeasible"):
+        walk_params(gait="wave", schedule=rows, period=0.2, duration=6)
