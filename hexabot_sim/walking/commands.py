@@ -71,13 +71,25 @@ def _rows(name: str, raw: Any, columns: tuple[str, ...], required: int) -> list[
         except UnicodeDecodeError:
             raise UsageError(f"{name} file {shown} is not UTF-8 text") from None
         # Blank lines and '#' comment lines are skipped (numpy.loadtxt's convention); line numbers are the file's.
-        lines = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip()[:1] not in ("", "#")]
+        numbered = list(enumerate(text.splitlines(), start=1))
+        lines = [(i, line) for i, line in numbered if line.strip()[:1] not in ("", "#")]
         if not lines:
-            raise UsageError(f"{name} file {shown} is empty; it needs a header row ({allowed}) and rows")
+            what = "has only blank and '#' comment lines" if text.strip() else "is empty"
+            raise UsageError(f"{name} file {shown} {what}; it needs a header row ({allowed}) and rows")
         header = [h.strip().lower() for h in _cells(name, shown, *lines[0])]
-        unknown = [h for h in header if h not in columns]
-        if unknown or len(set(header)) != len(header) or not set(columns[:required]) <= set(header):
-            problem = f"unknown column {unknown[0]!r}" if unknown else "a column missing or repeated"
+        problem = _header_problem(header, columns, required)
+        if problem:
+            # The last comment before it, if it is the header: numpy.savetxt(header=...) writes '# ' before it.
+            comment = next((c for c in reversed(numbered[: lines[0][0] - 1]) if c[1].strip()), None)
+            if comment is not None:
+                cells = [h.strip().lower() for h in _cells(name, shown, *comment)]
+                if cells and cells[0].startswith("#"):
+                    cells[0] = cells[0].lstrip("#").strip()
+                if not _header_problem(cells, columns, required):
+                    raise UsageError(
+                        f"{name} file {shown}: line {comment[0]} is the header as a '#' comment (numpy.savetxt "
+                        "writes it so); remove the '#'"
+                    )
             raise UsageError(f"{name} file {shown}: the header {lines[0][1][:60]!r} has {problem}; it needs {allowed}")
         if len(lines) - 1 > limit:
             raise UsageError(f"{name} file {shown} has {len(lines) - 1} rows; the limit is {limit}")
@@ -110,6 +122,14 @@ def _rows(name: str, raw: Any, columns: tuple[str, ...], required: int) -> list[
             )
         out.append((where, [*row, *[None] * (len(columns) - len(row))]))
     return out
+
+
+def _header_problem(header: list[str], columns: tuple[str, ...], required: int) -> str:
+    """'' if these (lower-case) names are a table's header, else what is wrong with them."""
+    unknown = [h for h in header if h not in columns]
+    if unknown or len(set(header)) != len(header) or not set(columns[:required]) <= set(header):
+        return f"unknown column {unknown[0]!r}" if unknown else "a column missing or repeated"
+    return ""
 
 
 def _cells(name: str, shown: str, number: int, line: str) -> list[str]:

@@ -32,6 +32,9 @@ BAD_SCHEDULES = {
         "schedule: at t = 11.9 s (after the switch to the tripod gait at 11 s) foot lr would leave its reachable"
     ),
     "t,vx,vy,yaw_rate\n0,0.1,0\n": "line 2: 3 values for the 4 columns",
+    # numpy.savetxt(..., header=...) writes '# ' before the header: not "the header '0,0.05,0,0' has unknown column"
+    "# t,vx,vy,yaw_rate\n0,0.05,0,0\n": "line 1 is the header as a '#' comment (numpy.savetxt writes it so); remove",
+    "# t,vx,vy,yaw_rate\n# 0,0.05,0,0\n": "has only blank and '#' comment lines; it needs a header row",  # not empty
 }
 
 
