@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -71,7 +72,8 @@ def _rows(name: str, raw: Any, columns: tuple[str, ...], required: int) -> list[
         except UnicodeDecodeError:
             raise UsageError(f"{name} file {shown} is not UTF-8 text") from None
         # Blank lines and '#' comment lines are skipped (numpy.loadtxt's convention); line numbers are the file's.
-        numbered = list(enumerate(text.splitlines(), start=1))
+        # Lines end at \n, \r\n or \r, as in an editor (str.splitlines also breaks at \f, \v, U+2028 ...).
+        numbered = list(enumerate(re.split(r"\r\n|\r|\n", text), start=1))
         lines = [(i, line) for i, line in numbered if line.strip()[:1] not in ("", "#")]
         if not lines:
             what = "has only blank and '#' comment lines" if text.strip() else "is empty"

@@ -35,6 +35,8 @@ BAD_SCHEDULES = {
     # numpy.savetxt(..., header=...) writes '# ' before the header: not "the header '0,0.05,0,0' has unknown column"
     "# t,vx,vy,yaw_rate\n0,0.05,0,0\n": "line 1 is the header as a '#' comment (numpy.savetxt writes it so); remove",
     "# t,vx,vy,yaw_rate\n# 0,0.05,0,0\n": "has only blank and '#' comment lines; it needs a header row",  # not empty
+    # Lines end at \n, \r\n or \r only (str.splitlines also broke at \f, \v, U+2028 ...: a wrong line number).
+    "t,vx,vy,yaw_rate\r\n0,0.05,0,0\u2028\r\n1\f,nan,0,0\r\n": "line 3: vx must be a number",
 }
 
 
