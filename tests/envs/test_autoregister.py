@@ -2,8 +2,10 @@
 
 import importlib.metadata
 import os
+import shutil
 import subprocess
 import sys
+import sysconfig
 from pathlib import Path
 
 import pytest
@@ -133,3 +135,35 @@ def test_the_opt_out_reads_its_value_as_a_switch(value, on, monkeypatch):
     monkeypatch.setenv(ids.OPT_OUT, value)
     ids.install_import_hook()
     assert any(getattr(f, "hexabot_sim_autoregister", False) for f in sys.meta_path) == on
+
+
+def _through_the_pth(tmp_path: Path, first: Path, code: str) -> subprocess.CompletedProcess:
+    """A fresh interpreter without site (-S) that processes this tree's .pth as site does (site.addsitedir), with
+    `first` at the front of sys.path, then runs `code` with the interpreter's own packages on sys.path."""
+    site_dir = tmp_path / "site"
+    site_dir.mkdir(exist_ok=True)
+    shutil.copy(Path(ids.__file__).with_name(PTH), site_dir / PTH)
+    purelib = sysconfig.get_paths()["purelib"]
+    setup = f"import site, sys; sys.path.insert(0, {str(first)!r}); site.addsitedir({str(site_dir)!r}); "
+    setup += f"sys.path.append({purelib!r})\n"
+    return subprocess.run(
+        [sys.executable, "-S", "-c", setup + code], capture_output=True, text=True, timeout=120,
+        env={**os.environ, ids.OPT_OUT: "0"}, cwd=tmp_path,
+    )  # fmt: skip
+
+
+def test_the_pth_installs_the_hook_from_the_first_ids_py_on_sys_path(tmp_path):
+    out = _through_the_pth(tmp_path, Path(ids.__file__).parents[2], SHOW)
+    assert out.returncode == 0 and out.stderr == ""
+    assert out.stdout.splitlines()[0] == str(IDS)
+
+
+@pytest.mark.parametrize("text", ["def broken(:\n", "NAMESPACE = 'an older ids.py without the hook'\n"])
+def test_the_pth_says_nothing_at_start_up_when_that_ids_py_is_broken(tmp_path, text):
+    """Every interpreter start runs the .pth: an ids.py it cannot use (a checkout mid-edit first on PYTHONPATH, an
+    older one) must not print a traceback at each start of every program (site did, twice with lib64)."""
+    other = tmp_path / "other"
+    (other / "hexabot_sim" / "envs").mkdir(parents=True)
+    (other / "hexabot_sim" / "envs" / "ids.py").write_text(text)
+    out = _through_the_pth(tmp_path, other, "print('ran')")
+    assert out.returncode == 0 and out.stdout == "ran\n" and out.stderr == ""
