@@ -79,6 +79,8 @@ class _Finder:
         if fullname != "gymnasium":
             return None
         _remove()
+        if _opted_out():  # set by the program since the interpreter started (a notebook's first cell)
+            return None
         try:
             import importlib.util  # here, not at interpreter start (it costs a few ms)
 
@@ -94,9 +96,13 @@ def _remove() -> None:
     sys.meta_path[:] = [f for f in sys.meta_path if not getattr(f, "hexabot_sim_autoregister", False)]
 
 
+def _opted_out() -> bool:
+    return os.environ.get(OPT_OUT, "").strip().lower() not in _OPT_OUT_OFF
+
+
 def install_import_hook() -> None:
     """Registers the ids with gymnasium now if it is imported, else when it first is (see the module's docstring)."""
-    if os.environ.get(OPT_OUT, "").strip().lower() not in _OPT_OUT_OFF:
+    if _opted_out():
         return
     gymnasium = sys.modules.get("gymnasium")
     if gymnasium is not None:

@@ -167,3 +167,18 @@ def test_the_pth_says_nothing_at_start_up_when_that_ids_py_is_broken(tmp_path, t
     (other / "hexabot_sim" / "envs" / "ids.py").write_text(text)
     out = _through_the_pth(tmp_path, other, "print('ran')")
     assert out.returncode == 0 and out.stdout == "ran\n" and out.stderr == ""
+
+
+def test_the_opt_out_set_by_the_program_before_it_imports_gymnasium_is_heeded():
+    """os.environ[HEXABOT_SIM_NO_AUTOREGISTER] = "1" in a program (a notebook's first cell) comes after the
+    interpreter's start, where the hook was installed: it is read again when gymnasium is imported."""
+    code = (
+        "import importlib.util, os, sys\n"
+        f"spec = importlib.util.spec_from_file_location('ids_copy', {ids.__file__!r})\n"
+        "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m); m.install_import_hook()\n"
+        f"os.environ[{ids.OPT_OUT!r}] = '1'\n"
+        "import gymnasium\n"
+        "print(sorted(k for k in gymnasium.registry if k.startswith('hexabot_sim/')))\n"
+        "print(sum(getattr(f, 'hexabot_sim_autoregister', False) for f in sys.meta_path))\n"
+    )
+    assert _python(code, **{ids.OPT_OUT: "0"}) == ["[]", "0"]
