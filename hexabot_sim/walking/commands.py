@@ -191,7 +191,8 @@ def read_waypoints(name: str, raw: Any) -> tuple:
         if math.hypot(px - previous[0], py - previous[1]) < 1e-3:
             if k == 0 and h is None:  # the start itself, as a closed course written from (0, 0) begins
                 continue
-            raise UsageError(f"{where}: ({px:g}, {py:g}) is within 1 mm of the point before it (or the start)")
+            start = "; a first row there is left out only without a heading (leave the cell empty)" if k == 0 else ""
+            raise UsageError(f"{where}: ({px:g}, {py:g}) is within 1 mm of the point before it (or the start){start}")
         previous = (px, py)
         out.append((px, py, h))
     if rows and not out:  # only the start: not a walk without waypoints (the fixed command) in disguise

@@ -68,6 +68,7 @@ def test_bad_waypoints_are_refused(tmp_path, capsys):
         "x,y\n0.3,0\n0.3,0.0001\n": "within 1 mm of the point before it",
         "x,y\n0,0\n0,0.0005\n": "line 3: (0, 0.0005) is within 1 mm of the point before it (or the start)",
         "x,y,heading\n0,0,1\n": "line 2: (0, 0) is within 1 mm",
+        "x,y,heading\n0,0,0\n0.3,0,\n": "(or the start); a first row there is left out only without a heading",
         "x,y\n0.3,0\n0.3,0\n0,0\n": "line 3: (0.3, 0) is within 1 mm",
         "x,y\n0.4,0\n5,0\n": "the course is 5 m long",
         "x,y\n5,0\n": "the course is 5 m long; at path_speed 0.1 m/s the walk needs about",
