@@ -366,12 +366,17 @@ def read_config(path: str | Path, cls: type | None = None) -> dict[str, Any]:
             raise UsageError(
                 f"config file {shown}: unexpected table [{_show(key)[1:-1]}]; write parameters as 'name = value' lines"
             )
-    return data if cls is None else files_beside(data, cls, path.parent)
+    return data if cls is None else files_beside(data, cls, path)
 
 
-def files_beside(data: dict[str, Any], cls: type, folder: Path) -> dict[str, Any]:
-    """The config's values with each relative file name of a file-naming parameter resolved in `folder` when the
-    file is there (a built-in name, e.g. robot = "hexabot", is not a file name)."""
+def files_beside(data: dict[str, Any], cls: type, config: Path) -> dict[str, Any]:
+    """The values of the config file `config` with each relative file name of a file-naming parameter resolved
+    beside it when the file is there: in its folder, else (a config reached through a symbolic link) in the folder
+    of the file it links to. A built-in name, e.g. robot = "hexabot", is not a file name."""
+    folders = [config.parent]
+    with contextlib.suppress(OSError, RuntimeError):  # a link loop: the config is refused when read
+        if (real := config.resolve().parent) != config.parent.resolve():
+            folders.append(real)
     out = dict(data)
     for name, (info, _) in infos(cls).items():
         value = data.get(name)
@@ -381,8 +386,7 @@ def files_beside(data: dict[str, Any], cls: type, folder: Path) -> dict[str, Any
             continue
         if not Path(value).is_absolute():
             with contextlib.suppress(OSError, ValueError):  # a NUL byte or an over-long name: checked later
-                if (folder / value).is_file():
-                    out[name] = str(folder / value)
+                out[name] = next((str(f / value) for f in folders if (f / value).is_file()), value)
     return out
 
 

@@ -193,3 +193,21 @@ def test_run_with_a_config_from_another_folder_reads_the_schedule_beside_it(tmp_
     monkeypatch.chdir(tmp_path)  # the schedule is not in the working folder
     result = api.run("hexabot-walk", config="study/walk.toml")
     assert [list(row[:4]) for row in result.params["schedule"]] == [[0.0, 0.05, 0.0, 0.0], [2.0, 0.08, 0.0, 0.0]]
+
+
+def test_a_linked_config_finds_its_files_beside_the_link_or_else_beside_the_file_it_links_to(tmp_path, monkeypatch):
+    """A config reached through a symbolic link: its files are looked for beside the link, then beside the real
+    file (the link's folder alone lost them, or silently took the working folder's file of the same name)."""
+    cls = registry.get("hexabot-walk").params_type
+    real, linked = tmp_path / "configs", tmp_path / "study"
+    real.mkdir()
+    linked.mkdir()
+    (real / "walk.toml").write_text('schedule = "sched.csv"\nwaypoints = "course.csv"\n')
+    (real / "sched.csv").write_text("t, vx, vy, yaw_rate\n0, 0.05, 0, 0\n")
+    (real / "course.csv").write_text("x, y\n0.3, 0\n")
+    (linked / "course.csv").write_text("x, y\n0.2, 0\n")  # beside the link: taken first
+    (linked / "walk.toml").symlink_to(real / "walk.toml")
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "sched.csv").write_text("t, vx, vy, yaw_rate\n0, 0.09, 0, 0\n")  # the working folder's: not taken
+    data = params.read_config(Path("study/walk.toml"), cls)
+    assert data == {"schedule": str(real / "sched.csv"), "waypoints": str(Path("study") / "course.csv")}

@@ -111,7 +111,7 @@ def _beside_config(args: argparse.Namespace, layers: list[dict[str, Any]], scena
     if args.config is None:
         return layers
     cls = registry.get(scenario).params_type
-    return [params_mod.files_beside(layers[0], cls, Path(args.config).parent), *layers[1:]]
+    return [params_mod.files_beside(layers[0], cls, Path(args.config)), *layers[1:]]
 
 
 def cmd_run(args: argparse.Namespace) -> int:

@@ -16,6 +16,7 @@ from hexabot_sim.control.walker import WalkingController
 from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward
 from hexabot_sim.envs.scene import STAIRS, check_range, check_stairs, robot_params
 from hexabot_sim.walking.constants import SETTLE_TIME
+from hexabot_sim.walking.parameters import WalkParams
 from hexabot_sim.walking.scene import acceleration_limit, make_controller
 
 TWIST_RANGE: tuple[tuple[float, float], ...] = ((-0.15, 0.15), (-0.1, 0.1), (-0.4, 0.4))  # vx, vy [m/s], yaw rate
@@ -23,6 +24,26 @@ STEP_HEIGHT_RANGE: tuple[float, float] = (0.015, 0.045)  # [m] foot lift at mid-
 # [m] on stairs: with the elevator reflex a swing clears 2 x step height less a foot radius, so 3 cm climbs the
 # default 4 cm rise (1.5 cm clears 22 mm)
 STAIRS_STEP_HEIGHT_RANGE: tuple[float, float] = (0.03, 0.045)
+
+
+def _on_stairs(base: WalkParams, rise: float, run: float, count: int, low: float) -> WalkParams:
+    """The walk on the stairs, checked at the lowest step height of the range (the lowest swing climbs least); a
+    refusal in this environment's arguments (the walk's names stand_height and step_height are not among them).
+    A step height the legs cannot deliver at the walk's default twist is left to the ranges' corners check."""
+    low_end = " (step_height_range's low end)"
+    for h in (low, base.step_height):
+        try:
+            return dataclasses.replace(base, stairs_rise=rise, stairs_run=run, stairs_count=count, step_height=h)
+        except ValueError as e:
+            reason, _, hint = str(e).rpartition("; ")
+            if "stair rise" not in reason and h != base.step_height:
+                continue  # not the stairs: the corners' check words it
+            advice = "raise step_height_range or lower the rise" if hint == "raise 'step_height'" else "lower the rise"
+            raise ValueError(
+                f"stairs rise {rise:g} m at step height {h:g} m{low_end if h == low else ''}: {reason or hint}; "
+                f"{advice}"
+            ) from None
+    raise AssertionError("unreachable")  # the loop's last step height returns or raises
 
 
 class ActionSource:
@@ -114,8 +135,9 @@ class LeggedCommandEnv(LeggedEnv):
         overrides: dict[str, object] = dict(ground.get(terrain, {}) if isinstance(terrain, str) else {})
         if terrain == "stairs":  # the walk's own checks: a rise its legs and the reflex can climb
             rise, run, count = check_stairs(stairs)
-            overrides.update(stairs_rise=rise, stairs_run=run, stairs_count=count)
-        base = robot_params(robot, **overrides)
+            base = _on_stairs(robot_params(robot, **overrides), rise, run, count, float(self.ranges[3, 0]))
+        else:
+            base = robot_params(robot, **overrides)
         self.p_controller = self._controller_params(base)
         super().__init__(
             self.p_controller, frame_skip, terrain, slope_deg, roughness, stairs, command_range, reward,

@@ -7,8 +7,9 @@ choosing MuJoCo's OpenGL backend; it imports nothing more than the interpreter a
 `install_import_hook`: when a program first imports gymnasium, the hook registers our ids right after gymnasium's
 own, as strings (entry points Gymnasium imports on `make`). So after `pip install "hexabot-sim[rl]"`,
 `gymnasium.make("hexabot_sim/HexabotJoints-v0")` works without importing hexabot_sim first, and a program that
-never imports gymnasium pays nothing but this file's load. HEXABOT_SIM_NO_AUTOREGISTER=1 turns the hook off (the
-"hexabot_sim.envs:" prefix and `import hexabot_sim.envs` register the ids in any case).
+never imports gymnasium pays nothing but this file's load. HEXABOT_SIM_NO_AUTOREGISTER=1 (any value but 0, false,
+no, off or empty) turns the hook off (the "hexabot_sim.envs:" prefix and `import hexabot_sim.envs` register the
+ids in any case).
 """
 
 import os
@@ -25,6 +26,7 @@ ENVS: dict[str, tuple[str, str | None, dict, int]] = {
     "HexabotCommand-v0": ("hexabot_sim.envs.command:LeggedCommandEnv", None, {"robot": "hexabot"}, 200),
 }
 OPT_OUT: str = "HEXABOT_SIM_NO_AUTOREGISTER"
+_OPT_OUT_OFF = ("", "0", "false", "no", "off")  # values that leave the hook on (any other turns it off)
 
 
 def register(gymnasium) -> None:  # no annotations needing __future__: this file loads at interpreter start
@@ -39,19 +41,27 @@ def register(gymnasium) -> None:  # no annotations needing __future__: this file
 
 
 class _Loader:
-    """gymnasium's own loader, which registers our ids once it has executed gymnasium (every other attribute is the
-    original loader's, so resources and the like are found as before)."""
+    """gymnasium's own loader, which registers our ids once it has executed gymnasium. A wrapper for the import
+    only: exec_module gives the module and its spec back their own loader first, so nothing afterwards (resources,
+    copy, pickle, isinstance) sees this one; until then every other attribute is the original loader's."""
 
     def __init__(self, loader) -> None:
         self._loader = loader
 
     def __getattr__(self, name: str):
+        if name == "_loader":  # not set (an instance made without __init__): no endless recursion
+            raise AttributeError(name)
         return getattr(self._loader, name)
 
     def create_module(self, spec):
         return self._loader.create_module(spec)
 
     def exec_module(self, module) -> None:
+        if getattr(module, "__loader__", None) is self:
+            module.__loader__ = self._loader
+        spec = getattr(module, "__spec__", None)
+        if spec is not None and spec.loader is self:
+            spec.loader = self._loader
         self._loader.exec_module(module)
         try:
             register(module)
@@ -69,6 +79,8 @@ class _Finder:
         if fullname != "gymnasium":
             return None
         _remove()
+        if _opted_out():  # set by the program since the interpreter started (a notebook's first cell)
+            return None
         try:
             import importlib.util  # here, not at interpreter start (it costs a few ms)
 
@@ -84,9 +96,13 @@ def _remove() -> None:
     sys.meta_path[:] = [f for f in sys.meta_path if not getattr(f, "hexabot_sim_autoregister", False)]
 
 
+def _opted_out() -> bool:
+    return os.environ.get(OPT_OUT, "").strip().lower() not in _OPT_OUT_OFF
+
+
 def install_import_hook() -> None:
     """Registers the ids with gymnasium now if it is imported, else when it first is (see the module's docstring)."""
-    if os.environ.get(OPT_OUT, "") not in ("", "0"):
+    if _opted_out():
         return
     gymnasium = sys.modules.get("gymnasium")
     if gymnasium is not None:

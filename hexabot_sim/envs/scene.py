@@ -62,6 +62,8 @@ def check_stairs(stairs) -> tuple[float, float, int]:
     """(rise [m], run [m], count) of a staircase, each in the range a walk's stairs_* parameter allows (rise > 0);
     else ValueError naming it."""
     try:
+        if isinstance(stairs, str | bytes | dict):  # unpacked, they gave letters or keys as the rise
+            raise TypeError
         rise, run, count = stairs
     except (TypeError, ValueError):
         raise ValueError(f"stairs must be (rise [m], run [m], count); got {stairs!r}") from None

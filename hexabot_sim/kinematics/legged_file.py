@@ -131,6 +131,11 @@ class _Reader:
         return tuple(self.number(v, where, f"{key}[{i}]", unit, lo, hi) for i, v in enumerate(value))
 
     def robot(self, doc: dict) -> LeggedRobot:
+        if isinstance(doc, dict) and "joints" in doc and {"leg", "legs"}.isdisjoint(doc):
+            raise self.fail(
+                "", "is a serial-arm (DH) robot file, not a legged-robot file ([leg], [body], [stance], [legs]: "
+                "docs/robot-files.md#legged-robot-files)"
+            )  # fmt: skip
         top = self.table(doc, "", TOP_KEYS, ("name", "leg", "body", "stance", "legs"))
         name = top["name"]
         if not isinstance(name, str) or not NAME.fullmatch(name):

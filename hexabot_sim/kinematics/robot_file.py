@@ -230,6 +230,9 @@ class _Reader:
         return float(value)
 
     def spec(self, builtin: bool) -> RobotSpec:
+        if isinstance(self.doc, dict) and not {"leg", "legs"}.isdisjoint(self.doc) and "joints" not in self.doc:
+            raise self.fail("", "is a legged-robot file, not a serial-arm (DH) robot file: walk it with hexabot-walk "
+                            "--set robot=FILE (docs/robot-files.md#legged-robot-files)")  # fmt: skip
         doc = self.keys(self.doc, TOP_KEYS, "", ("name", "convention", "angles", "joints"))
         name = self.name(doc["name"], "", "'name'")
         summary = doc.get("summary", "")

@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -71,19 +72,32 @@ def _rows(name: str, raw: Any, columns: tuple[str, ...], required: int) -> list[
         except UnicodeDecodeError:
             raise UsageError(f"{name} file {shown} is not UTF-8 text") from None
         # Blank lines and '#' comment lines are skipped (numpy.loadtxt's convention); line numbers are the file's.
-        lines = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip()[:1] not in ("", "#")]
+        # Lines end at \n, \r\n or \r, as in an editor (str.splitlines also breaks at \f, \v, U+2028 ...).
+        numbered = list(enumerate(re.split(r"\r\n|\r|\n", text), start=1))
+        lines = [(i, line) for i, line in numbered if line.strip()[:1] not in ("", "#")]
         if not lines:
-            raise UsageError(f"{name} file {shown} is empty; it needs a header row ({allowed}) and rows")
-        header = [h.strip().lower() for h in next(csv.reader([lines[0][1]], skipinitialspace=True))]
-        unknown = [h for h in header if h not in columns]
-        if unknown or len(set(header)) != len(header) or not set(columns[:required]) <= set(header):
-            problem = f"unknown column {unknown[0]!r}" if unknown else "a column missing or repeated"
+            what = "has only blank and '#' comment lines" if text.strip() else "is empty"
+            raise UsageError(f"{name} file {shown} {what}; it needs a header row ({allowed}) and rows")
+        header = [h.strip().lower() for h in _cells(name, shown, *lines[0])]
+        problem = _header_problem(header, columns, required)
+        if problem:
+            # The last comment before it, if it is the header: numpy.savetxt(header=...) writes '# ' before it.
+            comment = next((c for c in reversed(numbered[: lines[0][0] - 1]) if c[1].strip()), None)
+            if comment is not None:
+                cells = [h.strip().lower() for h in _cells(name, shown, *comment)]
+                if cells and cells[0].startswith("#"):
+                    cells[0] = cells[0].lstrip("#").strip()
+                if not _header_problem(cells, columns, required):
+                    raise UsageError(
+                        f"{name} file {shown}: line {comment[0]} is the header as a '#' comment (numpy.savetxt "
+                        "writes it so); remove the '#'"
+                    )
             raise UsageError(f"{name} file {shown}: the header {lines[0][1][:60]!r} has {problem}; it needs {allowed}")
         if len(lines) - 1 > limit:
             raise UsageError(f"{name} file {shown} has {len(lines) - 1} rows; the limit is {limit}")
         out = []
         for number, line in lines[1:]:
-            cells = [c.strip() for c in next(csv.reader([line], skipinitialspace=True))]  # '0, "0.08"' too
+            cells = [c.strip() for c in _cells(name, shown, number, line)]
             if len(cells) != len(header):
                 raise UsageError(
                     f"{name} file {shown}, line {number}: {len(cells)} values for the {len(header)} columns"
@@ -110,6 +124,22 @@ def _rows(name: str, raw: Any, columns: tuple[str, ...], required: int) -> list[
             )
         out.append((where, [*row, *[None] * (len(columns) - len(row))]))
     return out
+
+
+def _header_problem(header: list[str], columns: tuple[str, ...], required: int) -> str:
+    """'' if these (lower-case) names are a table's header, else what is wrong with them."""
+    unknown = [h for h in header if h not in columns]
+    if unknown or len(set(header)) != len(header) or not set(columns[:required]) <= set(header):
+        return f"unknown column {unknown[0]!r}" if unknown else "a column missing or repeated"
+    return ""
+
+
+def _cells(name: str, shown: str, number: int, line: str) -> list[str]:
+    """The cells of one line of a table file ('0, "0.08"' too), or a UsageError naming the line."""
+    try:
+        return next(csv.reader([line], skipinitialspace=True))
+    except csv.Error as e:  # e.g. a cell above csv's field size limit (128 KiB)
+        raise UsageError(f"{name} file {shown}, line {number}: {e}") from None
 
 
 def _number(where: str, column: str, value: Any, low: float, high: float, unit: str) -> float:
@@ -151,7 +181,8 @@ def read_waypoints(name: str, raw: Any) -> tuple:
     1 mm, no heading) is the start itself and left out."""
     out = []
     previous = (0.0, 0.0)
-    for k, (where, (x, y, heading)) in enumerate(_rows(name, raw, WAYPOINT_COLUMNS, WAYPOINT_REQUIRED)):
+    rows = _rows(name, raw, WAYPOINT_COLUMNS, WAYPOINT_REQUIRED)
+    for k, (where, (x, y, heading)) in enumerate(rows):
         if x is None or y is None:
             raise UsageError(f"{where}: x and y must both be given")
         px = _number(where, "x", x, -MAX_DISTANCE, MAX_DISTANCE, "m")
@@ -160,9 +191,12 @@ def read_waypoints(name: str, raw: Any) -> tuple:
         if math.hypot(px - previous[0], py - previous[1]) < 1e-3:
             if k == 0 and h is None:  # the start itself, as a closed course written from (0, 0) begins
                 continue
-            raise UsageError(f"{where}: ({px:g}, {py:g}) is within 1 mm of the point before it (or the start)")
+            start = "; a first row there is left out only without a heading (leave the cell empty)" if k == 0 else ""
+            raise UsageError(f"{where}: ({px:g}, {py:g}) is within 1 mm of the point before it (or the start){start}")
         previous = (px, py)
         out.append((px, py, h))
+    if rows and not out:  # only the start: not a walk without waypoints (the fixed command) in disguise
+        raise UsageError(f"{rows[0][0]}: the start itself is the only waypoint; the course needs a point away from it")
     return tuple(out)
 
 

@@ -215,7 +215,8 @@ def _cycle_problem_computed(p: WalkParams, cmd: Command) -> str:
 
 
 def feasibility(p: WalkParams) -> str:
-    """'' if the legs can deliver the command, else a one-line reason with the largest feasible command."""
+    """'' if the legs can deliver the command (vx, vy, yaw_rate; only stepping in place with a schedule or waypoints,
+    which replace them), else a one-line reason with the largest feasible command."""
     if not math.isfinite(p.vx + p.vy + p.yaw_rate):
         return "vx, vy and yaw_rate must be finite"
     standing = _cycle_problem(p, Command())
@@ -226,6 +227,8 @@ def feasibility(p: WalkParams) -> str:
             f"(stand_height {p.stand_height:g} m, step_height {p.step_height:g} m): {standing}; "
             f"lengthen 'period' or lower 'step_height'{faster}"
         )
+    if p.schedule or p.waypoints:  # they replace vx, vy and yaw_rate (commands.problem checks their commands)
+        return ""
     cmd = p.command()
     problem = _cycle_problem(p, cmd)
     if not problem:

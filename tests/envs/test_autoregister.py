@@ -2,8 +2,10 @@
 
 import importlib.metadata
 import os
+import shutil
 import subprocess
 import sys
+import sysconfig
 from pathlib import Path
 
 import pytest
@@ -101,3 +103,82 @@ def test_ids_py_imports_no_more_than_os_and_sys():
     )  # fmt: skip
     load = f"exec(compile(open({ids.__file__!r}).read(), 'ids.py', 'exec'), {{'__name__': 'x'}})"
     assert _python(code.format(load), "-S") == _python(code.format("import os, sys"), "-S")
+
+
+def test_gymnasium_keeps_its_own_loader_once_imported():
+    """The registering loader is a wrapper for the import only: gymnasium's module and spec carry its own loader
+    afterwards, so copying, pickling and isinstance checks of them behave as without the hook (the wrapper's
+    __getattr__ made copy.deepcopy(gymnasium.__spec__) recurse without end)."""
+    code = (
+        "import copy, importlib.machinery, importlib.util, pickle, sys\n"
+        f"spec = importlib.util.spec_from_file_location('ids_copy', {ids.__file__!r})\n"
+        "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m); m.install_import_hook()\n"
+        "import gymnasium\n"
+        "loader = gymnasium.__loader__\n"
+        "print(isinstance(loader, importlib.machinery.SourceFileLoader), gymnasium.__spec__.loader is loader)\n"
+        "print(type(copy.deepcopy(gymnasium.__spec__).loader).__name__, type(copy.copy(loader)).__name__)\n"
+        "print(type(pickle.loads(pickle.dumps(loader))).__name__)\n"
+    )
+    assert _python(code, **{ids.OPT_OUT: "0"}) == [
+        "True True",
+        "SourceFileLoader SourceFileLoader",
+        "SourceFileLoader",
+    ]
+
+
+@pytest.mark.parametrize(("value", "on"), [("", True), ("0", True), ("false", True), ("No", True), (" off ", True),
+                                           ("1", False), ("true", False), ("yes", False)])  # fmt: skip
+def test_the_opt_out_reads_its_value_as_a_switch(value, on, monkeypatch):
+    """HEXABOT_SIM_NO_AUTOREGISTER=false (or no, off, 0, empty) leaves the hook on; any other value turns it off."""
+    monkeypatch.setattr(sys, "meta_path", list(sys.meta_path))
+    monkeypatch.delitem(sys.modules, "gymnasium", raising=False)  # install_import_hook then installs the finder
+    monkeypatch.setenv(ids.OPT_OUT, value)
+    ids.install_import_hook()
+    assert any(getattr(f, "hexabot_sim_autoregister", False) for f in sys.meta_path) == on
+
+
+def _through_the_pth(tmp_path: Path, first: Path, code: str) -> subprocess.CompletedProcess:
+    """A fresh interpreter without site (-S) that processes this tree's .pth as site does (site.addsitedir), with
+    `first` at the front of sys.path, then runs `code` with the interpreter's own packages on sys.path."""
+    site_dir = tmp_path / "site"
+    site_dir.mkdir(exist_ok=True)
+    shutil.copy(Path(ids.__file__).with_name(PTH), site_dir / PTH)
+    purelib = sysconfig.get_paths()["purelib"]
+    setup = f"import site, sys; sys.path.insert(0, {str(first)!r}); site.addsitedir({str(site_dir)!r}); "
+    setup += f"sys.path.append({purelib!r})\n"
+    return subprocess.run(
+        [sys.executable, "-S", "-c", setup + code], capture_output=True, text=True, timeout=120,
+        env={**os.environ, ids.OPT_OUT: "0"}, cwd=tmp_path,
+    )  # fmt: skip
+
+
+def test_the_pth_installs_the_hook_from_the_first_ids_py_on_sys_path(tmp_path):
+    out = _through_the_pth(tmp_path, Path(ids.__file__).parents[2], SHOW)
+    assert out.returncode == 0 and out.stderr == ""
+    assert out.stdout.splitlines()[0] == str(IDS)
+
+
+@pytest.mark.parametrize("text", ["def broken(:\n", "NAMESPACE = 'an older ids.py without the hook'\n"])
+def test_the_pth_says_nothing_at_start_up_when_that_ids_py_is_broken(tmp_path, text):
+    """Every interpreter start runs the .pth: an ids.py it cannot use (a checkout mid-edit first on PYTHONPATH, an
+    older one) must not print a traceback at each start of every program (site did, twice with lib64)."""
+    other = tmp_path / "other"
+    (other / "hexabot_sim" / "envs").mkdir(parents=True)
+    (other / "hexabot_sim" / "envs" / "ids.py").write_text(text)
+    out = _through_the_pth(tmp_path, other, "print('ran')")
+    assert out.returncode == 0 and out.stdout == "ran\n" and out.stderr == ""
+
+
+def test_the_opt_out_set_by_the_program_before_it_imports_gymnasium_is_heeded():
+    """os.environ[HEXABOT_SIM_NO_AUTOREGISTER] = "1" in a program (a notebook's first cell) comes after the
+    interpreter's start, where the hook was installed: it is read again when gymnasium is imported."""
+    code = (
+        "import importlib.util, os, sys\n"
+        f"spec = importlib.util.spec_from_file_location('ids_copy', {ids.__file__!r})\n"
+        "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m); m.install_import_hook()\n"
+        f"os.environ[{ids.OPT_OUT!r}] = '1'\n"
+        "import gymnasium\n"
+        "print(sorted(k for k in gymnasium.registry if k.startswith('hexabot_sim/')))\n"
+        "print(sum(getattr(f, 'hexabot_sim_autoregister', False) for f in sys.meta_path))\n"
+    )
+    assert _python(code, **{ids.OPT_OUT: "0"}) == ["[]", "0"]

@@ -124,3 +124,16 @@ def test_the_gait_controller_climbs_the_stairs_with_its_reflex():
         _, reward, terminated, _, _ = env.step(forward)
         assert not terminated and np.isfinite(reward)
     assert env.data.qpos[0] > 1.0 and env.data.qpos[2] - z0 > 0.075
+
+
+def test_a_stair_rise_is_checked_at_the_step_heights_the_environment_walks_with():
+    """The rise is checked with step_height_range's low end (not the walk's default 3 cm), and a refusal names
+    the environment's arguments, not the walk's parameters it does not take (stand_height, step_height)."""
+    high = LeggedCommandEnv(terrain="stairs", stairs=(0.06, 0.25, 3), step_height_range=(0.045, 0.045))
+    assert high.p_controller.stairs_rise == 0.06  # 2 x 4.5 cm less a foot radius climbs 6 cm
+    for stairs, words in (((0.06, 0.25, 3), "above the largest climbable step"), ((0.1, 0.05, 3), "hit the plate")):
+        with pytest.raises(ValueError, match=r"^stairs rise 0\.\d+ m at step height 0\.03 m") as e:  # default range
+            LeggedCommandEnv(terrain="stairs", stairs=stairs)
+        message = str(e.value)
+        assert words in message and "step_height_range" in message and "'stand_height'" not in message
+        assert "'step_height'" not in message and "\n" not in message

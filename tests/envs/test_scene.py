@@ -87,7 +87,9 @@ def test_stairs_are_where_mujoco_collides_them():
     ("stairs", "words"),
     [((0.0, 0.25, 3), "stairs rise must be 0 < rise <= 0.1 m; got 0.0"), ((0.04, 0.25, 2.5), "an integer"),
      ((0.04, 0.01, 3), "stairs run must be 0.05 <= run <= 2 m"), ("steps", "stairs must be (rise [m], run [m], count)"),
-     ((float("nan"), 0.25, 3), "got nan"), ((0.04, 0.25), "stairs must be")],
+     ((float("nan"), 0.25, 3), "got nan"), ((0.04, 0.25), "stairs must be"),
+     ("abc", "stairs must be (rise [m], run [m], count); got 'abc'"),  # not "stairs rise ...; got 'a'"
+     ({"rise": 0.04, "run": 0.25, "count": 3}, "stairs must be (rise [m], run [m], count); got {")],
 )  # fmt: skip
 def test_bad_stairs_are_refused_naming_what_is_allowed(stairs, words):
     with pytest.raises(ValueError, match=re.escape(words)):

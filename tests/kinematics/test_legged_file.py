@@ -155,3 +155,17 @@ def test_a_leg_with_a_one_millimetre_coxa_compiles(tmp_path: Path) -> None:
     tiny = tmp_path / "tiny.toml"
     tiny.write_text(re.sub(r"(?m)^l1 = \S+", "l1 = 0.001", EXAMPLE.read_text()))
     mujoco.MjModel.from_xml_string(legged_file.read(tiny).robot_xml())
+
+
+def test_an_arm_file_given_as_a_legged_one_and_the_reverse_say_which_kind_they_are(capsys) -> None:
+    """Not "unknown key 'convention'; allowed: name, summary, leg, ..." (the walk's robot=) nor "unknown key 'leg'"
+    (kin, export): the two kinds of robot file name each other."""
+    from hexabot_sim.kinematics import robot_file
+
+    arm = Path(robot_file.__file__).parent / "arms" / "scara.toml"
+    with pytest.raises(UsageError, match=r"is a serial-arm \(DH\) robot file, not a legged-robot file") as e:
+        legged_file.read(arm)
+    assert "\n" not in str(e.value)
+    with pytest.raises(UsageError, match=r"is a legged-robot file, not a serial-arm \(DH\) robot file") as e:
+        robot_file.read(EXAMPLE)
+    assert "hexabot-walk --set robot=" in str(e.value) and "\n" not in str(e.value)

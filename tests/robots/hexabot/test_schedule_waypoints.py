@@ -32,6 +32,11 @@ BAD_SCHEDULES = {
         "schedule: at t = 11.9 s (after the switch to the tripod gait at 11 s) foot lr would leave its reachable"
     ),
     "t,vx,vy,yaw_rate\n0,0.1,0\n": "line 2: 3 values for the 4 columns",
+    # numpy.savetxt(..., header=...) writes '# ' before the header: not "the header '0,0.05,0,0' has unknown column"
+    "# t,vx,vy,yaw_rate\n0,0.05,0,0\n": "line 1 is the header as a '#' comment (numpy.savetxt writes it so); remove",
+    "# t,vx,vy,yaw_rate\n# 0,0.05,0,0\n": "has only blank and '#' comment lines; it needs a header row",  # not empty
+    # Lines end at \n, \r\n or \r only (str.splitlines also broke at \f, \v, U+2028 ...: a wrong line number).
+    "t,vx,vy,yaw_rate\r\n0,0.05,0,0\u2028\r\n1\f,nan,0,0\r\n": "line 3: vx must be a number",
 }
 
 
@@ -49,7 +54,9 @@ def test_unreadable_and_huge_tables_are_refused(tmp_path, capsys):
     huge.write_text("t,vx,vy,yaw_rate\n" + "0,0,0,0\n" * (MAX_TABLE_BYTES // 8 + 1))
     many = tmp_path / "many.csv"
     many.write_text("t,vx,vy,yaw_rate\n" + "".join(f"{i},0.05,0,0\n" for i in range(1001)))
-    for value, words in ((huge, "is larger than 1024 KiB"), (tmp_path, "is a directory"),
+    wide = tmp_path / "wide.csv"
+    wide.write_text("t,vx,vy,yaw_rate\n0,0,0,0\n1," + "1" * 200_000 + ",0,0\n")  # a cell above csv's field limit
+    for value, words in ((huge, "is larger than 1024 KiB"), (tmp_path, "is a directory"), (wide, "line 3: "),
                          (tmp_path / "none.csv", "not found"), (many, "has 1001 rows; the limit is 1000")):  # fmt: skip
         code, _, err = cli(capsys, "run", "hexabot-walk", "--set", f"schedule={value}", "--out", str(tmp_path / "o"))
         assert code == 2 and words in err and len(err.strip().splitlines()) == 1
@@ -61,9 +68,12 @@ def test_bad_waypoints_are_refused(tmp_path, capsys):
         "x,y\n0.3,0\n0.3,0.0001\n": "within 1 mm of the point before it",
         "x,y\n0,0\n0,0.0005\n": "line 3: (0, 0.0005) is within 1 mm of the point before it (or the start)",
         "x,y,heading\n0,0,1\n": "line 2: (0, 0) is within 1 mm",
+        "x,y,heading\n0,0,0\n0.3,0,\n": "(or the start); a first row there is left out only without a heading",
         "x,y\n0.3,0\n0.3,0\n0,0\n": "line 3: (0.3, 0) is within 1 mm",
         "x,y\n0.4,0\n5,0\n": "the course is 5 m long",
         "x,y\n5,0\n": "the course is 5 m long; at path_speed 0.1 m/s the walk needs about",
+        "x,y\n0,0\n": "line 2: the start itself is the only waypoint",  # not a walk without waypoints
+        "# a course\nx, y\n0, 0.0005\n": "line 3: the start itself is the only waypoint; the course needs a point",
     }
     for text, words in cases.items():
         path = _write(tmp_path / "w.csv", text)
@@ -245,3 +255,17 @@ def test_bounces_and_the_speed_dip_are_counted_as_defined():
     v = np.where((t >= 0.8) & (t < 1.3), 0.05, 0.1)
     assert course.speed_dip(t, v, 0.1, 0.5, 0.0, 2.0) == pytest.approx(0.5)
     assert course.speed_dip(t, v, 0.1, 0.5, 0.0, 0.7) == pytest.approx(0.0)
+
+
+def test_vx_vy_and_yaw_rate_that_a_schedule_or_waypoints_replace_are_not_checked():
+    """With a schedule or waypoints the walk's own twist is never commanded (standing before the first row, the
+    follower's after), so a wave walk is not refused for the default vx = 0.1 m/s its gait cannot deliver; the
+    rows, the follower and stepping in place are still checked."""
+    rows = [[0, 0.05, 0, 0]]
+    assert walk_params(gait="wave", schedule=rows, duration=6).schedule[0][1] == 0.05
+    course = walk_params(gait="wave", waypoints=[[0.3, 0]], path_speed=0.04, path_yaw_rate=0.2, duration=30)
+    assert course.waypoints == ((0.3, 0.0, None),)
+    with pytest.raises(ValueError, match=r"^schedule row 1 \(t = 0 s\): the legs cannot deliver"):
+        walk_params(gait="wave", schedule=[[0, 0.1, 0, 0]], duration=6)
+    with pytest.raises(ValueError, match="even stepping in place is infeasible"):
+        walk_params(gait="wave", schedule=rows, period=0.2, duration=6)
