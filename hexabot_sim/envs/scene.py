@@ -131,11 +131,13 @@ class EnvScene:
     ) -> None:
         if not isinstance(terrain, str) or terrain not in TERRAINS:
             raise ValueError(f"unknown terrain {terrain!r}; known: {', '.join(TERRAINS)}")
-        if terrain == "slope" and not (_number(slope_deg) and 0.0 < slope_deg <= MAX_SLOPE_DEG):
+        # Each terrain's keywords are checked whatever the terrain (a bad one is a mistake even where unused).
+        if not (_number(slope_deg) and 0.0 < slope_deg <= MAX_SLOPE_DEG):
             raise ValueError(f"slope_deg must be > 0 and <= {MAX_SLOPE_DEG:g} deg (a number); got {slope_deg!r}")
-        if terrain == "rough" and not (_number(roughness) and 0.0 < roughness <= MAX_ROUGHNESS):
+        if not (_number(roughness) and 0.0 < roughness <= MAX_ROUGHNESS):
             raise ValueError(f"roughness must be > 0 and <= {MAX_ROUGHNESS:g} m (a number); got {roughness!r}")
-        self.stairs = check_stairs(stairs) if terrain == "stairs" else None
+        checked = check_stairs(stairs)
+        self.stairs = checked if terrain == "stairs" else None
         self.p = p
         self.terrain = terrain
         self.roughness = roughness if terrain == "rough" else 0.0

@@ -92,6 +92,10 @@ def _rows(name: str, raw: Any, columns: tuple[str, ...], required: int) -> list[
                         f"{name} file {shown}: line {comment[0]} is the header as a '#' comment (numpy.savetxt "
                         "writes it so); remove the '#'"
                     )
+            separated = next((sep for sep in ("\t", ";") if "," not in lines[0][1] and sep in lines[0][1]), None)
+            if separated is not None:  # a spreadsheet's other export: say what the separator must be
+                shown_sep = "tabs" if separated == "\t" else "';'"
+                raise UsageError(f"{name} file {shown}: its columns are separated by {shown_sep}; use commas (CSV)")
             raise UsageError(f"{name} file {shown}: the header {lines[0][1][:60]!r} has {problem}; it needs {allowed}")
         if len(lines) - 1 > limit:
             raise UsageError(f"{name} file {shown} has {len(lines) - 1} rows; the limit is {limit}")

@@ -94,3 +94,13 @@ def test_stairs_are_where_mujoco_collides_them():
 def test_bad_stairs_are_refused_naming_what_is_allowed(stairs, words):
     with pytest.raises(ValueError, match=re.escape(words)):
         LeggedJointsEnv(terrain="stairs", stairs=stairs)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "words"),
+    [({"terrain": "flat", "stairs": "junk"}, "stairs must be"), ({"terrain": "rough", "slope_deg": -5}, "slope_deg"),
+     ({"terrain": "slope", "roughness": float("nan")}, "roughness")],
+)  # fmt: skip
+def test_a_terrain_keyword_is_checked_where_its_terrain_is_not_chosen(kwargs, words):
+    with pytest.raises(ValueError, match=words):
+        LeggedJointsEnv(**kwargs)

@@ -4,6 +4,7 @@ rows' steady speeds against the schedule, the course's cross-track error against
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -91,6 +92,15 @@ def test_table_files_take_comments_and_quoted_numbers_as_spreadsheets_write_them
     bad = _write(tmp_path / "b.csv", 't, vx, vy, yaw_rate\n# c\n0, "x", 0, 0\n')
     with pytest.raises(UsageError, match="line 3: vx must be a number"):  # the file's own line number
         read_schedule("schedule", str(bad))
+
+
+def test_a_tab_or_semicolon_separated_file_is_told_to_use_commas(tmp_path):
+    from hexabot_sim.walking.commands import read_schedule
+
+    for sep, words in (("\t", "separated by tabs; use commas"), (";", "separated by ';'; use commas")):
+        path = _write(tmp_path / "s.csv", sep.join(["t", "vx", "vy", "yaw_rate"]) + "\n0" + sep + "0.1\n")
+        with pytest.raises(UsageError, match=re.escape(words)):
+            read_schedule("schedule", str(path))
 
 
 def test_a_closed_course_may_start_at_the_start(tmp_path):
