@@ -41,9 +41,16 @@ def _installed_pth() -> bool:
     return any(f.name == PTH for f in files)
 
 
+def _pth_file() -> Path:
+    """The .pth: beside ids.py in a source tree (its source), at site-packages' top where a wheel installed it."""
+    here = Path(ids.__file__)
+    found = [path for path in (here.with_name(PTH), here.parents[2] / PTH) if path.is_file()]
+    assert found, f"no {PTH} beside {here} nor at {here.parents[2]}"
+    return found[0]
+
+
 def test_the_wheel_carries_the_pth_that_loads_ids_py():
-    source = Path(ids.__file__).with_name(PTH)
-    assert source.is_file()
+    assert "ids.py" in _pth_file().read_text()
     pyproject = Path(ids.__file__).parents[2] / "pyproject.toml"
     if pyproject.is_file():  # a source tree: the wheel's force-include puts it at site-packages' top
         assert f'"hexabot_sim/envs/{PTH}" = "{PTH}"' in pyproject.read_text()
@@ -142,7 +149,7 @@ def _through_the_pth(tmp_path: Path, first: Path, code: str) -> subprocess.Compl
     `first` at the front of sys.path, then runs `code` with the interpreter's own packages on sys.path."""
     site_dir = tmp_path / "site"
     site_dir.mkdir(exist_ok=True)
-    shutil.copy(Path(ids.__file__).with_name(PTH), site_dir / PTH)
+    shutil.copy(_pth_file(), site_dir / PTH)
     purelib = sysconfig.get_paths()["purelib"]
     setup = f"import site, sys; sys.path.insert(0, {str(first)!r}); site.addsitedir({str(site_dir)!r}); "
     setup += f"sys.path.append({purelib!r})\n"
