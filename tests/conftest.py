@@ -1,4 +1,5 @@
-"""Shared fixtures: headless GL chosen before MuJoCo is imported, one GL probe per session."""
+"""Shared fixtures: headless GL chosen before MuJoCo is imported, one GL probe per session; numba's cache warmed
+once before the test processes start."""
 
 import os
 
@@ -7,6 +8,18 @@ os.environ.setdefault("MUJOCO_GL", "egl")  # must precede any `import mujoco`
 import pytest
 
 from hexabot_sim import gl
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """Compiles the walking kernels into numba's on-disk cache once, in the process that starts the session (pytest-
+    xdist's controller, before its workers), so the workers and the commands the tests run in subprocesses load
+    them (~2 s) instead of each compiling them (~20 s a process on a machine's first run, two at once under xdist).
+    Tests of a cold cache set their own NUMBA_CACHE_DIR."""
+    if hasattr(session.config, "workerinput"):  # an xdist worker: the controller has warmed the cache
+        return
+    from hexabot_sim.control import kernels
+
+    kernels.warm_up()
 
 
 @pytest.fixture(scope="session")
