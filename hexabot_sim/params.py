@@ -384,9 +384,18 @@ def files_beside(data: dict[str, Any], cls: type, config: Path) -> dict[str, Any
             continue
         if info.name_or_file is not None and value.lower() in (n.lower() for n in info.name_or_file.names):
             continue
-        if not Path(value).is_absolute():
-            with contextlib.suppress(OSError, ValueError):  # a NUL byte or an over-long name: checked later
-                out[name] = next((str(f / value) for f in folders if (f / value).is_file()), value)
+        if Path(value).is_absolute():
+            continue
+        missing = False
+        with contextlib.suppress(OSError, ValueError):  # a NUL byte or an over-long name: checked later
+            out[name] = found = next((str(f / value) for f in folders if (f / value).exists()), value)
+            missing = info.table is not None and found == value and not Path(value).exists()
+        if missing:  # say where it was looked for (the reader would say only "not found")
+            places = " or ".join(repr(str(f)) for f in folders)
+            raise UsageError(
+                f"{name} file {value!r} (named in config file {str(config)!r}) is in neither {places} nor the "
+                "working folder"
+            )
     return out
 
 

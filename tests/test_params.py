@@ -168,7 +168,8 @@ def test_name_or_file_refusals_are_one_line(tmp_path, value, fragment):
 
 def test_a_config_names_its_files_relative_to_its_own_folder(tmp_path, monkeypatch):
     """A schedule or robot file named by a config is read beside the config (a config and its files travel
-    together); a built-in name stays a name; a file that is not there stays as written (the working folder)."""
+    together); a built-in name stays a name; a file that is not there is read from the working folder, and one in
+    neither place is refused naming both."""
     cls = registry.get("hexabot-walk").params_type
     folder = tmp_path / "study"
     folder.mkdir()
@@ -177,9 +178,14 @@ def test_a_config_names_its_files_relative_to_its_own_folder(tmp_path, monkeypat
     config = folder / "walk.toml"
     config.write_text('schedule = "sched.csv"\nrobot = "hexabot"\nwaypoints = "elsewhere.csv"\n')
     monkeypatch.chdir(tmp_path)
+    (tmp_path / "elsewhere.csv").write_text("x, y\n0.3, 0\n")  # in the working folder only
     data = params.read_config(Path("study/walk.toml"), cls)
     assert data == {"schedule": str(Path("study") / "sched.csv"), "robot": "hexabot", "waypoints": "elsewhere.csv"}
     assert params.read_config(config) == {"schedule": "sched.csv", "robot": "hexabot", "waypoints": "elsewhere.csv"}
+    (tmp_path / "elsewhere.csv").unlink()
+    with pytest.raises(UsageError, match=r"waypoints file 'elsewhere.csv' \(named in config file 'study/walk.toml'\) "
+                       r"is in neither 'study' nor the working folder"):  # fmt: skip
+        params.read_config(Path("study/walk.toml"), cls)
 
 
 @pytest.mark.slow
