@@ -61,3 +61,49 @@ def test_the_quintic_swing_is_checked_with_its_own_peak_speed():
     with pytest.raises(UsageError, match=r"the largest feasible in this direction is vx = 0\.16"):
         params.resolve(HexabotParams, {}, {"gait": "ripple", "vx": 0.2, "swing": "quintic"})
     params.resolve(HexabotParams, {}, {"gait": "ripple", "vx": 0.2})
+
+
+def test_landing_lift_is_smooth_and_meets_the_pad_slowly():
+    """swing="landing": the height's rate equals its finite difference (continuous, zero at both ends), the apex is
+    the step height, and below the hover height (above the pad's first contact, FOOT_PAD_MARGIN) the foot descends
+    at no more than the bounded landing speed, the one it reaches in the window's middle."""
+    from hexabot_sim.control import plan_kernels as K
+    from hexabot_sim.kinematics.legged_mjcf import FOOT_PAD_MARGIN
+
+    assert K.LANDING_HOVER > FOOT_PAD_MARGIN
+    for length in (1 / 6, 1 / 3, 0.5):  # the wave's, ripple's and tripod's swing at a 1 s period
+        s = np.linspace(0.0, 1.0, 40001)
+        z, rate = np.array([K.landing_lift(x, length, 0.03) for x in s]).T
+        assert np.abs(np.gradient(z, s * length) - rate).max() < 1e-3 * np.abs(rate).max()
+        assert abs(z[0]) < 1e-12 and abs(z[-1]) < 1e-12 and abs(rate[0]) < 1e-12 and abs(rate[-1]) < 1e-12
+        assert abs(z.max() - 0.03) < 1e-4
+        window = K.landing_window(length)
+        speed = K.LANDING_HOVER / (window * (1 - K.LANDING_RAMP / 2))
+        late = s > 1 - window / length
+        assert z[late].max() <= K.LANDING_HOVER + 1e-12
+        assert np.abs(rate[late]).max() <= speed * (1 + 1e-9)
+        mid = late & (np.abs(z - FOOT_PAD_MARGIN) < 1e-5)
+        assert np.allclose(-rate[mid], speed) and speed < 0.05
+
+
+def test_landing_swing_ends_on_the_ground_velocity_line():
+    """swing="landing": in the landing window a swing target moves with its coming stance's velocity (-v walking
+    straight), so the foot meets the pad with no horizontal speed over the ground; before it the arc is a quintic."""
+    from hexabot_sim.control import plan_kernels as K
+
+    dt = 0.002
+    planner = GaitPlanner(
+        GAITS["ripple"], 1.0, 0.03, DEFAULT_LAYOUT.neutral_feet_body(), dt, start_time=0.0, profile="landing"
+    )
+    rows = np.concatenate([planner.plan(Command(0.1), 500)] + [planner.plan(Command(0.1), 500)[1:] for _ in range(3)])
+    stance = planner.in_stance(dt * np.arange(len(rows)))
+    vel = np.diff(rows[..., :2], axis=0) / dt  # (n - 1, legs, 2)
+    window = round(K.landing_window(1 / 3) / dt)
+    checked = 0
+    for leg in range(6):
+        downs = np.flatnonzero(stance[1:, leg] & ~stance[:-1, leg]) + 1  # first stance row
+        for k in downs[downs > window + 2]:
+            assert np.allclose(vel[k - window + 1 : k, leg], [-0.1, 0.0], atol=1e-9), (leg, k)
+            assert np.abs(vel[k - window - 20, leg, 0] + 0.1) > 0.01  # still swinging over the ground before it
+            checked += 1
+    assert checked >= 15
