@@ -8,9 +8,7 @@ and touchdown (no stubbing, no scuffing), lifted by h sin^2(pi s) (zero vertical
 Or (profile "quintic") a quintic Hermite whose end accelerations are zero too: the foot stays on its stance
 path to second order while it is within a millimetre of the ground, where a compliant foot is already loaded
 (a cubic's foot moves over the ground there at a third of its mean swing speed); its peak speed is 1.875x the
-mean, the cubic's 1.5x, so the joint-speed limit refuses ~20 % lower commands. Or (profile "landing") the quintic
-ends a short window before the touchdown on the ground-velocity line, along which the foot then descends its last
-millimetre at a bounded speed (plan_kernels.landing_lift).
+mean, the cubic's 1.5x, so the joint-speed limit refuses ~20 % lower commands.
 
 Targets are planned in chunks (compiled: control/plan_kernels.py holds the maths, this module the planner's
 state); between chunks the command may change (heading hold), and every leg continues from where its target
@@ -136,11 +134,7 @@ def stance_path(cmd: Command, start: np.ndarray, tau: np.ndarray) -> np.ndarray:
     return out.reshape(start.shape[:-1] + out.shape[1:])
 
 
-PROFILES: tuple[str, ...] = (
-    "cubic",
-    "quintic",
-    "landing",
-)  # the swing's arc (GaitPlanner.profile; in plan_kernels' order)
+PROFILES: tuple[str, ...] = ("cubic", "quintic")  # the swing's horizontal arc (GaitPlanner.profile)
 
 Scale = Callable[[np.ndarray], np.ndarray]  # t [s] (array) -> fraction of the command in force
 
@@ -349,7 +343,7 @@ class GaitPlanner:
         out = np.empty((n_steps + 1, self.n_legs, 3))
         command = np.array([cmd.vx, cmd.vy, cmd.yaw_rate], dtype=float)
         K.targets(command, times, s, scale is not None, clock, self.timing, self.neutral, seg, count,
-                  factors, self.pos, self.vel, self.acc, PROFILES.index(self.profile), self.landing, self.landing_set,
+                  factors, self.pos, self.vel, self.acc, self.profile == "quintic", self.landing, self.landing_set,
                   out)  # fmt: skip
         self.time = float(times[-1])
         return out

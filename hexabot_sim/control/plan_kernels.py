@@ -167,53 +167,6 @@ def hermite5(p0, v0, a0, p1, v1, duration, u):
     return pos, rate, (dd[0] * t0 + dd[1] * t1 + dd[2] * t2 + dd[3] * t3) / (duration * duration)
 
 
-# swing="landing": the last LANDING_TIME [s] of a swing (at most LANDING_SHARE of it) descends at a constant speed
-# from LANDING_HOVER [m] above the stance height, 0.2 mm above the compliant pad's first contact
-# (legged_mjcf.FOOT_PAD_MARGIN, 0.8 mm), and comes to rest at the stance height in a sin^2 ramp over its last
-# LANDING_RAMP: the foot meets the pad at LANDING_HOVER / (window (1 - LANDING_RAMP / 2)) (sin^2: 0.07-0.25 m/s).
-LANDING_HOVER, LANDING_TIME, LANDING_SHARE, LANDING_RAMP = 0.001, 0.1, 0.2, 0.25
-CUBIC, QUINTIC, LANDING = 0, 1, 2  # the swing's profile (GaitPlanner.profile, gait.PROFILES' order)
-
-
-@jit
-def landing_window(length):
-    """The landing's length [s] in a swing of `length` [s] (swing="landing")."""
-    return min(LANDING_TIME, LANDING_SHARE * length)
-
-
-@jit
-def _ramp(x, r):
-    """Integral over [0, x] of sin^2(pi t / (2 r)) (0 <= x <= r), and its integrand at x."""
-    a = math.pi / (2.0 * r)
-    return 0.5 * x - math.sin(2.0 * a * x) / (4.0 * a), math.sin(a * x) ** 2
-
-
-@jit
-def landing_lift(lift, length, height):
-    """Height above the stance [m] and its rate [m/s] of a "landing" swing at fraction `lift` of its `length` [s].
-
-    The arc over s in [0, 1] of its time T1 = length - window: A sin^2(pi s) + c sin^2(pi s / 2) + v T1 (s^2 - s^3)
-    (A = height - c / 2 - v T1 / 8: the apex is `height` at s = 1/2) lifts off as sin^2 does (unloading a foot is a
-    hand-over, not an impact) and ends at c = LANDING_HOVER descending at v; the window then descends at v and
-    brakes to rest at the stance height in a sin^2 ramp (v c / (window (1 - LANDING_RAMP / 2)).
-    """
-    c, window, r = LANDING_HOVER, landing_window(length), LANDING_RAMP
-    v = c / (window * (1.0 - 0.5 * r))
-    main = length - window
-    t = lift * length
-    if t < main:
-        s = t / main
-        amp = height - 0.5 * c - v * main / 8.0
-        z = amp * math.sin(math.pi * s) ** 2 + c * math.sin(0.5 * math.pi * s) ** 2 + v * main * s * s * (1.0 - s)
-        rate = amp * math.pi * math.sin(2.0 * math.pi * s) + 0.5 * math.pi * c * math.sin(math.pi * s)
-        return z, rate / main + v * s * (2.0 - 3.0 * s)
-    x = min((t - main) / window, 1.0)
-    if x < 1.0 - r:
-        return c - v * window * x, -v
-    d, w = _ramp(1.0 - x, r)
-    return v * window * d, -v * w
-
-
 @jit
 def stance_points(vx, vy, w, start, tau, out):
     """stance_point of every start (m, 2) at every tau (k,) into out (m, k, 2)."""
@@ -296,7 +249,7 @@ def _warp(t, times, s, tau_rows):
 
 @jit
 def targets(
-    cmd, times, s, warped, clock, timing, neutral, seg, count, factors, pos, vel, acc, profile, aim, aimed, out
+    cmd, times, s, warped, clock, timing, neutral, seg, count, factors, pos, vel, acc, quintic, aim, aimed, out
 ):
     """The chunk's foot targets (n + 1, n_legs, 3) into out, from the segments; advances pos (n, 3), vel (n, 2) and
     acc (n, 2) (the planar acceleration a quintic swing starts from; a stance's is taken as zero).
@@ -304,12 +257,10 @@ def targets(
     cmd: (vx, vy, yaw rate). With `warped`, s (n + 1,) is the command's ramp factor at the rows and factors
     (n, rows, 2) its values at each segment's QUERY times: the twist s(t) cmd moves ground-fixed points along cmd's
     paths in the warped time tau = integral of s dt. A stance target is ground-fixed; a swing follows a cubic
-    Hermite (`profile` QUINTIC or LANDING: a quintic one that also starts from the acceleration and ends with none) in
-    the ground plane from the state at lift-off to the touchdown point (aim (n, 2), chosen at lift-off,
+    Hermite (with `quintic`, a quintic one that also starts from the acceleration and ends with none) in the ground
+    plane from the state at lift-off to the touchdown point (aim (n, 2), chosen at lift-off,
     where the next stance is centred on the neutral point: half a stance of warped time before it), lifted by
-    h sin^2(pi s). LANDING: the quintic ends `landing_window` before the touchdown, on the ground-velocity line
-    through the touchdown point, which the foot then follows while `landing_lift` lowers it. Each run's end state (at
-    the event, or the chunk's last time) starts the next.
+    h sin^2(pi s). Each run's end state (at the event, or the chunk's last time) starts the next.
     """
     vx, vy, w = cmd[0], cmd[1], cmd[2]
     n1 = times.shape[0]
@@ -350,34 +301,21 @@ def targets(
             tx, ty = aim[leg, 0], aim[leg, 1]
             tu, tv = f_end * (-vx + w * ty), f_end * (-vy - w * tx)  # the stance velocity at the touchdown
             duration = touchdown - t_state
-            window = landing_window(length) if profile == LANDING else 0.0
-            main = duration - window  # the horizontal arc's time (LANDING: then the ground-velocity line)
-            bx, by = tx - window * tu, ty - window * tv
             for k in range(first, end):
-                if (profile == LANDING and times[k] >= touchdown - window) or main <= 1e-9:
-                    out[k, leg, 0], out[k, leg, 1] = tx + (times[k] - touchdown) * tu, ty + (times[k] - touchdown) * tv
-                elif profile != CUBIC:
-                    u = (times[k] - t_state) / main
-                    out[k, leg, 0] = hermite5(px, ux, ax, bx, tu, main, u)[0]
-                    out[k, leg, 1] = hermite5(py, uy, ay, by, tv, main, u)[0]
+                u = (times[k] - t_state) / duration
+                if quintic:
+                    out[k, leg, 0] = hermite5(px, ux, ax, tx, tu, duration, u)[0]
+                    out[k, leg, 1] = hermite5(py, uy, ay, ty, tv, duration, u)[0]
                 else:
-                    u = (times[k] - t_state) / duration
                     out[k, leg, 0] = hermite(px, ux, tx, tu, duration, u)[0]
                     out[k, leg, 1] = hermite(py, uy, ty, tv, duration, u)[0]
                 lift = min(max((times[k] - (touchdown - length)) / length, 0.0), 1.0)
-                if profile == LANDING:
-                    out[k, leg, 2] = z + landing_lift(lift, length, height)[0]
-                else:
-                    out[k, leg, 2] = z + height * math.sin(math.pi * lift) ** 2
-            if (profile == LANDING and t_end >= touchdown - window) or main <= 1e-9:
-                px, py, ux, uy = tx + (t_end - touchdown) * tu, ty + (t_end - touchdown) * tv, tu, tv
-                ax = ay = 0.0
-            elif profile != CUBIC:
-                u = (t_end - t_state) / main
-                px, ux, ax = hermite5(px, ux, ax, bx, tu, main, u)
-                py, uy, ay = hermite5(py, uy, ay, by, tv, main, u)
+                out[k, leg, 2] = z + height * math.sin(math.pi * lift) ** 2
+            u = (t_end - t_state) / duration
+            if quintic:
+                px, ux, ax = hermite5(px, ux, ax, tx, tu, duration, u)
+                py, uy, ay = hermite5(py, uy, ay, ty, tv, duration, u)
             else:
-                u = (t_end - t_state) / duration
                 px, ux = hermite(px, ux, tx, tu, duration, u)
                 py, uy = hermite(py, uy, ty, tv, duration, u)
         out[n1 - 1, leg, 0], out[n1 - 1, leg, 1] = px, py  # the state at the chunk's last time
@@ -487,8 +425,9 @@ def compile_all() -> None:
     segments(times, clock, timing, seg, count)
     pos, vel, aim, aimed = np.zeros((n, 3)), np.zeros((n, 2)), np.zeros((n, 2)), np.zeros(n, dtype=np.bool_)
     out = np.zeros((rows, n, 3))
-    targets(np.zeros(3), times, times, True, clock, timing, pos, seg, count, np.ones((n, rows, 2)), pos, vel,
-            vel.copy(), LANDING, aim, aimed, out)  # fmt: skip
+    for quintic_swing in (False, True):  # one compiled version serves both (a bool argument)
+        targets(np.zeros(3), times, times, True, clock, timing, pos, seg, count, np.ones((n, rows, 2)), pos, vel,
+                vel.copy(), quintic_swing, aim, aimed, out)  # fmt: skip
     hip, rot = np.full((rows, n, 3), 0.1), np.zeros((n, 3, 3))
     hip_targets(hip.copy(), rot, pos, np.zeros(n), stance, swing_s, np.array([0.05, 0.1, 0.1, 0.008]),
                 np.zeros((n, 4)), np.ones(n, dtype=np.bool_), hip)  # fmt: skip
@@ -496,5 +435,5 @@ def compile_all() -> None:
 
 
 KERNELS = (pitch_of, phase, in_stance, _stance, _swing_fraction, next_touchdown, event_time, stance_point, hermite,
-           _quintic, hermite5, landing_window, _ramp, landing_lift, stance_points, flags, fractions, segments, _warp,
-           targets, hip_targets, add_heights)  # fmt: skip
+           _quintic, hermite5, stance_points, flags, fractions, segments, _warp, targets, hip_targets,
+           add_heights)  # fmt: skip

@@ -118,8 +118,7 @@ class WalkParams:
     )  # fmt: skip
     swing: str = param(
         "cubic", "", "the swing's horizontal arc: cubic Hermite, or quintic (zero acceleration at lift-off and "
-        "touchdown; ~20 % lower top speeds), or landing (quintic, then a slow last millimetre at the ground's speed)",
-        choices=PROFILES,
+        "touchdown; ~20 % lower top speeds)", choices=PROFILES,
     )  # fmt: skip
     schedule: tuple = param((), "", commands.SCHEDULE_DOC, table=(commands.SCHEDULE_ALLOWED, commands.read_schedule))
     waypoints: tuple = param(
