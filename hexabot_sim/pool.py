@@ -18,9 +18,10 @@ from typing import Any
 import numpy as np
 
 from hexabot_sim.errors import HexabotError
-from hexabot_sim.signals import signals_held
+from hexabot_sim.signals import RECEIVED_SIGNALS, signals_held, stop_request
 
 WORKER_WAIT: float = 30.0  # [s] how long a cluster without workers is given to get one
+STOP_GRACE: float = 2.0  # [s] how long a stopped local worker is given to clean up before it is killed
 
 
 # Metrics that measure the computer, not the physics (wall time): left out of sweep.csv, whose bytes
@@ -145,17 +146,26 @@ def local_executor(workers: int) -> concurrent.futures.ProcessPoolExecutor:
 
 def stop(executor: concurrent.futures.Executor, futures: Sequence[concurrent.futures.Future]) -> None:
     """Cancels what has not started and stops what is running: local workers are terminated at once."""
-    for future in futures:
-        future.cancel()
     if isinstance(executor, concurrent.futures.ProcessPoolExecutor):
+        # No future is cancelled here: the pool marks every unfinished one broken when its workers die, and Python
+        # 3.11's pool raised InvalidStateError in its own thread (a traceback on stderr) on one cancelled before.
         processes = list((getattr(executor, "_processes", None) or {}).values())
         for process in processes:
             with contextlib.suppress(OSError, ValueError):
                 process.terminate()
-        executor.shutdown(wait=True, cancel_futures=True)
+        # A worker inside a long C call (a compile, a kernel) runs its SIGTERM handler only when the call returns:
+        # it is given STOP_GRACE, then killed, so the pool's own shutdown below never waits on a live worker.
+        deadline = time.monotonic() + STOP_GRACE
         for process in processes:
-            process.join(timeout=5)
+            with contextlib.suppress(OSError, ValueError, AssertionError):
+                process.join(timeout=max(0.0, deadline - time.monotonic()))
+                if process.is_alive():
+                    process.kill()
+                    process.join(timeout=1.0)
+        executor.shutdown(wait=True)
     else:  # Dask: cancel the tasks on the scheduler; its workers stay up for the next job
+        for future in futures:
+            future.cancel()
         executor.shutdown(wait=False)
 
 
@@ -211,6 +221,7 @@ def run_cells(
 
 
 HEARTBEAT: float = 15.0  # [s] while no cell finishes, the progress is called again this often (it speaks each minute)
+POLL: float = 0.1  # [s] the longest a stop request waits while the sweep waits for its cells
 
 
 def _completed(
@@ -228,13 +239,29 @@ def _completed(
     pending, done = set(futures), 0
     client = getattr(executor, "_client", None)  # a Dask ClientExecutor's client
     workerless_since: float | None = None
+    quiet_since = time.monotonic()
     while pending:
-        finished, pending = concurrent.futures.wait(
-            pending, timeout=HEARTBEAT, return_when=concurrent.futures.FIRST_COMPLETED
-        )
-        if not finished and progress is not None:
+        # Short waits, held: a stop signal is raised here, between two waits, never inside concurrent.futures' own
+        # locks (a future left locked hangs the pool's shutdown); and one whose exception was swallowed is seen
+        # within POLL (a SIGTERM landing in logging's after-fork hook while the pool forked its workers is "ignored"
+        # by Python: the leg-sweep went on with all its cells, 30 s and more).
+        with signals_held():
+            finished, pending = concurrent.futures.wait(
+                pending, timeout=POLL, return_when=concurrent.futures.FIRST_COMPLETED
+            )
+        if RECEIVED_SIGNALS:  # a stop request whose exception was swallowed (simulate's check)
+            raise stop_request(RECEIVED_SIGNALS[-1])
+        for future in finished:
+            done += 1
+            yield future
+        now = time.monotonic()
+        if finished or now - quiet_since < HEARTBEAT:
+            quiet_since = now if finished else quiet_since
+            continue
+        quiet_since = now
+        if progress is not None:
             progress(done, total)
-        if not finished and client is not None:
+        if client is not None:
             try:
                 workers = len(client.nthreads())
             except Exception:
@@ -245,9 +272,6 @@ def _completed(
                 raise WorkerFailed(
                     f"the Dask cluster has had no worker for {WORKER_WAIT:g} s, with {len(pending)} cells unfinished"
                 )
-        for future in finished:
-            done += 1
-            yield future
 
 
 def workers_default() -> int:

@@ -273,6 +273,7 @@ def test_leg_sweep_stops_promptly_and_leaves_no_worker(tmp_path):
     _, err = proc.communicate(timeout=30)
     assert time.monotonic() - started < 5.0
     assert proc.returncode == 128 + signal.SIGTERM, err
+    assert "Traceback" not in err and "Exception in thread" not in err
     time.sleep(0.2)
     for pid in children:
         assert not Path(f"/proc/{pid}").exists() or "zombie" in Path(f"/proc/{pid}/status").read_text()
