@@ -46,6 +46,48 @@ def _on_stairs(base: WalkParams, rise: float, run: float, count: int, low: float
     raise AssertionError("unreachable")  # the loop's last step height returns or raises
 
 
+def _controller_params(base: WalkParams, ranges: np.ndarray) -> WalkParams:
+    """The walk parameters the controller is made with: every corner of the (4, 2) ranges (vx, vy, yaw rate, step
+    height) checked for feasibility, the one needing the largest joint-acceleration limit kept (the limit then covers
+    them all). Raises ValueError naming the first corner the legs cannot deliver."""
+    best, best_limit = base, -1.0
+    for vx, vy, w, h in itertools.product(*ranges):
+        try:
+            p = dataclasses.replace(base, vx=float(vx), vy=float(vy), yaw_rate=float(w), step_height=float(h))
+        except ValueError as e:
+            raise ValueError(
+                f"twist_range and step_height_range must hold commands the legs can deliver; at vx {vx:g}, "
+                f"vy {vy:g}, yaw rate {w:g}, step height {h:g}: {e}"
+            ) from None
+        limit = acceleration_limit(p)
+        if limit > best_limit:
+            best, best_limit = p, limit
+    return best
+
+
+def _feasible_scale(base: WalkParams, ranges: np.ndarray) -> float:
+    """The largest factor (to 1 %, at most 1) by which the twist ranges (rows 0-2 of `ranges`) can be scaled so that
+    every corner is a command the legs can deliver: the default ranges of a robot slower than the hexabot (the
+    quadbot's crawl). Raises ValueError if not even 1 % of them can be delivered (the corners' own message)."""
+
+    def feasible(scale: float) -> bool:
+        try:
+            _controller_params(base, np.vstack([ranges[:3] * scale, ranges[3:]]))
+        except ValueError:
+            return False
+        return True
+
+    if feasible(1.0):
+        return 1.0
+    low, high = 0.0, 1.0  # feasible at low (not yet known at 0), not at high
+    while high - low > 0.01:
+        mid = 0.5 * (low + high)
+        low, high = (mid, high) if feasible(mid) else (low, mid)
+    if low == 0.0:
+        _controller_params(base, np.vstack([ranges[:3] * 0.01, ranges[3:]]))  # raises, naming the corner
+    return math.floor(low * 100.0) / 100.0
+
+
 class ActionSource:
     """The policy's latest action as the controller's command source (control/commands.CommandSource): its twist
     holds for one control period; the step height ramps linearly over the period from the previous action's, so a
@@ -92,7 +134,9 @@ class LeggedCommandEnv(LeggedEnv):
         robot, terrain, slope_deg, roughness, stairs, command_range, reward, randomize_*, render_mode, width,
             height, camera: as LeggedJointsEnv's.
         frame_skip: Physics steps (2 ms each, the controller running at each) per action.
-        twist_range: (low, high) of the controller's vx, vy [m/s] and yaw rate [rad/s].
+        twist_range: (low, high) of the controller's vx, vy [m/s] and yaw rate [rad/s]; default TWIST_RANGE
+            ((-0.15, 0.15), (-0.1, 0.1), (-0.4, 0.4)), scaled down to the largest part of it (to 1 %) whose every
+            corner the robot's legs can deliver (the quadbot's crawl: 0.53 of it).
         step_height_range: (low, high) of the step height [m]; default (0.015, 0.045), on stairs (0.03, 0.045).
     """
 
@@ -105,7 +149,7 @@ class LeggedCommandEnv(LeggedEnv):
         roughness: float = 0.01,
         stairs: tuple[float, float, int] = STAIRS,
         command_range=COMMAND_RANGE,
-        twist_range=TWIST_RANGE,
+        twist_range=None,
         step_height_range=None,
         reward: Reward | dict | None = None,
         randomize_friction: tuple[float, float] | None = None,
@@ -117,7 +161,7 @@ class LeggedCommandEnv(LeggedEnv):
         camera: str = "track",
     ) -> None:
         try:
-            rows = [tuple(r) for r in twist_range]
+            rows = [tuple(r) for r in (TWIST_RANGE if twist_range is None else twist_range)]
         except TypeError:
             rows = []
         if len(rows) != 3:
@@ -138,7 +182,9 @@ class LeggedCommandEnv(LeggedEnv):
             base = _on_stairs(robot_params(robot, **overrides), rise, run, count, float(self.ranges[3, 0]))
         else:
             base = robot_params(robot, **overrides)
-        self.p_controller = self._controller_params(base)
+        if twist_range is None:  # the default: TWIST_RANGE, or the largest part of it this robot's legs can deliver
+            self.ranges[:3] *= _feasible_scale(base, self.ranges)
+        self.p_controller = _controller_params(base, self.ranges)
         super().__init__(
             self.p_controller, frame_skip, terrain, slope_deg, roughness, stairs, command_range, reward,
             randomize_friction, randomize_mass, randomize_servo_gain, render_mode, width, height, camera,
@@ -149,23 +195,6 @@ class LeggedCommandEnv(LeggedEnv):
         # Settle on the home stance up to the gait clock's start, in whole control periods.
         self._settle_steps = math.ceil(round(SETTLE_TIME / self.p_controller.timestep) / self.frame_skip) * frame_skip
         self.controller: WalkingController | None = None
-
-    def _controller_params(self, base):
-        """The walk parameters the controller is made with: every corner of the ranges checked for feasibility,
-        the one needing the largest joint-acceleration limit kept (the limit then covers them all)."""
-        best, best_limit = None, -1.0
-        for vx, vy, w, h in itertools.product(*self.ranges):
-            try:
-                p = dataclasses.replace(base, vx=float(vx), vy=float(vy), yaw_rate=float(w), step_height=float(h))
-            except ValueError as e:
-                raise ValueError(
-                    f"twist_range and step_height_range must hold commands the legs can deliver; at vx {vx:g}, "
-                    f"vy {vy:g}, yaw rate {w:g}, step height {h:g}: {e}"
-                ) from None
-            limit = acceleration_limit(p)
-            if limit > best_limit:
-                best, best_limit = p, limit
-        return best
 
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
         self._start(seed)

@@ -67,6 +67,30 @@ def test_ranges_the_legs_cannot_deliver_are_refused():
         env.step(np.zeros(3))
 
 
+def test_a_slower_robot_gets_the_largest_part_of_the_default_ranges_its_legs_deliver():
+    """The quadbot's crawl cannot deliver the hexabot's default twists (it was refused with the defaults): its default
+    ranges are TWIST_RANGE scaled to the largest feasible part (to 1 %), and it walks at the twist it is given."""
+    from hexabot_sim.envs.command import TWIST_RANGE
+
+    env = LeggedCommandEnv(robot="quadbot")
+    scale = env.ranges[0, 1] / TWIST_RANGE[0][1]
+    assert 0.05 < scale < 1.0
+    assert np.allclose(env.ranges[:3], np.array(TWIST_RANGE) * scale)
+    wider = np.array(TWIST_RANGE) * (scale + 0.02)
+    with pytest.raises(ValueError, match="must hold commands the legs can deliver"):
+        LeggedCommandEnv(robot="quadbot", twist_range=wider)
+    assert np.allclose(LeggedCommandEnv().ranges[:3], TWIST_RANGE)  # the hexabot delivers all of it
+    env.reset(seed=0)
+    twist = (0.05, 0.0, 0.0)
+    speeds = []
+    for k in range(60):
+        _, _, terminated, _, info = env.step(action_for(env, twist, 0.03))
+        assert not terminated
+        if k >= 30:  # after the first 3 s
+            speeds.append((info["vx"], info["vy"], info["yaw_rate"]))
+    assert np.allclose(np.mean(speeds, axis=0), twist, rtol=0.15, atol=0.005)
+
+
 def test_the_controller_writes_the_controls_and_mujoco_steps_them():
     """The controls seen at every physics step (MuJoCo's control callback), replayed with bare mj_step from the same
     start: the same state bit for bit."""
