@@ -218,6 +218,8 @@ def _to_float(raw: Any) -> float | None:
 
 def _convert(name: str, raw: Any, info: ParamInfo, kind: type) -> Any:
     """Converts one raw value (a string from --set or a TOML value) and checks its range."""
+    if (info.table is not None or info.name_or_file is not None) and isinstance(raw, str):
+        raw = _home(raw)
     if info.table is not None:  # a file name or rows: the parameter's own reader
         return info.table[1](name, raw)
     if kind is tuple:  # a list of numbers: "0.01,0.05" on the command line, [0.01, 0.05] in TOML
@@ -255,6 +257,12 @@ def _convert(name: str, raw: Any, info: ParamInfo, kind: type) -> Any:
             raise UsageError(f"parameter '{name}' must be a whole number with {allowed}; got {_show(raw)}")
         return int(value)
     return value
+
+
+def _home(text: str) -> str:
+    """A file name with its leading ~ or ~user expanded, as a shell would (no shell expands it after `--set name=` or
+    in a config file); any other text as it is."""
+    return os.path.expanduser(text) if text.startswith("~") else text
 
 
 def _name_or_file(name: str, raw: Any, kind: NameOrFile) -> str:
@@ -384,7 +392,7 @@ def files_beside(data: dict[str, Any], cls: type, config: Path) -> dict[str, Any
             continue
         if info.name_or_file is not None and value.lower() in (n.lower() for n in info.name_or_file.names):
             continue
-        if Path(value).is_absolute():
+        if Path(_home(value)).is_absolute():  # ~/file: the user's home, not the config's folder
             continue
         missing = False
         with contextlib.suppress(OSError, ValueError):  # a NUL byte or an over-long name: checked later

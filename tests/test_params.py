@@ -188,6 +188,25 @@ def test_a_config_names_its_files_relative_to_its_own_folder(tmp_path, monkeypat
         params.read_config(Path("study/walk.toml"), cls)
 
 
+def test_a_file_name_from_home_is_expanded_in_a_config_and_in_set(tmp_path, monkeypatch):
+    """`~/file` in a config file or after `--set name=` (where no shell expands it) is the user's home's file: it was
+    looked for beside the config, or taken literally, and refused."""
+    cls = registry.get("hexabot-walk").params_type
+    home, study = tmp_path / "home", tmp_path / "study"
+    home.mkdir()
+    study.mkdir()
+    monkeypatch.setenv("HOME", str(home))
+    (home / "sched.csv").write_text("t, vx, vy, yaw_rate\n0, 0.05, 0, 0\n")
+    (study / "walk.toml").write_text('schedule = "~/sched.csv"\n')
+    data = params.read_config(study / "walk.toml", cls)
+    assert data == {"schedule": "~/sched.csv"}
+    for layer in (data, {"schedule": "~/sched.csv"}):  # the config's value, and --set's
+        resolved = params.resolve(cls, {}, layer)
+        assert [list(row[:4]) for row in resolved.schedule] == [[0.0, 0.05, 0.0, 0.0]]
+    with pytest.raises(UsageError, match="schedule"):
+        params.resolve(cls, {}, {"schedule": "~/missing.csv"})
+
+
 @pytest.mark.slow
 def test_run_with_a_config_from_another_folder_reads_the_schedule_beside_it(tmp_path, monkeypatch):
     from hexabot_sim import api
