@@ -148,8 +148,9 @@ def _cells(name: str, shown: str, number: int, line: str) -> list[str]:
 
 def _number(where: str, column: str, value: Any, low: float, high: float, unit: str) -> float:
     """A finite number in [low, high] (a CSV cell or an API value), or a UsageError naming the row."""
-    try:
-        number = float(value.strip() if isinstance(value, str) else value)
+    text = value.strip() if isinstance(value, str) else None
+    try:  # float() reads "0_0.5" as 0.5 and "５" as 5: a slip, or not our digits (as params' numbers)
+        number = math.nan if text is not None and ("_" in text or not text.isascii()) else float(value)
     except (TypeError, ValueError):
         number = math.nan
     if isinstance(value, bool) or not math.isfinite(number) or not low <= number <= high:

@@ -24,6 +24,9 @@ def _write(path: Path, text: str) -> str:
 BAD_SCHEDULES = {
     "t,vx,vy,yaw_rate\n0,0.1,0,0\n2,0.1,0,0\n2,0,0,0.3\n": "line 4: t = 2 s is not after the previous row's 2 s",
     "t,vx,vy,yaw_rate\n0,0.1,0,0\n2,nan,0,0\n": "line 3: vx must be a number from -1 to 1 m/s; got 'nan'",
+    # float() reads "0_0.05" as 0.05 and full-width digits as digits: a slip, refused as params' numbers are
+    "t,vx,vy,yaw_rate\n0,0_0.05,0,0\n": "line 2: vx must be a number from -1 to 1 m/s; got '0_0.05'",
+    "t,vx,vy,yaw_rate\n0,0.05,0,\uff10\n": "line 2: yaw_rate must be a number from -3 to 3 rad/s",
     "t,vx,vy,yaw_rate,gait\n0,0.1,0,0,trot\n": "schedule row 1 (t = 0 s): unknown gait 'trot'; known: tripod",
     "t,vx,vy,yaw_rate\n0,0.1,0,0\n3,0.6,0,0\n": "schedule row 2 (t = 3 s): the legs cannot deliver this command",
     "t,vx,vy,yaw_rate,stand_height\n0,0.1,0,0,0.19\n": "schedule row 1 (t = 0 s): ",
