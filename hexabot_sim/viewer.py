@@ -292,7 +292,8 @@ def replay(
     quit_after: float | None = None,
     announce: Callable[[str], None] = print,
 ) -> str:
-    """Replays a run folder (load_recording) in the viewer until its window is closed (or quit_after wall seconds).
+    """Replays a run folder (load_recording) in the viewer until its window is closed (or quit_after wall seconds
+    after it opens).
 
     Returns:
         One line naming the last state shown (time, row, and whether it is the final state).
@@ -336,11 +337,11 @@ def replay(
     pose(row)
     overlay = hook.overlay if hook is not None else []
     scene = Scene(markers=hook.markers if hook is not None else ())
-    deadline = _deadline(quit_after)
     with _window(model, data, keys, str(folder)) as handle:
         if hook is not None:
             _set_camera(handle.cam, model, data, hook.camera, hook.track_body)
         announce(f"replaying {folder} ({rec.scenario or 'unknown scenario'}, {t[-1] - t[0]:.6g} s, {n} states)")
+        deadline = _deadline(quit_after)  # from the window's opening (seconds on a loaded machine with software GL)
         last = time.monotonic()
         while handle.is_running() and time.monotonic() < deadline:
             now = time.monotonic()
@@ -373,7 +374,8 @@ def live(
     quit_after: float | None = None,
     announce: Callable[[str], None] = print,
 ) -> str:
-    """Steps a scenario in real time in the viewer until its window is closed (or quit_after wall seconds).
+    """Steps a scenario in real time in the viewer until its window is closed (or quit_after wall seconds after it
+    opens).
 
     Args:
         make: Builds the scenario's Live (called again when Home restarts it).
@@ -400,10 +402,10 @@ def live(
     diverged = ""
     behind = False
     show()
-    deadline = _deadline(quit_after)
     with _window(model, data, keys, name) as handle:
         _set_camera(handle.cam, model, data, sim.camera, sim.track_body)
         announce(f"viewing {name} live ({sim.duration:.6g} s simulated, timestep {sim.timestep:g} s)")
+        deadline = _deadline(quit_after)  # from the window's opening
         last = time.monotonic()
         while handle.is_running() and time.monotonic() < deadline:
             now = time.monotonic()

@@ -140,7 +140,10 @@ def build_parser() -> argparse.ArgumentParser:
     view.add_argument("--speed", type=_view_speed, default=1.0, help="playback speed, times real time (default 1)")
     view.add_argument("--paused", action="store_true", help="start paused at t = 0 (space plays)")
     view.add_argument(
-        "--quit-after", type=_view_seconds, metavar="SECONDS", help="close the window after this wall time (scripts)"
+        "--quit-after",
+        type=_view_seconds,
+        metavar="SECONDS",
+        help="close the window this long after it opens (scripts)",
     )
     _add_study_parsers(sub)
     return parser
