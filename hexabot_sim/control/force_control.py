@@ -1,0 +1,144 @@
+"""Stance legs under force control (issue 19): a force distribution fed to the servos as joint torques.
+
+A position-controlled leg in a stance of four or more feet holds a height, not a force: the loads are
+undetermined by statics and set by micrometres of geometry, so a lightly loaded foot unloads and lands again. Here
+(`load_sharing=force`) each stance leg holds its foot *horizontally* with its position servos as before, but
+*vertically* it pushes with a commanded force, as legged robots with force-controlled stances do (a virtual model
+controller with a force distribution, as on MIT's Cheetah or ANYmal):
+
+- the body's wrench: the robot's weight m g plus a PID on the body's height over the stance feet (the weighted
+  plane through them, from the joint encoders) and on its attitude (that plane's slopes, or the IMU's roll and
+  pitch with `level_body=on`), Fz and the moments about the body's x and y axes;
+- its distribution: the vertical forces on the stance feet with the least weighted norm sum f_i^2 / w_i that carry
+  Fz with those moments (force_kernels.distribute; a closed form); a foot's weight w_i ramps up from `least_weight`
+  over `ramp_in` after its touchdown and down over `ramp_out` before its planned lift-off, so a foot takes its load
+  and gives it up smoothly while its neighbours take the rest;
+- the torques: each stance leg's servo command is offset by tau / kp with tau = J_z^T (-f_i - F_z,servo), which
+  replaces the vertical foot force the position servo would exert by -f_i (the foot pushes down with f_i); the
+  position command's height follows the measured foot, and the velocity servo's vertical part is removed, so the
+  servos keep only a damping vertically. A leg's blend into force mode ramps over `blend_in` after touchdown, and
+  back to position control over `blend_out` after lift-off, the swing starting from where the foot is.
+
+The controller reads what a real robot has: joint encoders, the IMU and the plan (the robot's mass is design
+knowledge). The torque reaches the joints through the servos (the position actuator's command offset), no force
+is applied to the model otherwise. Compiled per step: force_kernels.py.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import mujoco
+import numpy as np
+
+
+@dataclasses.dataclass(frozen=True)
+class ForceSettings:
+    """The stance force control's gains and ramps.
+
+    Attributes:
+        ramp_in: A foot's weight in the distribution ramps up over this time after touchdown [s].
+        ramp_out: ... and down over this time before its planned lift-off [s].
+        least_weight: The smallest weight (at touchdown and lift-off).
+        blend_in: A leg's vertical control goes from position to force over this time after touchdown [s].
+        blend_out: ... and back over this time after lift-off [s].
+        height_gain, height_damping, height_integral: PID on the body's height [N/m, N s/m, N/(m s)].
+        attitude_gain, attitude_damping, attitude_integral: PID on the slopes [N m, N m s, N m / s] per unit slope.
+        filter_time: The errors' rates are low-passed with this time constant [s].
+        integral_limit: The integrals' bound [m s or s].
+        return_time: In swing the target's height offset returns to the plan with this time constant [s].
+        touch_threshold: A swing foot whose touch sensor reads more [N] ... 
+        early_after: ... this long [s] after it was last down is down (before its planned touchdown).
+        soft: The moments' softness r in the distribution [m^2] (0: exact; see force_kernels.distribute).
+    """
+
+    ramp_in: float = 0.08
+    ramp_out: float = 0.08
+    least_weight: float = 0.01
+    blend_in: float = 0.02
+    blend_out: float = 0.01
+    height_gain: float = 20000.0
+    height_damping: float = 0.0
+    height_integral: float = 200000.0
+    attitude_gain: float = 300.0
+    attitude_damping: float = 0.0
+    attitude_integral: float = 3000.0
+    filter_time: float = 0.005
+    integral_limit: float = 0.01
+    return_time: float = 0.05
+    soft: float = 0.0
+    touch_threshold: float = 0.3
+    early_after: float = 0.06
+
+
+class StanceForce:
+    """The force control of every leg of a walking controller: `plan` once a chunk, `pre` and `post` every step."""
+
+    def __init__(self, model: mujoco.MjModel, layout, gains, dt: float, settings: ForceSettings, stand_height: float,
+                 level: bool) -> None:  # fmt: skip
+        from hexabot_sim.control import force_kernels as fk
+
+        self.fk = fk
+        n = layout.n_legs
+        self.settings = settings
+        self.dt = dt
+        hips = layout.hip_positions()
+        self.geo = np.zeros((n, 5))
+        self.geo[:, fk.TOUCH_ADR] = [model.sensor_adr[model.sensor(f"{leg}_touch").id] for leg in layout.legs]
+        self.geo[:, fk.COS], self.geo[:, fk.SIN] = np.cos(layout.yaws), np.sin(layout.yaws)
+        self.geo[:, fk.HIP_X], self.geo[:, fk.HIP_Y] = hips[:, 0], hips[:, 1]
+        g = layout.geometry
+        mass = float(model.body_subtreemass[model.body("torso").id])
+        s = settings
+        p = np.zeros(fk.NPAR)
+        p[fk.DT], p[fk.WEIGHT] = dt, mass * float(-model.opt.gravity[2])
+        p[[fk.T_IN, fk.T_OUT, fk.S_IN, fk.S_OUT, fk.W_MIN]] = s.ramp_in, s.ramp_out, s.blend_in, s.blend_out, s.least_weight
+        p[[fk.K_H, fk.D_H, fk.I_H]] = s.height_gain, s.height_damping, s.height_integral
+        p[[fk.K_T, fk.D_T, fk.I_T]] = s.attitude_gain, s.attitude_damping, s.attitude_integral
+        p[fk.STAND], p[fk.LEVEL] = stand_height, float(level)
+        p[fk.QUAT_ADR] = model.sensor_adr[model.sensor("imu_quat").id]
+        p[fk.RETURN_TIME], p[fk.TASK_GAIN] = s.return_time, gains.task_gain
+        p[[fk.L1, fk.L2, fk.L3]] = g.l1, g.l2, g.l3
+        p[fk.FILTER], p[fk.I_LIMIT], p[fk.SOFT] = s.filter_time, s.integral_limit, s.soft
+        p[fk.TOUCH_THRESHOLD], p[fk.EARLY_AFTER] = s.touch_threshold, s.early_after
+        femur, tibia = model.body(f"{layout.legs[0]}_femur"), model.body(f"{layout.legs[0]}_tibia")
+        gravity = float(-model.opt.gravity[2])
+        p[fk.G_FEMUR] = float(femur.mass[0]) * gravity * float(femur.ipos[0])
+        p[fk.G_TIBIA], p[fk.TIBIA_COM] = float(tibia.mass[0]) * gravity, float(tibia.ipos[0])
+        self.par = p
+        self.state = np.zeros((n, fk.NSTATE))
+        self.body = np.zeros(fk.NBODY)
+        self.kp = np.ascontiguousarray(model.actuator_gainprm[: 3 * n, 0], dtype=float)
+        self.extra = np.zeros(3 * n)
+        self._until = np.full((1, n), 1e9)  # per row of the chunk: time to each leg's next planned lift-off [s]
+
+    def plan(self, planner, times: np.ndarray, stance: np.ndarray) -> None:
+        """The chunk's rows (times (m,), planned stance (m, n)): the time from each row to each leg's next planned
+        lift-off (after its next touchdown if it is in swing; 1e9 beyond the plan's next ramp_out)."""
+        dt = self.dt
+        extra = max(1, int(np.ceil(self.settings.ramp_out / dt)) + 2)
+        later = planner.in_stance(times[-1] + dt * np.arange(1, extra + 1))
+        flags = np.concatenate([stance, later.reshape(extra, -1)])
+        rows = flags.shape[0]
+        idx = np.arange(rows)[:, None]
+        nf = np.minimum.accumulate(np.where(~flags, idx, rows)[::-1], axis=0)[::-1]  # next swing row
+        nt = np.minimum.accumulate(np.where(flags, idx, rows)[::-1], axis=0)[::-1]  # next stance row
+        legs = np.arange(flags.shape[1])[None, :]
+        lift = np.where(nt < rows, nf[np.minimum(nt, rows - 1), legs], rows)
+        until = np.where(lift < rows, (lift - idx) * dt, 1e9)
+        self._until = np.ascontiguousarray(until[: stance.shape[0]])
+
+    def pre(self, qpos, trims, sensordata, row, down, k: int) -> np.ndarray:
+        """Before the servo step of row k: returns the feed correction (3 n,)."""
+        self.fk.force_pre(self.par, self.geo, self.state, self.body, qpos, trims, sensordata, row, down,
+                          self._until[k], self.extra)  # fmt: skip
+        return self.extra
+
+    def post(self, qpos, trims, q_cmd, dq, ctrl) -> None:
+        """After the servo step: the force-mode legs' servo commands."""
+        self.fk.force_post(self.par, self.state, qpos, trims, q_cmd, dq, self.kp, ctrl)
+
+    @property
+    def forces(self) -> np.ndarray:
+        """The commanded vertical ground force of each foot now [N] (n_legs,)."""
+        return self.state[:, self.fk.FORCE].copy()
