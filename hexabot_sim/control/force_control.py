@@ -1,27 +1,32 @@
-"""Stance legs under force control (issue 19): a force distribution fed to the servos as joint torques.
+"""Stance legs under force control (issue 19, `load_sharing=force`): a force distribution fed to the servos as joint
+torques.
 
-A position-controlled leg in a stance of four or more feet holds a height, not a force: the loads are
-undetermined by statics and set by micrometres of geometry, so a lightly loaded foot unloads and lands again. Here
-(`load_sharing=force`) each stance leg holds its foot *horizontally* with its position servos as before, but
-*vertically* it pushes with a commanded force, as legged robots with force-controlled stances do (a virtual model
-controller with a force distribution, as on MIT's Cheetah or ANYmal):
+A position-controlled leg in a stance of four or more feet holds a height, not a force: the loads are undetermined
+by statics and set by micrometres of geometry, so a lightly loaded foot unloads and lands again. Here each stance
+leg holds its foot *horizontally* with its position servos as before, but *vertically* it pushes with a commanded
+force (a virtual model controller with a force distribution, as legged robots with force-controlled stances do):
 
-- the body's wrench: the robot's weight m g plus a PID on the body's height over the stance feet (the weighted
-  plane through them, from the joint encoders) and on its attitude (that plane's slopes, or the IMU's roll and
-  pitch with `level_body=on`), Fz and the moments about the body's x and y axes;
-- its distribution: the vertical forces on the stance feet with the least weighted norm sum f_i^2 / w_i that carry
-  Fz with those moments (force_kernels.distribute; a closed form); a foot's weight w_i ramps up from `least_weight`
-  over `ramp_in` after its touchdown and down over `ramp_out` before its planned lift-off, so a foot takes its load
-  and gives it up smoothly while its neighbours take the rest;
-- the torques: each stance leg's servo command is offset by tau / kp with tau = J_z^T (-f_i - F_z,servo), which
-  replaces the vertical foot force the position servo would exert by -f_i (the foot pushes down with f_i); the
-  position command's height follows the measured foot, and the velocity servo's vertical part is removed, so the
-  servos keep only a damping vertically. A leg's blend into force mode ramps over `blend_in` after touchdown, and
-  back to position control over `blend_out` after lift-off, the swing starting from where the foot is.
+- the body's wrench: the robot's weight m g plus a PI on the body's height over the stance feet and a P on its
+  attitude, Fz and the moments about the body's x and y axes. The errors come from the joint encoders: the
+  weighted plane z = a + b x + c y through the stance feet (body frame); height error a + stand_height, slope
+  errors (b, c) (with `level_body=on` the IMU's pitch and roll instead). They move with the feet that are down
+  (the plane through the same feet with the same weights now and a step ago), drawn to the plane's own values over
+  `filter_time`: a foot that lands or lifts changes the plane at once, which would be a step in the wrench;
+- its distribution: the vertical forces on the stance feet with the least weighted norm sum f_i^2 / w_i that sum
+  to Fz, the moments soft (force_kernels.distribute, a closed form); a foot's weight ramps up from `least_weight`
+  over `ramp_in` after its touchdown and down over `ramp_out` before its planned lift-off;
+- the torques: each stance leg's position command is offset by tau / kp, tau = J_z^T (-f_i - F_z,servo), which
+  replaces the vertical foot force the position servo would exert (beyond holding the leg's own weight) by the
+  commanded one (the foot pushes down with f_i); the position command's height follows the measured foot's and
+  the velocity command loses its vertical part, so vertically the servos keep only their damping. A leg blends
+  into force mode over `blend_in` from its touchdown (planned, sensed by the ground controller, or its touch
+  sensor firing `early_after` after it was last down), and back to position control over `blend_out` after
+  lift-off; the swing starts from where the foot is (a height offset that returns to the plan over
+  `return_time`).
 
-The controller reads what a real robot has: joint encoders, the IMU and the plan (the robot's mass is design
-knowledge). The torque reaches the joints through the servos (the position actuator's command offset), no force
-is applied to the model otherwise. Compiled per step: force_kernels.py.
+The controller reads what a real robot has: joint encoders, the touch sensors, the IMU, and the plan; the robot's
+mass and the legs' link masses are design knowledge. The torque reaches the joints through the servos (the
+position actuator's command offset); nothing else acts on the model. Compiled per step: force_kernels.py.
 """
 
 from __future__ import annotations
@@ -42,31 +47,30 @@ class ForceSettings:
         least_weight: The smallest weight (at touchdown and lift-off).
         blend_in: A leg's vertical control goes from position to force over this time after touchdown [s].
         blend_out: ... and back over this time after lift-off [s].
-        height_gain, height_damping, height_integral: PID on the body's height [N/m, N s/m, N/(m s)].
-        attitude_gain, attitude_damping, attitude_integral: PID on the slopes [N m, N m s, N m / s] per unit slope.
-        filter_time: The errors' rates are low-passed with this time constant [s].
+        height_gain, height_integral: PI on the body's height [N/m, N/(m s)].
+        attitude_gain, attitude_integral: PI on the slopes [N m, N m / s] per unit slope.
+        filter_time: The errors are drawn to the stance plane's with this time constant [s].
         integral_limit: The integrals' bound [m s or s].
         return_time: In swing the target's height offset returns to the plan with this time constant [s].
-        touch_threshold: A swing foot whose touch sensor reads more [N] ... 
-        early_after: ... this long [s] after it was last down is down (before its planned touchdown).
         soft: The moments' softness r in the distribution [m^2] (0: exact; see force_kernels.distribute).
+        touch_threshold: A swing foot whose touch sensor reads more than this [N] ...
+        early_after: ... this long [s] after it was last down is down (the planned controller; the ground
+            controller's sensed touchdown says so itself).
     """
 
-    ramp_in: float = 0.08
-    ramp_out: float = 0.08
+    ramp_in: float = 0.01
+    ramp_out: float = 0.01
     least_weight: float = 0.01
-    blend_in: float = 0.02
+    blend_in: float = 0.01
     blend_out: float = 0.01
     height_gain: float = 20000.0
-    height_damping: float = 0.0
     height_integral: float = 200000.0
-    attitude_gain: float = 300.0
-    attitude_damping: float = 0.0
-    attitude_integral: float = 3000.0
-    filter_time: float = 0.005
+    attitude_gain: float = 1500.0
+    attitude_integral: float = 0.0
+    filter_time: float = 0.05
     integral_limit: float = 0.01
     return_time: float = 0.05
-    soft: float = 0.0
+    soft: float = 0.01
     touch_threshold: float = 0.3
     early_after: float = 0.06
 
@@ -92,9 +96,14 @@ class StanceForce:
         s = settings
         p = np.zeros(fk.NPAR)
         p[fk.DT], p[fk.WEIGHT] = dt, mass * float(-model.opt.gravity[2])
-        p[[fk.T_IN, fk.T_OUT, fk.S_IN, fk.S_OUT, fk.W_MIN]] = s.ramp_in, s.ramp_out, s.blend_in, s.blend_out, s.least_weight
-        p[[fk.K_H, fk.D_H, fk.I_H]] = s.height_gain, s.height_damping, s.height_integral
-        p[[fk.K_T, fk.D_T, fk.I_T]] = s.attitude_gain, s.attitude_damping, s.attitude_integral
+        p[[fk.T_IN, fk.T_OUT, fk.S_IN, fk.S_OUT, fk.W_MIN]] = (
+            s.ramp_in,
+            s.ramp_out,
+            s.blend_in,
+            s.blend_out,
+            s.least_weight,
+        )
+        p[[fk.K_H, fk.I_H, fk.K_T, fk.I_T]] = s.height_gain, s.height_integral, s.attitude_gain, s.attitude_integral
         p[fk.STAND], p[fk.LEVEL] = stand_height, float(level)
         p[fk.QUAT_ADR] = model.sensor_adr[model.sensor("imu_quat").id]
         p[fk.RETURN_TIME], p[fk.TASK_GAIN] = s.return_time, gains.task_gain

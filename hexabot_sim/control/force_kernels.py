@@ -10,10 +10,9 @@ import numpy as np
 from hexabot_sim.control.kernels import jit
 
 # Scalars `par`.
-(DT, WEIGHT, T_IN, T_OUT, S_IN, S_OUT, W_MIN, K_H, D_H, I_H, K_T, D_T, I_T, STAND, LEVEL, QUAT_ADR, RETURN_TIME,
- TASK_GAIN, L1, L2, L3, FILTER, I_LIMIT, SOFT, G_FEMUR, G_TIBIA, TIBIA_COM, TOUCH_THRESHOLD, EARLY_AFTER,
- SETTLE) = range(30)  # fmt: skip
-NPAR = 30
+(DT, WEIGHT, T_IN, T_OUT, S_IN, S_OUT, W_MIN, K_H, I_H, K_T, I_T, STAND, LEVEL, QUAT_ADR, RETURN_TIME, TASK_GAIN,
+ L1, L2, L3, FILTER, I_LIMIT, SOFT, G_FEMUR, G_TIBIA, TIBIA_COM, TOUCH_THRESHOLD, EARLY_AFTER) = range(27)  # fmt: skip
+NPAR = 27
 # Per-leg constants `geo` (n, 5).
 COS, SIN, HIP_X, HIP_Y, TOUCH_ADR = range(5)
 # Per-leg state `state` (n, NSTATE): force-mode blend s, time down, the target's vertical offset and its rate,
@@ -22,10 +21,10 @@ COS, SIN, HIP_X, HIP_Y, TOUCH_ADR = range(5)
 # since the foot was last down [s]).
 S, SINCE, DZ, VZ, FORCE, W, X, Y, Z, EARLY, UP = range(11)
 NSTATE = 11
-# The body's state `body` (NBODY,): the errors (height, two slopes), their filtered rates and integrals, whether
-# the errors have been measured once, the wrench asked for (Fz, Px, Py).
-E, DE, IE, STARTED, WRENCH = 0, 3, 6, 9, 10
-NBODY = 13
+# The body's state `body` (NBODY,): the errors (height, two slopes) and their integrals, whether the errors have
+# been measured once, the wrench asked for (Fz, Px, Py).
+E, IE, STARTED, WRENCH = 0, 3, 6, 7
+NBODY = 10
 
 
 @jit
@@ -175,9 +174,9 @@ def force_pre(par, geo, state, body, qpos, trims, sensordata, row, down, until, 
         for k in range(3):
             body[IE + k] = max(-lim, min(lim, body[IE + k] + body[E + k] * dt))
         body[STARTED] = 1.0
-    body[WRENCH] = par[WEIGHT] + par[K_H] * body[E] + par[D_H] * body[DE] + par[I_H] * body[IE]
+    body[WRENCH] = par[WEIGHT] + par[K_H] * body[E] + par[I_H] * body[IE]
     for k in range(1, 3):
-        body[WRENCH + k] = par[K_T] * body[E + k] + par[D_T] * body[DE + k] + par[I_T] * body[IE + k]
+        body[WRENCH + k] = par[K_T] * body[E + k] + par[I_T] * body[IE + k]
     f = np.empty(m)
     distribute(xs[:m], ys[:m], ws[:m], body[WRENCH], body[WRENCH + 1], body[WRENCH + 2], par[SOFT], f)
     for k in range(m):

@@ -164,8 +164,12 @@ class WalkingController:
             model, layout.legs, self.hips, layout.yaws, gains.task_gain, self.dt, planner.stance_time,
             settings.admittance,
         )  # fmt: skip
-        self.force = None if settings.force is None else StanceForce(
-            model, layout, gains, self.dt, settings.force, -float(np.mean(planner.neutral[:, 2])), False
+        self.force = (
+            None
+            if settings.force is None
+            else StanceForce(
+                model, layout, gains, self.dt, settings.force, -float(np.mean(planner.neutral[:, 2])), False
+            )
         )
         self._no_extra = np.zeros(nq)  # the feed correction without an admittance
         self._feed_row = np.zeros(nq)
@@ -398,6 +402,7 @@ class GroundController(WalkingController):
         self._started = False
         if self.force is not None:  # its height and levelling are the ground's
             self.force = StanceForce(model, layout, gains, self.dt, settings.force, ground.stand_height, ground.level)
+            self.force.par[self.force.fk.EARLY_AFTER] = math.inf  # the ground's own touchdown modes say when
         self._down = np.zeros(n, dtype=bool)
 
     def _swing_time(self, planner: GaitPlanner) -> None:

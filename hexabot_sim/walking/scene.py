@@ -134,14 +134,6 @@ def acceleration_limit(p: WalkParams) -> float:
     return max(ACCELERATION_LIMIT, ACCELERATION_HEADROOM * peak)
 
 
-def _force_settings():  # EXPERIMENT: overrides from HEXFORCE="name=value,..."
-    import os
-
-    text = os.environ.get("HEXFORCE", "")
-    kw = {k: float(v) for k, v in (item.split("=") for item in text.split(",") if item)}
-    return ForceSettings(**kw)
-
-
 def make_controller(
     p: WalkParams, model: mujoco.MjModel, data: mujoco.MjData, source: CommandSource | None = None
 ) -> WalkingController:
@@ -159,7 +151,7 @@ def make_controller(
         p.command(), settle_time=SETTLE_TIME, ramp_time=p.period if source is None else 0.0,
         heading_hold=p.heading_hold == "on", trims=tuple(trims.tolist()),
         admittance=AdmittanceSettings() if p.load_sharing == "admittance" else None,
-        force=_force_settings() if p.load_sharing == "force" else None,
+        force=ForceSettings() if p.load_sharing == "force" else None,
     )  # fmt: skip
     gains = ResolvedRateGains(p.task_gain, 0.01, 0.01, p.max_joint_speed, acceleration_limit(p))
     q0 = model.key("home").qpos[7:].reshape(-1, 3)
