@@ -147,6 +147,11 @@ class StanceForce:
         """After the servo step: the force-mode legs' servo commands."""
         self.fk.force_post(self.par, self.state, qpos, trims, q_cmd, dq, self.kp, ctrl)
 
+    def step(self, qpos, trims, sensordata, row, down, k: int, feed, consts, q_cmd, dq, ctrl) -> None:
+        """pre, the servo step toward `feed` and post in one compiled call (the planned controller)."""
+        self.fk.force_step(self.par, self.geo, self.state, self.body, qpos, trims, sensordata, row, down,
+                           self._until[k], feed, consts, q_cmd, dq, self.kp, ctrl)  # fmt: skip
+
     @property
     def forces(self) -> np.ndarray:
         """The commanded vertical ground force of each foot now [N] (n_legs,)."""

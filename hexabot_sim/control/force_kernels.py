@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from hexabot_sim.control.kernels import jit
+from hexabot_sim.control.kernels import jit, servo
 
 # Scalars `par`.
 (DT, WEIGHT, T_IN, T_OUT, S_IN, S_OUT, W_MIN, K_H, I_H, K_T, I_T, STAND, LEVEL, QUAT_ADR, RETURN_TIME, TASK_GAIN,
@@ -232,6 +232,27 @@ def force_post(par, state, qpos, trims, q_cmd, dq, kp, ctrl):
         ctrl[nq + j + 2] = dq[j + 2] - b11 * vz / det
 
 
+@jit
+def force_step(par, geo, state, body, qpos, trims, sensordata, row, down, until, feed, k, q_cmd, dq, kp, ctrl):
+    """One control step of the planned walking controller with force control, in one call: force_pre, the servo
+    step toward `feed` (3 n,) plus its correction (kernels.servo), force_post."""
+    extra = np.zeros(feed.shape[0])  # force_pre sets the z entries only
+    force_pre(par, geo, state, body, qpos, trims, sensordata, row, down, until, extra)
+    for i in range(feed.shape[0]):
+        extra[i] += feed[i]
+    servo(k, qpos, trims, q_cmd, dq, extra, par[DT], ctrl)
+    force_post(par, state, qpos, trims, q_cmd, dq, kp, ctrl)
+
+
+@jit
+def ground_down(flags, stance_modes, out):
+    """out[i] = the ground controller's leg i is down: its mode (flags[i, 0]) one of `stance_modes` (STANCE, EARLY)
+    and grounded (flags[i, 2])."""
+    for i in range(flags.shape[0]):
+        mode = flags[i, 0]
+        out[i] = (mode == stance_modes[0] or mode == stance_modes[1]) and flags[i, 2] != 0
+
+
 def compile_all() -> None:
     """Calls each kernel once on arrays of the types the controller passes."""
     n = 6
@@ -242,6 +263,14 @@ def compile_all() -> None:
     trims, extra, row = np.zeros(3 * n), np.zeros(3 * n), np.zeros(3 * n)
     force_pre(par, geo, state, body, qpos, trims, np.zeros(8), row, np.ones(n, dtype=np.bool_), np.ones(n), extra)
     force_post(par, state, qpos, trims, np.zeros(3 * n), np.zeros(3 * n), np.ones(3 * n), np.zeros(6 * n))
+    ground_down(np.zeros((n, 3), dtype=np.int64), np.zeros(2, dtype=np.int64), np.zeros(n, dtype=np.bool_))
+    from hexabot_sim.control import resolved_rate
+    from hexabot_sim.kinematics.leg import LegGeometry
+
+    gains = resolved_rate.ResolvedRateGains(max_joint_acceleration=200.0)
+    k = np.array(resolved_rate.step_constants(LegGeometry(), gains, (-1.0, -1.0, 0.0), (1.0, 1.0, 2.0)))
+    force_step(par, geo, state, body, qpos, trims, np.zeros(8), row, np.ones(n, dtype=np.bool_), np.ones(n), extra, k,
+               np.zeros(3 * n), np.zeros(3 * n), np.ones(3 * n), np.zeros(6 * n))  # fmt: skip
 
 
-KERNELS = (solve3, distribute, plane, foot, force_pre, force_post)
+KERNELS = (solve3, distribute, plane, foot, force_pre, force_post, force_step, ground_down)

@@ -276,13 +276,11 @@ class WalkingController:
         if self.admittance is not None:
             extra = self.admittance.update(self._sensordata, self._rows[k], self._stance[k])
             feed = np.add(feed, extra, out=self._feed_row)
-        force = self.force
-        if force is not None:
-            extra = force.pre(self._qpos, self.trims, self._sensordata, self._rows[k], self._stance[k], k)
-            feed = np.add(feed, extra, out=self._feed_row)
-        self.kernels.servo(self.consts, self._qpos, self.trims, self.q_cmd, self.dq, feed, self.dt, self._ctrl)
-        if force is not None:
-            force.post(self._qpos, self.trims, self.q_cmd, self.dq, self._ctrl)
+        if self.force is not None:  # its kernel runs the servo step too
+            self.force.step(self._qpos, self.trims, self._sensordata, self._rows[k], self._stance[k], k, feed,
+                            self.consts, self.q_cmd, self.dq, self._ctrl)  # fmt: skip
+        else:
+            self.kernels.servo(self.consts, self._qpos, self.trims, self.q_cmd, self.dq, feed, self.dt, self._ctrl)
         self._k = k + 1
 
 
@@ -404,6 +402,7 @@ class GroundController(WalkingController):
             self.force = StanceForce(model, layout, gains, self.dt, settings.force, ground.stand_height, ground.level)
             self.force.par[self.force.fk.EARLY_AFTER] = math.inf  # the ground's own touchdown modes say when
         self._down = np.zeros(n, dtype=bool)
+        self._down_modes = np.array([K.STANCE, K.EARLY], dtype=np.int64)  # with GROUNDED: the leg is down
 
     def _swing_time(self, planner: GaitPlanner) -> None:
         """The kernel's swing time and late-touchdown seek speed (half the swing's peak) from the planner's gait."""
@@ -482,8 +481,7 @@ class GroundController(WalkingController):
             extra = self.admittance.update(self._sensordata, self._row_prev, stance[k])
         force = self.force
         if force is not None:
-            mode = self.flags[:, K.MODE]
-            self._down[:] = ((mode == K.STANCE) | (mode == K.EARLY)) & (self.flags[:, K.GROUNDED] != 0)
+            force.fk.ground_down(self.flags, self._down_modes, self._down)
             extra = force.pre(self._qpos, self.trims, self._sensordata, self._row_prev, self._down, k)
         n = K.ground_step(self.par, self.geo, self.consts, self.legs, self.flags, self.plane, self.counts, self.cmd,
                           rows, stance, k, t, self._row_prev, self.q_cmd, self.dq, self.trims, self._qpos,
