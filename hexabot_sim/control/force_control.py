@@ -14,7 +14,9 @@ force (a virtual model controller with a force distribution, as legged robots wi
   `filter_time`: a foot that lands or lifts changes the plane at once, which would be a step in the wrench;
 - its distribution: the vertical forces on the stance feet with the least weighted norm sum f_i^2 / w_i that sum
   to Fz, the moments soft (force_kernels.distribute, a closed form); a foot's weight ramps up from `least_weight`
-  over `ramp_in` after its touchdown and down over `ramp_out` before its planned lift-off;
+  over `ramp_in` after its touchdown and down over `ramp_out` before its planned lift-off (with a `duty` above the
+  gait's own, `for_overlap`: smoothstep ramps over the whole overlap of a landing and a lifting foot, so their
+  weights sum to 1, and each foot's force closed around its touch sensor);
 - the torques: each stance leg's position command is offset by tau / kp, tau = J_z^T (-f_i - F_z,servo), which
   replaces the vertical foot force the position servo would exert (beyond holding the leg's own weight) by the
   commanded one (the foot pushes down with f_i); the position command's height follows the measured foot's and
@@ -56,6 +58,11 @@ class ForceSettings:
         touch_threshold: A swing foot whose touch sensor reads more than this [N] ...
         early_after: ... this long [s] after it was last down is down (the planned controller; the ground
             controller's sensed touchdown says so itself).
+        smooth: The weights' ramps are smoothstep 3 x^2 - 2 x^3 instead of linear (force_kernels.ramp).
+        from_plan: A foot down before its planned (or, with the ground controller, sensed) touchdown keeps the
+            least weight until then; its ramp starts there.
+        force_gain: Each stance foot's commanded force is corrected by this gain times its error against the
+            foot's touch sensor (0: open loop).
     """
 
     ramp_in: float = 0.01
@@ -73,6 +80,21 @@ class ForceSettings:
     soft: float = 0.01
     touch_threshold: float = 0.3
     early_after: float = 0.06
+    smooth: bool = False
+    from_plan: bool = False
+    force_gain: float = 0.0
+
+
+def for_overlap(overlap: float) -> ForceSettings:
+    """The settings for hand-overs that overlap by `overlap` [s] (a `duty` above the gait's own: a foot lands
+    that long before the one it relieves lifts): each foot's weight ramps up over the whole overlap from its
+    planned touchdown and down over the whole overlap to its planned lift-off, smoothstep, so a landing foot's
+    and a lifting foot's weights sum to 1 throughout; the commanded forces closed around the touch sensors (gain
+    1: the servos' damping and the pad otherwise make the feet's forces lag the command by ~20-30 ms). An overlap
+    not above the default ramps' 10 ms: the defaults."""
+    if overlap <= ForceSettings.ramp_in + 1e-9:
+        return ForceSettings()
+    return ForceSettings(ramp_in=overlap, ramp_out=overlap, smooth=True, from_plan=True, force_gain=1.0)
 
 
 class StanceForce:
@@ -110,6 +132,7 @@ class StanceForce:
         p[[fk.L1, fk.L2, fk.L3]] = g.l1, g.l2, g.l3
         p[fk.FILTER], p[fk.I_LIMIT], p[fk.SOFT] = s.filter_time, s.integral_limit, s.soft
         p[fk.TOUCH_THRESHOLD], p[fk.EARLY_AFTER] = s.touch_threshold, s.early_after
+        p[fk.SMOOTH], p[fk.FROM_PLAN], p[fk.K_F] = float(s.smooth), float(s.from_plan), s.force_gain
         femur, tibia = model.body(f"{layout.legs[0]}_femur"), model.body(f"{layout.legs[0]}_tibia")
         gravity = float(-model.opt.gravity[2])
         p[fk.G_FEMUR] = float(femur.mass[0]) * gravity * float(femur.ipos[0])

@@ -11,16 +11,17 @@ from hexabot_sim.control.kernels import jit, servo
 
 # Scalars `par`.
 (DT, WEIGHT, T_IN, T_OUT, S_IN, S_OUT, W_MIN, K_H, I_H, K_T, I_T, STAND, LEVEL, QUAT_ADR, RETURN_TIME, TASK_GAIN,
- L1, L2, L3, FILTER, I_LIMIT, SOFT, G_FEMUR, G_TIBIA, TIBIA_COM, TOUCH_THRESHOLD, EARLY_AFTER) = range(27)  # fmt: skip
-NPAR = 27
+ L1, L2, L3, FILTER, I_LIMIT, SOFT, G_FEMUR, G_TIBIA, TIBIA_COM, TOUCH_THRESHOLD, EARLY_AFTER, SMOOTH,
+ FROM_PLAN, K_F) = range(30)  # fmt: skip
+NPAR = 30
 # Per-leg constants `geo` (n, 5).
 COS, SIN, HIP_X, HIP_Y, TOUCH_ADR = range(5)
 # Per-leg state `state` (n, NSTATE): force-mode blend s, time down, the target's vertical offset and its rate,
 # the commanded ground force [N], the weight in the distribution, the foot's body-frame position (x, y, z).
 # A foot that touches late in its swing is down before the plan says (EARLY latched until its stance; UP: time
 # since the foot was last down [s]).
-S, SINCE, DZ, VZ, FORCE, W, X, Y, Z, EARLY, UP = range(11)
-NSTATE = 11
+S, SINCE, DZ, VZ, FORCE, W, X, Y, Z, EARLY, UP, TOUCH = range(12)
+NSTATE = 12
 # The body's state `body` (NBODY,): the errors (height, two slopes) and their integrals, whether the errors have
 # been measured once, the wrench asked for (Fz, Px, Py).
 E, IE, STARTED, WRENCH = 0, 3, 6, 7
@@ -50,6 +51,14 @@ def solve3(a, b, out):
     for i in range(3):
         out[i] = inv[i, 0] * b[0] + inv[i, 1] * b[1] + inv[i, 2] * b[2]
     return True
+
+
+@jit
+def ramp(x, smooth):
+    """A weight's ramp at x (0 at x <= 0, 1 at x >= 1): linear, or smoothstep 3 x^2 - 2 x^3 if `smooth` (C1, and
+    ramp(1 - x) = 1 - ramp(x): a foot ramping up and one ramping down over the same interval sum to 1)."""
+    x = min(1.0, max(0.0, x))
+    return x * x * (3.0 - 2.0 * x) if smooth else x
 
 
 @jit
@@ -134,16 +143,19 @@ def force_pre(par, geo, state, body, qpos, trims, sensordata, row, down, until, 
         state[i, Y] = s * hx + c * hy + geo[i, HIP_Y]
         z_before = state[i, Z] if body[STARTED] != 0.0 else hz
         state[i, Z] = hz
-        touching = sensordata[int(geo[i, TOUCH_ADR])] > par[TOUCH_THRESHOLD]
+        state[i, TOUCH] = sensordata[int(geo[i, TOUCH_ADR])]
+        touching = state[i, TOUCH] > par[TOUCH_THRESHOLD]
         if down[i]:
             state[i, EARLY] = 0.0
         elif touching and state[i, UP] > par[EARLY_AFTER]:
             state[i, EARLY] = 1.0  # the foot met the ground before its planned touchdown: down from now on
         if down[i] or state[i, EARLY] != 0.0:
             state[i, UP] = 0.0
-            state[i, SINCE] += dt
+            if down[i] or par[FROM_PLAN] == 0.0:  # FROM_PLAN: an early touch waits at the least weight
+                state[i, SINCE] += dt
             state[i, S] = min(1.0, state[i, S] + dt / par[S_IN])
-            w = min(1.0, state[i, SINCE] / par[T_IN], until[i] / par[T_OUT])
+            smooth = par[SMOOTH] != 0.0
+            w = min(ramp(state[i, SINCE] / par[T_IN], smooth), ramp(until[i] / par[T_OUT], smooth))
             state[i, W] = max(par[W_MIN], w)
             xs[m], ys[m], zs[m], zp[m], ws[m] = state[i, X], state[i, Y], hz, z_before, state[i, W]
             idx[m] = i
@@ -223,7 +235,10 @@ def force_post(par, state, qpos, trims, q_cmd, dq, kp, ctrl):
         t2 = kp[j + 1] * (q_cmd[j + 1] - q2) + g2
         t3 = kp[j + 2] * (q_cmd[j + 2] - q3) + g3
         fz = (-b12 * t2 + b11 * t3) / det  # (F_r, F_z) = B^-T (t2, t3): the servo's foot force on the ground, z
-        add = -s * (fz + state[i, FORCE])
+        # The commanded force, corrected by K_F times its error against the touch sensor's (a force loop around the
+        # servo's open-loop push, which its damping and the pad make lag).
+        push = state[i, FORCE] + par[K_F] * (state[i, FORCE] - state[i, TOUCH])
+        add = -s * (fz + push)
         ctrl[j] = q_cmd[j] + trims[j]
         ctrl[j + 1] = q_cmd[j + 1] + trims[j + 1] + b21 * add / kp[j + 1]
         ctrl[j + 2] = q_cmd[j + 2] + trims[j + 2] + b22 * add / kp[j + 2]
@@ -273,4 +288,4 @@ def compile_all() -> None:
                np.zeros(3 * n), np.zeros(3 * n), np.ones(3 * n), np.zeros(6 * n))  # fmt: skip
 
 
-KERNELS = (solve3, distribute, plane, foot, force_pre, force_post, force_step, ground_down)
+KERNELS = (solve3, ramp, distribute, plane, foot, force_pre, force_post, force_step, ground_down)
