@@ -63,6 +63,8 @@ class ForceSettings:
             least weight until then; its ramp starts there.
         force_gain: Each stance foot's commanded force is corrected by this gain times its error against the
             foot's touch sensor (0: open loop).
+        landing_lift: In swing the target's height offset returns to this much above the plan [m], so a foot
+            meets the pad near its planned touchdown, not before it (force mode then presses it down).
     """
 
     ramp_in: float = 0.01
@@ -83,6 +85,7 @@ class ForceSettings:
     smooth: bool = False
     from_plan: bool = False
     force_gain: float = 0.0
+    landing_lift: float = 0.0
 
 
 def for_overlap(overlap: float) -> ForceSettings:
@@ -90,11 +93,14 @@ def for_overlap(overlap: float) -> ForceSettings:
     that long before the one it relieves lifts): each foot's weight ramps up over the whole overlap from its
     planned touchdown and down over the whole overlap to its planned lift-off, smoothstep, so a landing foot's
     and a lifting foot's weights sum to 1 throughout; the commanded forces closed around the touch sensors (gain
-    1: the servos' damping and the pad otherwise make the feet's forces lag the command by ~20-30 ms). An overlap
-    not above the default ramps' 10 ms: the defaults."""
+    1: the servos' damping and the pad otherwise make the feet's forces lag the command by ~20-30 ms); the swing
+    ends 0.4 mm above the plan (half the pad's compression under a foot's share), so the foot meets the pad at
+    about its planned touchdown; the least weight 0.05 (a landing foot pressed lightly at once, not pulled off by
+    the force loop). An overlap not above the default ramps' 10 ms: the defaults."""
     if overlap <= ForceSettings.ramp_in + 1e-9:
         return ForceSettings()
-    return ForceSettings(ramp_in=overlap, ramp_out=overlap, smooth=True, from_plan=True, force_gain=1.0)
+    return ForceSettings(ramp_in=overlap, ramp_out=overlap, least_weight=0.05, smooth=True, from_plan=True,
+                         force_gain=1.0, landing_lift=0.0004)  # fmt: skip
 
 
 class StanceForce:
@@ -133,6 +139,7 @@ class StanceForce:
         p[fk.FILTER], p[fk.I_LIMIT], p[fk.SOFT] = s.filter_time, s.integral_limit, s.soft
         p[fk.TOUCH_THRESHOLD], p[fk.EARLY_AFTER] = s.touch_threshold, s.early_after
         p[fk.SMOOTH], p[fk.FROM_PLAN], p[fk.K_F] = float(s.smooth), float(s.from_plan), s.force_gain
+        p[fk.LIFT] = s.landing_lift
         femur, tibia = model.body(f"{layout.legs[0]}_femur"), model.body(f"{layout.legs[0]}_tibia")
         gravity = float(-model.opt.gravity[2])
         p[fk.G_FEMUR] = float(femur.mass[0]) * gravity * float(femur.ipos[0])

@@ -12,8 +12,8 @@ from hexabot_sim.control.kernels import jit, servo
 # Scalars `par`.
 (DT, WEIGHT, T_IN, T_OUT, S_IN, S_OUT, W_MIN, K_H, I_H, K_T, I_T, STAND, LEVEL, QUAT_ADR, RETURN_TIME, TASK_GAIN,
  L1, L2, L3, FILTER, I_LIMIT, SOFT, G_FEMUR, G_TIBIA, TIBIA_COM, TOUCH_THRESHOLD, EARLY_AFTER, SMOOTH,
- FROM_PLAN, K_F) = range(30)  # fmt: skip
-NPAR = 30
+ FROM_PLAN, K_F, LIFT) = range(31)  # fmt: skip
+NPAR = 31
 # Per-leg constants `geo` (n, 5).
 COS, SIN, HIP_X, HIP_Y, TOUCH_ADR = range(5)
 # Per-leg state `state` (n, NSTATE): force-mode blend s, time down, the target's vertical offset and its rate,
@@ -197,8 +197,8 @@ def force_pre(par, geo, state, body, qpos, trims, sensordata, row, down, until, 
         dz = state[i, DZ]
         if down[i]:  # the target's height follows the measured foot as force mode takes over
             new = dz + state[i, S] * (state[i, Z] - row[3 * i + 2] - dz)
-        else:  # back to the plan
-            new = dz * max(0.0, 1.0 - dt / par[RETURN_TIME])
+        else:  # back to the plan, LIFT above it
+            new = par[LIFT] + (dz - par[LIFT]) * max(0.0, 1.0 - dt / par[RETURN_TIME])
         state[i, VZ] = (new - dz) / dt
         state[i, DZ] = new
         extra[3 * i + 2] = par[TASK_GAIN] * new + state[i, VZ]

@@ -126,6 +126,27 @@ def test_an_early_touch_waits_at_the_least_weight_until_its_planned_touchdown():
             assert during[-1] > 0.5
 
 
+def test_a_swing_targets_the_landing_lift_above_the_plan():
+    """In swing the target's height offset goes from where the stance left it to `landing_lift` above the plan as
+    h + (dz0 - h) (1 - dt / return_time)^k after k steps, and the feed correction is task_gain dz + its rate."""
+    par, geo = _par(0.05), _geo()
+    h, rt, dz0, gain = 0.0004, 0.05, -0.002, 30.0
+    par[fk.LIFT], par[fk.RETURN_TIME], par[fk.TASK_GAIN] = h, rt, gain
+    state, body = np.zeros((6, fk.NSTATE)), np.zeros(fk.NBODY)
+    state[:, fk.DZ] = dz0
+    qpos = np.zeros(25)
+    qpos[7:] = np.tile([0.0, 0.5, 1.2], 6)
+    extra, before = np.zeros(18), dz0
+    down = np.ones(6, dtype=np.bool_)
+    down[0] = False
+    for k in range(1, 60):
+        fk.force_pre(par, geo, state, body, qpos, np.zeros(18), np.zeros(6), np.zeros(18), down, np.full(6, 1e9), extra)
+        expect = h + (dz0 - h) * (1.0 - DT / rt) ** k
+        assert abs(state[0, fk.DZ] - expect) < 1e-15
+        assert abs(extra[2] - (gain * expect + (expect - before) / DT)) < 1e-9
+        before = expect
+
+
 def test_the_force_loop_adds_its_error_to_the_command():
     """force_post with force_gain k and the touch sensor reading t pushes as the open loop (gain 0) would with the
     command f + k (f - t)."""
@@ -147,10 +168,12 @@ def test_the_force_loop_adds_its_error_to_the_command():
 
 def test_a_duty_above_the_gaits_own_selects_the_overlap_settings():
     """for_overlap: 10 ms or less of overlap is the defaults; more ramps over it, smooth, from the plan, with the
-    force loop; the walk's scene passes (duty - the gait's own) x period."""
+    force loop, the landing lift and a larger least weight; the walk's scene passes (duty - the gait's own) x
+    period."""
     assert for_overlap(0.0) == ForceSettings() and for_overlap(0.01) == ForceSettings()
     s = for_overlap(0.1)
     assert (s.ramp_in, s.ramp_out, s.smooth, s.from_plan, s.force_gain) == (0.1, 0.1, True, True, 1.0)
+    assert (s.least_weight, s.landing_lift) == (0.05, 0.0004)
     from hexabot_sim.result import at_home
     from hexabot_sim.robots.hexabot.walk import HexabotParams
     from hexabot_sim.walking.scene import build_xml, make_controller
