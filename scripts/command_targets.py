@@ -11,8 +11,9 @@ Usage: python scripts/command_targets.py [--seeds N] [--quick]
               a period) across each switch, and the feet's bounces (foot_bounces' definition, walking.forces:
               a loaded foot unloading for under 60 ms) in the 2.5 s from each switch against 2.5 s of the
               steady gait after that                                                target dip <= 10 %
-              the same with load_sharing=admittance, with feet=pad swing=quintic (issue 19) and with that at a
-              2 s period, and on 1 cm rough ground (hexabot-rough, sensed touchdown), seeds 0 and 1
+              the same with load_sharing=admittance, with feet=pad swing=quintic (issue 19), with that at a
+              2 s period and with load_sharing=force on the pad, and on 1 cm rough ground (hexabot-rough, sensed
+              touchdown), seeds 0 and 1
 
 Prints one line per measurement; --quick runs the figure-eight on flat ground only.
 """
@@ -107,6 +108,7 @@ def main(argv: list[str] | None = None) -> int:
     switch(load_sharing="admittance")
     switch(feet="pad", swing="quintic")  # issue 19's bounce-free option
     switch(feet="pad", swing="quintic", period=2.0)  # its slower swings: no touchdown rebounds (docs/hexabot.md)
+    switch(load_sharing="force", feet="pad", swing="quintic")  # the stance force control on the pad
     for seed in range(min(args.seeds, 2)):
         switch("hexabot-rough", seed)
     return 0

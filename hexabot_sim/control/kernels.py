@@ -377,17 +377,18 @@ def warm_up() -> None:
 def _all_kernels() -> tuple:
     """Every compiled kernel of the walking controllers: these, the legs' admittance (compliance_kernels.py) and the
     gait plan's (plan_kernels.py)."""
-    from hexabot_sim.control import compliance_kernels, plan_kernels
+    from hexabot_sim.control import compliance_kernels, force_kernels, plan_kernels
 
-    return _KERNELS + compliance_kernels.KERNELS + plan_kernels.KERNELS
+    return _KERNELS + compliance_kernels.KERNELS + force_kernels.KERNELS + plan_kernels.KERNELS
 
 
 def _compile_all() -> None:
     """Calls each kernel the controllers call from Python once, on arrays of the types they pass (for six
     legs; the types, hence the compiled code, are the same for any leg count)."""
-    from hexabot_sim.control import compliance_kernels, plan_kernels
+    from hexabot_sim.control import compliance_kernels, force_kernels, plan_kernels
 
     compliance_kernels.compile_all()
+    force_kernels.compile_all()
     plan_kernels.compile_all()
     par = np.zeros(NPAR)
     par[UPDATE_EVERY], par[DT], par[SWING_TIME] = 1.0, 0.002, 1.0

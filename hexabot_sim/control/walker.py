@@ -33,6 +33,7 @@ import numpy as np
 
 from hexabot_sim.control.commands import CommandSource, StanceLog, add_heights
 from hexabot_sim.control.compliance import Admittance, AdmittanceSettings
+from hexabot_sim.control.force_control import ForceSettings, StanceForce
 from hexabot_sim.control.gait import Command, GaitPlanner, gaits_for
 from hexabot_sim.control.resolved_rate import ResolvedRateGains, step_constants
 from hexabot_sim.kinematics import legged
@@ -66,6 +67,7 @@ class WalkSettings:
             reads q - trim; empty: none.
         admittance: The legs' admittance around the position servos, driven by the touch sensors
             (control/compliance.py); None: stiff position-controlled legs.
+        force: The stance legs' force control (control/force_control.py); None: none.
     """
 
     command: Command
@@ -75,6 +77,7 @@ class WalkSettings:
     heading_gain: float = 2.0
     trims: tuple[float, ...] = ()
     admittance: AdmittanceSettings | None = None
+    force: ForceSettings | None = None
 
 
 def yaw_of(quat: np.ndarray) -> float:
@@ -161,6 +164,13 @@ class WalkingController:
             model, layout.legs, self.hips, layout.yaws, gains.task_gain, self.dt, planner.stance_time,
             settings.admittance,
         )  # fmt: skip
+        self.force = (
+            None
+            if settings.force is None
+            else StanceForce(
+                model, layout, gains, self.dt, settings.force, -float(np.mean(planner.neutral[:, 2])), False
+            )
+        )
         self._no_extra = np.zeros(nq)  # the feed correction without an admittance
         self._feed_row = np.zeros(nq)
 
@@ -218,6 +228,8 @@ class WalkingController:
         self.plan_kernels.hip_targets(targets, self.rot, self.hips, self._pitch_dz(), stance, swing_s, geo, offsets,
                                       was, hip)  # fmt: skip
         self._publish(hip.reshape(n + 1, -1), stance)
+        if self.force is not None:
+            self.force.plan(self.planner, times, stance)
         self._chunk = n
         self._k = 0
 
@@ -264,7 +276,11 @@ class WalkingController:
         if self.admittance is not None:
             extra = self.admittance.update(self._sensordata, self._rows[k], self._stance[k])
             feed = np.add(feed, extra, out=self._feed_row)
-        self.kernels.servo(self.consts, self._qpos, self.trims, self.q_cmd, self.dq, feed, self.dt, self._ctrl)
+        if self.force is not None:  # its kernel runs the servo step too
+            self.force.step(self._qpos, self.trims, self._sensordata, self._rows[k], self._stance[k], k, feed,
+                            self.consts, self.q_cmd, self.dq, self._ctrl)  # fmt: skip
+        else:
+            self.kernels.servo(self.consts, self._qpos, self.trims, self.q_cmd, self.dq, feed, self.dt, self._ctrl)
         self._k = k + 1
 
 
@@ -382,6 +398,11 @@ class GroundController(WalkingController):
         self._events = np.zeros((n, 3))  # swings that ended in one step (kernels.targets): one a leg at most
         self._row_prev = np.zeros(3 * n)  # the targets at the current time (hip frames)
         self._started = False
+        if self.force is not None:  # its height and levelling are the ground's
+            self.force = StanceForce(model, layout, gains, self.dt, settings.force, ground.stand_height, ground.level)
+            self.force.par[self.force.fk.EARLY_AFTER] = math.inf  # the ground's own touchdown modes say when
+        self._down = np.zeros(n, dtype=bool)
+        self._down_modes = np.array([K.STANCE, K.EARLY], dtype=np.int64)  # with GROUNDED: the leg is down
 
     def _swing_time(self, planner: GaitPlanner) -> None:
         """The kernel's swing time and late-touchdown seek speed (half the swing's peak) from the planner's gait."""
@@ -458,9 +479,15 @@ class GroundController(WalkingController):
         extra = self._no_extra
         if self.admittance is not None:
             extra = self.admittance.update(self._sensordata, self._row_prev, stance[k])
+        force = self.force
+        if force is not None:
+            force.fk.ground_down(self.flags, self._down_modes, self._down)
+            extra = force.pre(self._qpos, self.trims, self._sensordata, self._row_prev, self._down, k)
         n = K.ground_step(self.par, self.geo, self.consts, self.legs, self.flags, self.plane, self.counts, self.cmd,
                           rows, stance, k, t, self._row_prev, self.q_cmd, self.dq, self.trims, self._qpos,
                           self._sensordata, self._ctrl, self._events, extra)  # fmt: skip
+        if force is not None:
+            force.post(self._qpos, self.trims, self.q_cmd, self.dq, self._ctrl)
         if n:
             self._record(n)
         self._k = k + 1

@@ -110,7 +110,8 @@ class WalkParams:
     )  # fmt: skip
     load_sharing: str = param(
         "off", "", "stance legs yield to their touch sensors' force error, sharing the load (admittance), or hold "
-        "their planned height (off)", choices=("admittance", "off"),
+        "their planned height (off), or push with a force distribution's forces through their servos (force)",
+        choices=("admittance", "force", "off"),
     )  # fmt: skip
     feet: str = param(
         "rigid", "", "the feet's contact: rigid, or a compliant 0.8 mm pad (no contact bounces; use with "

@@ -11,6 +11,7 @@ import numpy as np
 from hexabot_sim import models
 from hexabot_sim.control.commands import CommandSource
 from hexabot_sim.control.compliance import AdmittanceSettings
+from hexabot_sim.control.force_control import for_overlap
 from hexabot_sim.control.gait import GaitPlanner
 from hexabot_sim.control.resolved_rate import ResolvedRateGains
 from hexabot_sim.control.walker import GroundController, GroundSettings, WalkingController, WalkSettings
@@ -150,6 +151,7 @@ def make_controller(
         p.command(), settle_time=SETTLE_TIME, ramp_time=p.period if source is None else 0.0,
         heading_hold=p.heading_hold == "on", trims=tuple(trims.tolist()),
         admittance=AdmittanceSettings() if p.load_sharing == "admittance" else None,
+        force=for_overlap((gait.duty - p.gaits()[gait.name].duty) * p.period) if p.load_sharing == "force" else None,
     )  # fmt: skip
     gains = ResolvedRateGains(p.task_gain, 0.01, 0.01, p.max_joint_speed, acceleration_limit(p))
     q0 = model.key("home").qpos[7:].reshape(-1, 3)

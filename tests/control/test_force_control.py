@@ -1,0 +1,120 @@
+"""The stance force control (`load_sharing=force`, control/force_control.py and force_kernels.py), against
+independent truth: the force distribution against numpy's least squares and statics, the leg's kinematics and
+Jacobian against MuJoCo's (mj_jacSite), and a standing robot's sensed foot forces against the commanded ones."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from hexabot_sim.control import force_kernels as fk
+
+W = 1.78 * 9.81
+
+
+def test_the_distribution_carries_the_wrench_with_the_least_weighted_norm():
+    """Exact moments (soft = 0): the forces sum to fz with moments (px, py), and of all such forces have the least
+    weighted norm sum f^2 / w: numpy's least-squares solution in g = f / sqrt(w) (the pseudo-inverse of A sqrt(W))."""
+    rng = np.random.default_rng(5)
+    for n in (3, 4, 5, 6):
+        x, y = rng.uniform(-0.2, 0.2, n), rng.uniform(-0.2, 0.2, n)
+        for w in (np.ones(n), rng.uniform(0.01, 1.0, n)):
+            b = np.array([W, rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3)])
+            out = np.empty(n)
+            assert fk.distribute(x, y, w, b[0], b[1], b[2], 0.0, out)
+            a = np.vstack([np.ones(n), x, y])
+            np.testing.assert_allclose(a @ out, b, rtol=1e-9, atol=1e-10)  # statics: the wrench is carried
+            g = np.linalg.lstsq(a * np.sqrt(w), b, rcond=None)[0]
+            np.testing.assert_allclose(out, np.sqrt(w) * g, rtol=1e-9, atol=1e-10)
+
+
+def test_soft_moments_minimise_the_penalised_norm():
+    """soft = r > 0: f minimises sum f^2 / w + |moments - (px, py)|^2 / r with the sum held at fz (a hard
+    constraint): the KKT system of that problem, solved by numpy."""
+    rng = np.random.default_rng(8)
+    n, r = 5, 0.01
+    x, y, w = rng.uniform(-0.2, 0.2, n), rng.uniform(-0.2, 0.2, n), rng.uniform(0.01, 1.0, n)
+    fz, px, py = W, 0.2, -0.1
+    out = np.empty(n)
+    fk.distribute(x, y, w, fz, px, py, r, out)
+    m = np.vstack([x, y])  # (2, n)
+    # minimise f^T (W^-1 + M^T M / r) f - 2 f^T M^T (px, py) / r subject to sum f = fz
+    h = np.diag(1.0 / w) + m.T @ m / r
+    kkt = np.block([[2 * h, np.ones((n, 1))], [np.ones((1, n)), np.zeros((1, 1))]])
+    rhs = np.concatenate([2 * m.T @ np.array([px, py]) / r, [fz]])
+    np.testing.assert_allclose(out, np.linalg.solve(kkt, rhs)[:n], rtol=1e-9, atol=1e-10)
+    assert abs(out.sum() - fz) < 1e-9
+
+
+def test_collinear_feet_share_the_force_by_weight():
+    out = np.empty(3)
+    line = np.array([0.0, 0.1, 0.2])
+    assert not fk.distribute(line, line, np.array([1.0, 1.0, 2.0]), 8.0, 0.0, 0.0, 0.0, out)
+    np.testing.assert_allclose(out, [2.0, 2.0, 4.0])
+
+
+def test_foot_kinematics_and_jacobian_against_mujoco():
+    """force_kernels.foot: the foot centre in the hip frame and the leg plane's Jacobian (radial and vertical rows
+    by the femur and tibia columns) equal MuJoCo's site position and mj_jacSite of `<leg>_foot`, turned into the
+    hip site's frame, at random joint angles."""
+    from hexabot_sim import models
+    from hexabot_sim.robots.hexabot.walk import HEXABOT
+
+    layout = HEXABOT.layout
+    model = mujoco.MjModel.from_xml_path(str(models.model_path("hexabot")))
+    data = mujoco.MjData(model)
+    par = np.zeros(fk.NPAR)
+    par[[fk.L1, fk.L2, fk.L3]] = layout.geometry.l1, layout.geometry.l2, layout.geometry.l3
+    rng = np.random.default_rng(2)
+    jacp = np.zeros((3, model.nv))
+    for leg in ("lf", "rm"):
+        hip = model.site(f"{leg}_hip").id
+        dofs = [model.joint(f"{leg}_{j}").dofadr[0] for j in ("coxa", "femur", "tibia")]
+        for _ in range(5):
+            q = rng.uniform([-0.8, -0.5, 0.5], [0.8, 1.0, 2.2])
+            data.qpos[:] = model.qpos0
+            data.qpos[[model.joint(f"{leg}_{j}").qposadr[0] for j in ("coxa", "femur", "tibia")]] = q
+            mujoco.mj_forward(model, data)
+            rot = data.site_xmat[hip].reshape(3, 3)  # hip -> world
+            p = rot.T @ (data.site_xpos[model.site(f"{leg}_foot").id] - data.site_xpos[hip])
+            x, y, z, b11, b12, b21, b22 = fk.foot(par, *q)
+            np.testing.assert_allclose([x, y, z], p, atol=1e-12)
+            mujoco.mj_jacSite(model, data, jacp, None, model.site(f"{leg}_foot").id)
+            jac = rot.T @ jacp[:, dofs]  # hip frame, (x, y, z) by (coxa, femur, tibia)
+            radial = np.array([np.cos(q[0]), np.sin(q[0]), 0.0])
+            np.testing.assert_allclose(radial @ jac[:, 1:], [b11, b12], atol=1e-12)
+            np.testing.assert_allclose(jac[2, 1:], [b21, b22], atol=1e-12)
+            assert abs(jac[2, 0]) < 1e-12  # the coxa turns the foot about the vertical: no vertical speed
+
+
+@pytest.mark.slow
+def test_standing_feet_carry_the_commanded_forces():
+    """A hexabot standing on its six feet (the 0.5 s before the walk) under force control: each foot's touch sensor
+    reads the force the distribution commands (within 2 %), the commanded forces sum to the measured weight less
+    the legs' own weight on the feet (the height's integral finds it), and the body stays at its height."""
+    from hexabot_sim.result import at_home
+    from hexabot_sim.robots.hexabot.walk import HexabotParams
+    from hexabot_sim.walking.scene import build_xml, make_controller
+
+    p = HexabotParams(load_sharing="force", duration=3.0)
+    model, data = at_home(build_xml(p))
+    controller = make_controller(p, model, data)
+    touch = [model.sensor_adr[model.sensor(f"{leg}_touch").id] for leg in p.ROBOT.layout.legs]
+    for _ in range(200):  # 0.4 s
+        controller(model, data)
+        mujoco.mj_step(model, data)
+    sensed = data.sensordata[touch]
+    np.testing.assert_allclose(controller.force.forces, sensed, rtol=0.02)
+    assert abs(sensed.sum() - float(model.body_subtreemass[1]) * 9.81) < 0.02 * W
+    assert abs(data.qpos[2] - (p.stand_height + p.ROBOT.layout.foot_radius)) < 3e-4
+
+
+def test_force_mode_walks_and_is_a_choice_of_load_sharing():
+    import hexabot_sim as hs
+
+    r = hs.run("hexabot-walk", load_sharing="force", feet="pad", swing="quintic", duration=2.6, gait="ripple")
+    m = r.metrics
+    assert not m["fell"].value
+    assert abs(m["vx_error"].value) < 0.02
+    assert m["foot_bounces"].value == 0
