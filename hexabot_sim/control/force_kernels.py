@@ -62,15 +62,10 @@ def ramp(x, smooth):
 
 
 @jit
-def distribute(x, y, w, fz, px, py, soft, out):
-    """Vertical forces (m,) on the feet at (x, y) that sum to fz with moments sum x f = px, sum y f = py and the
-    least weighted norm sum f^2 / w: f = W A^T (A W A^T)^-1 (fz, px, py), A = (1; x; y). With soft > 0 the moments
-    are soft: f minimises sum f^2 / w + |A f - b|^2 / r with r = (0, soft, soft), f = W A^T (A W A^T + diag r)^-1 b
-    (a foot of small weight is not made to carry a moment the others cannot). Feet that span no plane (fewer than
-    3, or in a line) share fz in proportion to w. Returns False in that case."""
-    m = x.shape[0]
+def normal_matrix(x, y, w):
+    """The (3, 3) matrix sum_i w_i a_i a_i^T with a_i = (1, x_i, y_i): A W A^T of the distribution and the plane."""
     a = np.zeros((3, 3))
-    for i in range(m):
+    for i in range(x.shape[0]):
         a[0, 0] += w[i]
         a[0, 1] += w[i] * x[i]
         a[0, 2] += w[i] * y[i]
@@ -78,6 +73,18 @@ def distribute(x, y, w, fz, px, py, soft, out):
         a[1, 2] += w[i] * x[i] * y[i]
         a[2, 2] += w[i] * y[i] * y[i]
     a[1, 0], a[2, 0], a[2, 1] = a[0, 1], a[0, 2], a[1, 2]
+    return a
+
+
+@jit
+def distribute(x, y, w, fz, px, py, soft, out):
+    """Vertical forces (m,) on the feet at (x, y) that sum to fz with moments sum x f = px, sum y f = py and the
+    least weighted norm sum f^2 / w: f = W A^T (A W A^T)^-1 (fz, px, py), A = (1; x; y). With soft > 0 the moments
+    are soft: f minimises sum f^2 / w + |A f - b|^2 / r with r = (0, soft, soft), f = W A^T (A W A^T + diag r)^-1 b
+    (a foot of small weight is not made to carry a moment the others cannot). Feet that span no plane (fewer than
+    3, or in a line) share fz in proportion to w. Returns False in that case."""
+    m = x.shape[0]
+    a = normal_matrix(x, y, w)
     a[1, 1] += soft
     a[2, 2] += soft
     lam = np.empty(3)
@@ -95,19 +102,12 @@ def distribute(x, y, w, fz, px, py, soft, out):
 def plane(x, y, z, w, out):
     """Weighted least-squares plane z = a + b x + c y through the points into out[:3]; False if they span none."""
     m = x.shape[0]
-    a = np.zeros((3, 3))
+    a = normal_matrix(x, y, w)
     r = np.zeros(3)
     for i in range(m):
-        a[0, 0] += w[i]
-        a[0, 1] += w[i] * x[i]
-        a[0, 2] += w[i] * y[i]
-        a[1, 1] += w[i] * x[i] * x[i]
-        a[1, 2] += w[i] * x[i] * y[i]
-        a[2, 2] += w[i] * y[i] * y[i]
         r[0] += w[i] * z[i]
         r[1] += w[i] * x[i] * z[i]
         r[2] += w[i] * y[i] * z[i]
-    a[1, 0], a[2, 0], a[2, 1] = a[0, 1], a[0, 2], a[1, 2]
     return m >= 3 and solve3(a, r, out)
 
 
@@ -288,4 +288,4 @@ def compile_all() -> None:
                np.zeros(3 * n), np.zeros(3 * n), np.ones(3 * n), np.zeros(6 * n))  # fmt: skip
 
 
-KERNELS = (solve3, ramp, distribute, plane, foot, force_pre, force_post, force_step, ground_down)
+KERNELS = (solve3, ramp, normal_matrix, distribute, plane, foot, force_pre, force_post, force_step, ground_down)
