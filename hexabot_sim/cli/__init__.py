@@ -203,6 +203,7 @@ def console() -> NoReturn:
     # handlers back, which would end a published run with 128 + N and no word).
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         signal.signal(sig, signal.SIG_IGN)
+    signals.stop_redelivering()  # a redelivery timer still running must not end the exit by SIGALRM
     if PUBLISHED[0] and PENDING_SIGNALS:
         name = signal.Signals(PENDING_SIGNALS[-1]).name
         eprint(f"{PROG}: {name} came after the results were published; they are complete")

@@ -264,6 +264,61 @@ def test_ctrl_c_while_the_walking_kernels_compile_stops_the_run_cleanly(tmp_path
     assert not (tmp_path / "out").exists()
 
 
+_SWALLOWED = """
+import os, signal, sys, time
+from hexabot_sim import signals
+signals.quiet_interruptions()
+signal.signal(signal.SIG{name}, signals.raise_interrupted)
+
+
+class Dropped:
+    def __del__(self):
+        os.kill(os.getpid(), signal.SIG{name})  # its handler runs here: Python drops the exception ("ignored")
+
+
+{hold}
+Dropped()
+started = time.monotonic()
+try:
+    while time.monotonic() - started < 3.0:  # work with no check of RECEIVED_SIGNALS (plots, a compile...)
+        sum(range(100))
+except KeyboardInterrupt as e:
+    print("stopped", getattr(e, "signum", 2), signals.RECEIVED_SIGNALS[0], round(time.monotonic() - started, 3))
+else:
+    print("went on", signals.RECEIVED_SIGNALS)
+"""
+
+
+@pytest.mark.parametrize("name", ["TERM", "INT", "HUP"])
+def test_a_stop_request_swallowed_in_a_del_is_raised_again_at_once(name):
+    """A stop signal whose handler runs in a __del__ (or a weakref callback, an after-fork hook) raises where Python
+    only drops the exception: it is raised again milliseconds later where the program is (numba's compiler went on
+    for a minute after one; a sweep ran all its cells). Nothing is printed."""
+    done = subprocess.run([sys.executable, "-c", _SWALLOWED.format(name=name, hold="")], capture_output=True,
+                          text=True, timeout=60)  # fmt: skip
+    number = int(getattr(signal, f"SIG{name}"))
+    words = done.stdout.split()
+    assert words[:3] == ["stopped", str(number), str(number)] and float(words[3]) < 0.5, done.stdout + done.stderr
+    assert done.returncode == 0 and done.stderr == ""
+
+
+def test_a_stop_request_swallowed_before_a_hold_waits_for_the_hold():
+    """Swallowed just before a hold (publishing) begins, a stop request is redelivered inside it: recorded only, and
+    raised when the hold ends."""
+    code = _SWALLOWED.split("{hold}")[0].format(name="TERM") + (
+        "Dropped()\n"
+        "try:\n"
+        "    with signals.signals_held():\n"
+        "        time.sleep(0.3)  # the redelivery comes here\n"
+        "        print('held', signals.PENDING_SIGNALS == [signal.SIGTERM])\n"
+        "except KeyboardInterrupt as e:\n"
+        "    print('stopped', e.signum)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert done.stdout.split() == ["held", "True", "stopped", str(int(signal.SIGTERM))], done.stdout + done.stderr
+    assert done.stderr == ""
+
+
 @pytest.mark.slow
 def test_leg_sweep_stops_promptly_and_leaves_no_worker(tmp_path):
     proc = _start(tmp_path, "run", "leg-sweep", "--set", "workers=2", "--out", "sweep")
