@@ -177,6 +177,8 @@ def test_full_disk_leaves_nothing_and_removes_created_parents(tmp_path, monkeypa
     assert code == 1
     assert "No space left on device" in one_line_error(err)
     assert list(tmp_path.iterdir()) == []  # deep/ and deep/nested/ were ours: gone again
+    # Removing them is no move by someone else (it said "the folder ... was moved or removed during the run")
+    assert "moved" not in err and "writing the run folder failed" in err
 
 
 def test_default_runs_folder_removed_when_the_run_fails(tmp_path, monkeypatch, capsys):
