@@ -321,6 +321,37 @@ def test_a_stop_request_swallowed_before_a_hold_waits_for_the_hold():
     assert done.stderr == ""
 
 
+@pytest.mark.parametrize("when", ["loading", "before our handlers", "as the command ends"])
+def test_a_stop_at_the_command_lines_edges_ends_in_one_line(tmp_path, when):
+    """SIGTERM as _entry installs its import-time handlers, while that handler is still the one in force as the
+    command line installs its own, or once `kin` has printed and its output is being flushed (a slow pipe): one line
+    and 143, not a traceback out of console()."""
+    code = (
+        "import os, signal, sys\n"
+        "from hexabot_sim import cli, signals\n"
+        f"when = {when!r}\n"
+        "calls = []\n"
+        "def stop(real, call):\n"
+        "    def wrapped(*args):\n"
+        "        calls.append(1)\n"
+        "        result = real(*args)\n"
+        "        if len(calls) == call:\n"
+        "            os.kill(os.getpid(), signal.SIGTERM)\n"
+        "        return result\n"
+        "    return wrapped\n"
+        "if when == 'as the command ends':\n"
+        "    cli.main = stop(cli.main, 1)\n"
+        "else:  # called by _entry, then by the command line\n"
+        "    signals.quiet_interruptions = stop(signals.quiet_interruptions, 1 if when == 'loading' else 2)\n"
+        "from hexabot_sim._entry import console\n"
+        "sys.argv = ['hexabot-sim', 'kin', 'stanford']\n"
+        "console()\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 128 + signal.SIGTERM, done.stderr
+    assert done.stderr == "hexabot-sim: stopped by SIGTERM; nothing written\n"
+
+
 @pytest.mark.slow
 def test_leg_sweep_stops_promptly_and_leaves_no_worker(tmp_path):
     proc = _start(tmp_path, "run", "leg-sweep", "--set", "workers=2", "--out", "sweep")
