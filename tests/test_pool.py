@@ -60,3 +60,29 @@ def test_a_worker_deaf_to_sigterm_is_killed_after_the_grace(clean_signals, monke
     pool.stop(executor, futures)
     assert time.monotonic() - started < 0.5 + 3.0  # not the cells' 60 s
     assert not any(p.is_alive() for p in processes)
+
+
+def test_a_worker_stopped_before_its_initializer_ends_without_a_word(tmp_path):
+    """A forked worker inherits the command line's stop handler until its initializer replaces it: a SIGTERM from the
+    stopping sweep then ended it with "Exception in initializer:" and a traceback on the command line's stderr (found
+    by fuzzing a sweep stopped as it started). The child ends at once, 128 + N, silent."""
+    import subprocess
+    import sys
+
+    code = (
+        "import os, signal\n"
+        "from hexabot_sim import signals\n"
+        "signal.signal(signal.SIGTERM, signals.raise_interrupted)\n"
+        "ready, told = os.pipe()\n"
+        "pid = os.fork()\n"
+        "if pid == 0:  # a worker still in its start-up: the parent's handler is still in force\n"
+        "    os.write(told, b'x')\n"
+        "    while True:\n"
+        "        sum(range(100))\n"
+        "os.read(ready, 1)\n"
+        "os.kill(pid, signal.SIGTERM)\n"
+        "print(os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1]), signals.RECEIVED_SIGNALS)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    assert done.stdout.split() == [str(128 + signal.SIGTERM), "[]"], done.stdout + done.stderr
+    assert done.stderr == "" and done.returncode == 0
