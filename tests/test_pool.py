@@ -86,3 +86,30 @@ def test_a_worker_stopped_before_its_initializer_ends_without_a_word(tmp_path):
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, cwd=tmp_path)
     assert done.stdout.split() == [str(128 + signal.SIGTERM), "[]"], done.stdout + done.stderr
     assert done.stderr == "" and done.returncode == 0
+
+
+def quick(name, seconds):
+    """A cell's runner that returns at once."""
+    return None
+
+
+def test_the_pool_is_started_and_fed_under_the_signal_hold(clean_signals):
+    """A stop signal while the pool forks its workers and takes the cells is recorded and raised once every submit
+    returned: raised inside multiprocessing's Finalize.__init__ it left a half-made finalizer that printed
+    "Exception ignored ... AttributeError: 'Finalize' object has no attribute '_key'" on stderr (found by fuzzing)."""
+    executor = pool.local_executor(1)
+    held, workers = [], []
+    submit = executor.submit
+
+    def submit_as_a_sigterm_lands(*args, **kwargs):
+        held.append(signals.HOLD[0])
+        signals.raise_interrupted(signal.SIGTERM, None)  # the command line's handler, as the signal lands here
+        future = submit(*args, **kwargs)
+        workers.extend(executor._processes.values())
+        return future
+
+    executor.submit = submit_as_a_sigterm_lands
+    with pytest.raises(signals.Interrupted):
+        pool.run_cells(executor, _jobs(quick, count=2, seconds=0.0))
+    assert held == [1, 1]  # both submitted, under the hold; the stop raised after them
+    assert workers and not any(p.is_alive() for p in workers)
