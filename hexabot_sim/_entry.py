@@ -15,11 +15,11 @@ def console() -> None:
         RECEIVED_SIGNALS.append(signum)  # remembered even if an import swallows the exception
         raise KeyboardInterrupt
 
-    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
-        if signal.getsignal(sig) is not signal.SIG_IGN:
-            signal.signal(sig, interrupted)
-    quiet_interruptions()
-    try:
+    try:  # from the first handler on: a stop request between two of these lines was a traceback
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            if signal.getsignal(sig) is not signal.SIG_IGN:
+                signal.signal(sig, interrupted)
+        quiet_interruptions()
         from hexabot_sim.cli import console as run
 
         if RECEIVED_SIGNALS:

@@ -294,12 +294,15 @@ def run_folder(out: str | os.PathLike[str] | None, scenario: str = "run", force:
     except BaseException as e:
         # Ctrl-C, a signal, a failed simulation or write: remove everything this run made, then say why.
         with signals_held():
+            # Looked at before the clean-up: removing the parents this run created is no move by someone else (a
+            # failed first run in a new runs/ said "the folder 'runs' ... was moved or removed during the run").
+            moved = isinstance(e, OSError) and parent_fd >= 0 and _moved(target.parent, parent_fd)
             if staging and parent_fd >= 0:
                 shutil.rmtree(staging, ignore_errors=True, dir_fd=parent_fd)
             _remove_created(created)
         if isinstance(e, OSError) and folder is None:
             raise UsageError(f"output folder {str(target)!r} cannot be written: {e.strerror or e}") from None
-        if isinstance(e, OSError) and parent_fd >= 0 and _moved(target.parent, parent_fd):
+        if moved:
             raise OutputError(
                 f"the folder {display_path(target.parent)!r} that was to receive the run folder was moved or "
                 f"removed during the run ({e.strerror or e}); nothing written"

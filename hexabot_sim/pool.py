@@ -187,7 +187,12 @@ def run_cells(
     futures: list[concurrent.futures.Future] = []
     finished = False
     try:
-        futures = [executor.submit(run_cell, job) for job in jobs]
+        # Started (the workers forked) and fed under the hold: a stop signal is raised once every submit returned. One
+        # that landed in multiprocessing's Finalize.__init__ as a worker started left a half-made finalizer whose
+        # callback printed "Exception ignored ... AttributeError: 'Finalize' object has no attribute '_key'" on stderr
+        # after the one-line message (found by fuzzing); one in logging's after-fork hook was swallowed.
+        with signals_held():
+            futures = [executor.submit(run_cell, job) for job in jobs]
         if progress is not None:
             progress(0, len(jobs))
         for done, future in enumerate(_completed(futures, len(jobs), progress, executor), start=1):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import sys
 from collections.abc import Iterator
@@ -53,8 +54,20 @@ class Interrupted(KeyboardInterrupt):
         self.signum = signum
 
 
+# The process whose stop requests these are: a child forked from it (a sweep's worker) inherits the handler below
+# until its pool initializer replaces it, and must not raise the parent's stop request in its own start-up.
+_OWNER: list[int] = [os.getpid()]
+
+
 def raise_interrupted(signum: int, frame: Any) -> None:
-    """Ctrl-C, SIGTERM and SIGHUP stop the run; while a publish or clean-up is held, only after it."""
+    """Ctrl-C, SIGTERM and SIGHUP stop the run; while a publish or clean-up is held, only after it.
+
+    In a forked child that has not put its own handlers in place yet (a pool worker still starting, which the
+    stopping sweep terminates) the child just ends, at once and without a word: raising there printed the worker's
+    "Exception in initializer:" traceback on the command line's stderr (found by fuzzing).
+    """
+    if os.getpid() != _OWNER[0]:
+        os._exit(128 + signum)
     RECEIVED_SIGNALS.append(signum)
     if HOLD[0] > 0 or PUBLISHED[0]:  # held, or too late: the results are published
         PENDING_SIGNALS.append(signum)
@@ -69,13 +82,50 @@ def reset() -> None:
     PUBLISHED[0] = False
 
 
+REDELIVERY_DELAY: float = 0.005  # [s] a swallowed stop request is raised again this long after
+
+# True once quiet_interruptions has its SIGALRM handler (the command line's): swallowed stop requests are redelivered.
+REDELIVERING: list[bool] = [False]
+
+
 def quiet_interruptions() -> None:
-    """A stop request raised where Python cannot propagate it (a weakref callback of the import system, a
-    __del__) is recorded and acted on later: do not print it as "Exception ignored ... Traceback"."""
+    """A stop request raised where Python cannot propagate it (a weakref callback of the import system, a __del__,
+    an after-fork hook) is not printed as "Exception ignored ... Traceback": it is recorded, and raised again
+    REDELIVERY_DELAY later (by SIGALRM), where the program is by then (again if it lands in such a place once more).
+
+    Polling RECEIVED_SIGNALS catches it only where a loop looks: numba's compiler frees thousands of LLVM objects in
+    __del__ and went on compiling for a minute; the pool's fork swallowed one in logging's after-fork hook.
+    """
     default = sys.unraisablehook
 
     def hook(unraisable: sys.UnraisableHookArgs) -> None:
         if not isinstance(unraisable.exc_value, KeyboardInterrupt):
             default(unraisable)
+        elif REDELIVERING[0]:
+            with contextlib.suppress(OSError, ValueError):
+                signal.setitimer(signal.ITIMER_REAL, REDELIVERY_DELAY)
 
     sys.unraisablehook = hook
+    if hasattr(signal, "setitimer") and signal.getsignal(signal.SIGALRM) in (signal.SIG_DFL, _redelivered):
+        signal.signal(signal.SIGALRM, _redelivered)  # main thread only: the command line's start
+        REDELIVERING[0] = True
+
+
+def _redelivered(signum: int, frame: Any) -> None:
+    """SIGALRM after a stop request was swallowed: the stop signal's handler again (it records the request again and
+    raises it, or only records it while a hold is on or once the results are published)."""
+    if not RECEIVED_SIGNALS:
+        return
+    stop = RECEIVED_SIGNALS[-1]
+    handler = signal.getsignal(stop)
+    if callable(handler):
+        handler(stop, frame)
+
+
+def stop_redelivering() -> None:
+    """No swallowed stop request is raised again from now on (the command line's outcome is decided)."""
+    if REDELIVERING[0]:
+        with contextlib.suppress(OSError, ValueError):
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, signal.SIG_IGN)
+        REDELIVERING[0] = False

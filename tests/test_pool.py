@@ -60,3 +60,56 @@ def test_a_worker_deaf_to_sigterm_is_killed_after_the_grace(clean_signals, monke
     pool.stop(executor, futures)
     assert time.monotonic() - started < 0.5 + 3.0  # not the cells' 60 s
     assert not any(p.is_alive() for p in processes)
+
+
+def test_a_worker_stopped_before_its_initializer_ends_without_a_word(tmp_path):
+    """A forked worker inherits the command line's stop handler until its initializer replaces it: a SIGTERM from the
+    stopping sweep then ended it with "Exception in initializer:" and a traceback on the command line's stderr (found
+    by fuzzing a sweep stopped as it started). The child ends at once, 128 + N, silent."""
+    import subprocess
+    import sys
+
+    code = (
+        "import os, signal\n"
+        "from hexabot_sim import signals\n"
+        "signal.signal(signal.SIGTERM, signals.raise_interrupted)\n"
+        "ready, told = os.pipe()\n"
+        "pid = os.fork()\n"
+        "if pid == 0:  # a worker still in its start-up: the parent's handler is still in force\n"
+        "    os.write(told, b'x')\n"
+        "    while True:\n"
+        "        sum(range(100))\n"
+        "os.read(ready, 1)\n"
+        "os.kill(pid, signal.SIGTERM)\n"
+        "print(os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1]), signals.RECEIVED_SIGNALS)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    assert done.stdout.split() == [str(128 + signal.SIGTERM), "[]"], done.stdout + done.stderr
+    assert done.stderr == "" and done.returncode == 0
+
+
+def quick(name, seconds):
+    """A cell's runner that returns at once."""
+    return None
+
+
+def test_the_pool_is_started_and_fed_under_the_signal_hold(clean_signals):
+    """A stop signal while the pool forks its workers and takes the cells is recorded and raised once every submit
+    returned: raised inside multiprocessing's Finalize.__init__ it left a half-made finalizer that printed
+    "Exception ignored ... AttributeError: 'Finalize' object has no attribute '_key'" on stderr (found by fuzzing)."""
+    executor = pool.local_executor(1)
+    held, workers = [], []
+    submit = executor.submit
+
+    def submit_as_a_sigterm_lands(*args, **kwargs):
+        held.append(signals.HOLD[0])
+        signals.raise_interrupted(signal.SIGTERM, None)  # the command line's handler, as the signal lands here
+        future = submit(*args, **kwargs)
+        workers.extend(executor._processes.values())
+        return future
+
+    executor.submit = submit_as_a_sigterm_lands
+    with pytest.raises(signals.Interrupted):
+        pool.run_cells(executor, _jobs(quick, count=2, seconds=0.0))
+    assert held == [1, 1]  # both submitted, under the hold; the stop raised after them
+    assert workers and not any(p.is_alive() for p in workers)

@@ -184,13 +184,13 @@ def _ensure_std_streams() -> None:
 def console() -> NoReturn:
     """Entry point of the `hexabot-sim` console script."""
     _ensure_std_streams()
-    os.environ["MPLBACKEND"] = "Agg"  # the command line draws off-screen, whatever the environment says
-    signals.quiet_interruptions()
-    # SIGTERM and SIGHUP stop a run exactly like Ctrl-C: clean up, exit 128 + N.
-    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
-        if signal.getsignal(sig) is not signal.SIG_IGN:  # e.g. Ctrl-C stays ignored in a background job
-            signal.signal(sig, signals.raise_interrupted)
     try:
+        os.environ["MPLBACKEND"] = "Agg"  # the command line draws off-screen, whatever the environment says
+        signals.quiet_interruptions()
+        # SIGTERM and SIGHUP stop a run exactly like Ctrl-C: clean up, exit 128 + N.
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            if signal.getsignal(sig) is not signal.SIG_IGN:  # e.g. Ctrl-C stays ignored in a background job
+                signal.signal(sig, signals.raise_interrupted)
         code = main()
         sys.stdout.flush()
     except BrokenPipeError:  # e.g. `hexabot-sim list | head`: the reader left; not an error of ours
@@ -199,10 +199,19 @@ def console() -> NoReturn:
     except OSError as e:  # stdout full at the final flush
         eprint(f"{PROG}: error: cannot write to standard output: {e.strerror or e}")
         code = 1
-    # The outcome is decided: a stop request now must not kill the exit (Python's shutdown puts the default
-    # handlers back, which would end a published run with 128 + N and no word).
+    except KeyboardInterrupt as e:
+        # A stop outside main's own handling: as the command ended (flushing a `kin`'s output into a slow pipe), or
+        # before our handlers (_entry's, which raises a plain KeyboardInterrupt for SIGTERM too). It was a traceback.
+        if not isinstance(e, Interrupted) and RECEIVED_SIGNALS:
+            e = stop_request(RECEIVED_SIGNALS[-1])
+        code = _interrupted(e)
+    finally:
+        signals.HOLD[0] += 1  # the outcome is decided: a stop request from now on is only recorded
+    # A stop request now must not kill the exit either (Python's shutdown puts the default handlers back, which
+    # would end a published run with 128 + N and no word).
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         signal.signal(sig, signal.SIG_IGN)
+    signals.stop_redelivering()  # a redelivery timer still running must not end the exit by SIGALRM
     if PUBLISHED[0] and PENDING_SIGNALS:
         name = signal.Signals(PENDING_SIGNALS[-1]).name
         eprint(f"{PROG}: {name} came after the results were published; they are complete")

@@ -109,10 +109,8 @@ def _kernels():
     if _KERNELS:
         return _KERNELS[0]
     from hexabot_sim.control import kernels, plan_kernels
-    from hexabot_sim.signals import signals_held
 
-    with signals_held():  # a Ctrl-C inside numba's compiler would break the kernels (see kernels.warm_up)
-        kernels.warm_up()
+    kernels.warm_up()  # not under the signal hold: a cold compile takes tens of seconds (see kernels.warm_up)
     _KERNELS.append(plan_kernels)
     return plan_kernels
 

@@ -32,6 +32,7 @@ import math
 import sys
 
 import numba
+import numba.core.event
 import numpy as np
 from numba.core.caching import NullCache
 
@@ -347,9 +348,10 @@ _WARM = [False]
 def warm_up() -> None:
     """Compiles every kernel (or loads it from the cache) for the argument types the controllers pass.
 
-    Once per process, before a walk's first step, so the compiling (a few seconds on a machine's
-    first run) happens under the command line's signal hold: a Ctrl-C that struck inside numba's
-    compiler would leave the kernel unusable ("no compiled object yet") instead of stopping the run.
+    Once per process, before a walk's first step. The compiling (tens of seconds on a loaded machine's first run)
+    is not under the command line's signal hold: a stop request ends it at once. One that struck inside numba's
+    compiler may come out of it as another error, or be swallowed and leave a kernel unusable ("no compiled object
+    yet"): a stop request recorded by then is raised instead of retrying or going on (the run stops either way).
     A cache numba cannot use (a full disk, a truncated or foreign file) does not stop the walk: the
     kernels are compiled in memory instead, with a one-line note naming the cache folder.
     """
@@ -358,12 +360,14 @@ def warm_up() -> None:
     try:
         _compile_all()
     except Exception as error:  # retried without the cache; if that fails too, the first error stands
+        _stop_if_requested()
         where = getattr(getattr(ground_step, "_cache", None), "cache_path", "?")
         for kernel in _all_kernels():
             kernel._cache = NullCache()  # numba's own "no caching" (the dispatcher attribute cache=True sets)
         try:
             _compile_all()
         except Exception:
+            _stop_if_requested()
             raise error from None
         text = " ".join(f"{type(error).__name__}: {error}".split())[:200]
         print(
@@ -371,7 +375,31 @@ def warm_up() -> None:
             "compiled in memory (removing that folder lets numba rebuild it)",
             file=sys.stderr,
         )
+    _stop_if_requested()  # numba swallowed it: its kernels may be unusable, so they are not marked warm
     _WARM[0] = True
+
+
+def _stop_if_requested() -> None:
+    """Raises the stop request the command line recorded (Ctrl-C, SIGTERM, SIGHUP), if any (and not held)."""
+    from hexabot_sim.signals import HOLD, PUBLISHED, RECEIVED_SIGNALS, stop_request
+
+    if RECEIVED_SIGNALS and not HOLD[0] and not PUBLISHED[0]:
+        raise stop_request(RECEIVED_SIGNALS[-1]) from None
+
+
+class _StopBetweenPasses(numba.core.event.Listener):
+    """Stops a compile at the start of numba's next compiler pass once a stop request was recorded.
+
+    numba's compiler drops (and frees) thousands of LLVM objects, whose __del__ is Python: a stop signal whose handler
+    runs in one raises where Python can only print and drop it ("Exception ignored", which the command line silences).
+    The compile went on with every kernel, a minute under load (found by fuzzing with a cold cache).
+    """
+
+    def on_start(self, event: numba.core.event.Event) -> None:
+        _stop_if_requested()
+
+    def on_end(self, event: numba.core.event.Event) -> None:
+        pass
 
 
 def _all_kernels() -> tuple:
@@ -384,7 +412,13 @@ def _all_kernels() -> tuple:
 
 def _compile_all() -> None:
     """Calls each kernel the controllers call from Python once, on arrays of the types they pass (for six
-    legs; the types, hence the compiled code, are the same for any leg count)."""
+    legs; the types, hence the compiled code, are the same for any leg count); a stop request recorded meanwhile
+    ends it at numba's next compiler pass (_StopBetweenPasses)."""
+    with numba.core.event.install_listener("numba:run_pass", _StopBetweenPasses()):
+        _compile_each()
+
+
+def _compile_each() -> None:
     from hexabot_sim.control import compliance_kernels, force_kernels, plan_kernels
 
     compliance_kernels.compile_all()

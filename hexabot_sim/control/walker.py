@@ -43,10 +43,8 @@ def kernels():
     """control/kernels.py, imported on first use and compiled (importing numba takes ~0.15 s, which
     `hexabot-sim list` should not pay: it imports this module for the parameter tables)."""
     from hexabot_sim.control import kernels
-    from hexabot_sim.signals import signals_held
 
-    with signals_held():  # a Ctrl-C inside numba's compiler would break the kernels (see kernels.warm_up)
-        kernels.warm_up()
+    kernels.warm_up()  # not under the signal hold: a cold compile takes tens of seconds (see kernels.warm_up)
     return kernels
 
 
