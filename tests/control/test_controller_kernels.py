@@ -178,7 +178,14 @@ def test_an_unusable_numba_cache_does_not_stop_a_walk(tmp_path):
     assert index
     for path in index:
         path.write_bytes(b"\x0cnot a pickle")
-    done = _warm_up_in_a_new_process(cache)
+    # warm_up's real path (numba's load fails, every kernel's cache turned off, compiled again in memory, the note)
+    # over the admittance's kernels only: the whole set compiled in memory took a minute of the suite under load.
+    only = (
+        "from hexabot_sim.control import compliance_kernels, kernels\n"
+        "kernels._all_kernels = lambda: compliance_kernels.KERNELS\n"
+        "kernels._compile_each = compliance_kernels.compile_all\n"
+    )
+    done = _warm_up_in_a_new_process(cache, prelude=only)
     assert done.returncode == 0 and done.stdout.split() == ["warm"], done.stderr
     assert done.stderr.startswith("hexabot-sim: note: numba's cache in ") and done.stderr.count("\n") == 1
     assert "could not be used (UnpicklingError" in done.stderr and str(cache) in done.stderr
