@@ -142,6 +142,11 @@ class WalkParams:
             raise ValueError(
                 f"parameter 'duty' for the {self.gait} gait must be {allowed(lo, 'up')} to < 1 (or 0); got {self.duty}"
             )
+        if self.load_sharing == "force" and self.stairs_rise and self.feet == "rigid":
+            raise ValueError(
+                "parameter 'load_sharing' = force on stairs needs feet=pad (with swing=quintic): on rigid feet the "
+                "tripod fell on hexabot-stairs' steps (measured; with the pad it climbs them); or load_sharing=off"
+            )
         shortest = SETTLE_TIME + self.period + MEASURE_TIME
         if self.duration < shortest - 1e-9:
             raise ValueError(
