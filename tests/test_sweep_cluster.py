@@ -136,9 +136,14 @@ def test_kill_9_of_a_real_worker_or_scheduler_mid_sweep_is_one_line_in_bounded_t
     processes = [_dask_cli("scheduler", "--port", "0", "--scheduler-file", str(file), *common, log=log)]
     try:
         deadline = time.monotonic() + 15
-        while not file.exists() and time.monotonic() < deadline:
-            time.sleep(0.1)
-        address = json.loads(file.read_text())["address"]
+        address = None
+        while address is None and time.monotonic() < deadline:  # the file exists before the scheduler fills it
+            try:
+                address = json.loads(file.read_text())["address"]
+            except (OSError, ValueError, KeyError):
+                time.sleep(0.1)
+        told = (tmp_path / "dask.log").read_text(errors="replace")[-500:]
+        assert address, f"the dask scheduler wrote no address in 15 s: {told}"
         processes.append(_dask_cli("worker", address, "--no-nanny", "--nthreads", "1", *common, log=log))
         code = (
             "import sys; from hexabot_sim import pool; pool.HEARTBEAT = 0.2; pool.WORKER_WAIT = 1.0\n"
