@@ -247,9 +247,8 @@ def _completed(
     quiet_since = time.monotonic()
     while pending:
         # Short waits, held: a stop signal is raised here, between two waits, never inside concurrent.futures' own
-        # locks (a future left locked hangs the pool's shutdown); and one whose exception was swallowed is seen
-        # within POLL (a SIGTERM landing in logging's after-fork hook while the pool forked its workers is "ignored"
-        # by Python: the leg-sweep went on with all its cells, 30 s and more).
+        # locks (a future left locked hangs the pool's shutdown); and one whose exception Python swallowed (a
+        # finalizer, an after-fork hook: the leg-sweep once went on with all its cells) is seen within POLL.
         with signals_held():
             finished, pending = concurrent.futures.wait(
                 pending, timeout=POLL, return_when=concurrent.futures.FIRST_COMPLETED
