@@ -266,16 +266,39 @@ def _completed(
         if progress is not None:
             progress(done, total)
         if client is not None:
-            try:
-                workers = len(client.nthreads())
-            except Exception:
-                raise WorkerFailed(f"lost the Dask scheduler at {client.scheduler.address}") from None
+            workers = _dask_workers(client)
+            if workers is None:  # a live scheduler slow to answer: asked again at the next heartbeat
+                continue
             now = time.monotonic()
             workerless_since = None if workers else (workerless_since or now)
             if workerless_since is not None and now - workerless_since >= WORKER_WAIT:
                 raise WorkerFailed(
                     f"the Dask cluster has had no worker for {WORKER_WAIT:g} s, with {len(pending)} cells unfinished"
                 )
+
+
+SCHEDULER_ANSWER: float = 2.0  # [s] the longest the heartbeat waits for the Dask scheduler's worker count
+
+
+def _dask_workers(client: Any) -> int | None:
+    """The Dask cluster's number of workers, or None if its scheduler, still connected, did not answer within
+    SCHEDULER_ANSWER. A client that lost its scheduler blocked `nthreads()` for its whole reconnect timeout (10 s,
+    seen in CI when the count was asked in the instant before the client noticed the loss): the wait is bounded.
+
+    Raises:
+        WorkerFailed: the scheduler is gone (the client is reconnecting or closed, or the call failed).
+    """
+    lost = WorkerFailed(f"lost the Dask scheduler at {client.scheduler.address}")
+    if getattr(client, "status", "running") != "running":
+        raise lost
+    try:
+        return len(client.nthreads(callback_timeout=SCHEDULER_ANSWER))
+    except TimeoutError:
+        if getattr(client, "status", "running") != "running":
+            raise lost from None
+        return None
+    except Exception:
+        raise lost from None
 
 
 def workers_default() -> int:

@@ -83,10 +83,10 @@ def test_a_peer_that_accepts_but_is_no_scheduler_is_refused_in_bounded_time():
 
 class _FakeClient:
     def __init__(self, nthreads):
-        self._nthreads = nthreads
+        self._nthreads, self.status = nthreads, "running"
         self.scheduler = type("S", (), {"address": "tcp://127.0.0.1:1"})()
 
-    def nthreads(self):
+    def nthreads(self, callback_timeout=None):
         return self._nthreads()
 
 
@@ -105,6 +105,62 @@ def test_a_cluster_that_loses_its_workers_or_scheduler_mid_sweep_fails_in_bounde
     never = concurrent.futures.Future()
     with pytest.raises(pool.WorkerFailed, match=r"no worker for|lost the Dask scheduler"):
         list(pool._completed([never], 1, None, executor))
+
+
+@pytest.mark.parametrize("noticed", [False, True])
+def test_a_scheduler_slow_to_answer_the_worker_count_is_asked_again_unless_the_client_lost_it(noticed):
+    """nthreads() timing out: a client still connected is asked again at the next heartbeat (None); one that has
+    meanwhile noticed the loss (reconnecting) ends the sweep."""
+    client = _FakeClient(None)
+
+    def slow():
+        client.status = "connecting" if noticed else "running"
+        raise TimeoutError("timed out after 2 s.")
+
+    client._nthreads = slow
+    if noticed:
+        with pytest.raises(pool.WorkerFailed, match="lost the Dask scheduler"):
+            pool._dask_workers(client)
+    else:
+        assert pool._dask_workers(client) is None
+    client.status = "closed"
+    with pytest.raises(pool.WorkerFailed, match="lost the Dask scheduler"):
+        pool._dask_workers(client)
+
+
+@pytest.mark.slow
+def test_the_worker_count_of_a_killed_scheduler_is_refused_within_the_bound(tmp_path):
+    """Asked in the instant after its scheduler died, Dask's nthreads() waited for the client's whole reconnect
+    timeout (10 s: a CI failure); the count is bounded by SCHEDULER_ANSWER."""
+    import json
+    import signal
+    import time
+
+    distributed = pytest.importorskip("distributed", reason="the 'cluster' extra (distributed) is not installed")
+    file, log = tmp_path / "scheduler.json", open(tmp_path / "dask.log", "wb")
+    scheduler = _dask_cli("scheduler", "--port", "0", "--scheduler-file", str(file), "--no-dashboard", "--host",
+                          "127.0.0.1", log=log)  # fmt: skip
+    try:
+        address, deadline = None, time.monotonic() + 15
+        while address is None and time.monotonic() < deadline:
+            try:
+                address = json.loads(file.read_text())["address"]
+            except (OSError, ValueError, KeyError):
+                time.sleep(0.1)
+        assert address, "the dask scheduler wrote no address in 15 s"
+        dask_cluster._silence_logs("distributed", "tornado", "asyncio")
+        with distributed.Client(address, set_as_default=False, timeout=10) as client:
+            assert pool._dask_workers(client) == 0
+            scheduler.send_signal(signal.SIGKILL)
+            scheduler.wait(timeout=10)
+            started = time.monotonic()
+            with pytest.raises(pool.WorkerFailed, match="lost the Dask scheduler"):
+                pool._dask_workers(client)
+            assert time.monotonic() - started < pool.SCHEDULER_ANSWER + 1.5
+    finally:
+        scheduler.kill()
+        scheduler.wait(timeout=10)
+        log.close()
 
 
 def _dask_cli(*args, log):
