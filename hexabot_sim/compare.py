@@ -32,7 +32,7 @@ ANNOUNCE_BYTES: int = 200 << 20  # a CSV this large (~8 s to read) is read with 
 MAX_JSON_BYTES: int = 16 << 20  # a run.json is a few kB; one larger than this is not read
 MAX_HEADER_BYTES: int = 1 << 16  # a CSV header line is at most this long
 RELATIVE_FLOOR: float = 0.01  # a relative difference needs a reference at least this fraction of the other value
-MAX_CSV_BYTES: float = 2e9  # a run folder's CSV is at most this large (params.MAX_OUTPUT_BYTES)
+MAX_CSV_BYTES: float = 2e9  # a run folder's CSV is at most this large (budget.MAX_OUTPUT_BYTES)
 
 
 @dataclasses.dataclass

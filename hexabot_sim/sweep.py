@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from hexabot_sim import budget, pool, registry
 from hexabot_sim import params as params_mod
-from hexabot_sim import pool, registry
 from hexabot_sim.errors import UsageError
 from hexabot_sim.pool import WALL_CLOCK_METRICS, CellJob, CellResult
 
@@ -31,7 +31,7 @@ ERROR_COLUMN = "error"
 MAX_CELLS: int = 100_000  # cells of one sweep (a cell is one run)
 MAX_AXIS_POINTS: int = 10_000  # values of one --grid axis
 MAX_WORKERS: int = 256  # local worker processes
-MAX_SWEEP_SECONDS: float = 24 * params_mod.MAX_SECONDS  # estimated wall time of a whole sweep (a run: 1 h)
+MAX_SWEEP_SECONDS: float = 24 * budget.MAX_SECONDS  # estimated wall time of a whole sweep (a run: 1 h)
 CHECK_QUIET_SECONDS: float = 2.0  # checking the cells longer than this reports its progress ...
 CHECK_REPORT_SECONDS: float = 1.0  # ... at most this often (the printer throttles its lines further)
 COUNT_SECONDS: float = 10.0  # after a cell that cannot run, counting the others stops after this long
@@ -242,7 +242,7 @@ def _check_cells(
     first: tuple[list[Any], str, float] | None = None  # the first cell that cannot run: values, why, when
     started = last = time.monotonic()
     reported = False
-    with params_mod.estimates() as seconds:
+    with budget.estimates() as seconds:
         for k, index in enumerate(np.ndindex(*shape)):
             if first is not None and time.monotonic() - first[2] > COUNT_SECONDS:
                 checked = k  # a walk's refusal bisects its fastest command (~60 ms): 1e5 of them take hours
@@ -290,7 +290,7 @@ def _check_cells(
 
 
 def _time(seconds: float) -> str:
-    return f"{seconds / 86400:.3g} days" if seconds >= 2 * 86400 else params_mod._time(seconds)
+    return f"{seconds / 86400:.3g} days" if seconds >= 2 * 86400 else budget.time_text(seconds)
 
 
 def check_cost(p: Plan, workers: int, where: str) -> float | None:
@@ -303,7 +303,7 @@ def check_cost(p: Plan, workers: int, where: str) -> float | None:
         return None
     seconds = max(sum(p.costs) / max(workers, 1), max(p.costs, default=0.0))
     if seconds > MAX_SWEEP_SECONDS:
-        shown, limit = params_mod.over(seconds, MAX_SWEEP_SECONDS, _time, 3600.0, " h")
+        shown, limit = budget.over(seconds, MAX_SWEEP_SECONDS, _time, 3600.0, " h")
         raise UsageError(
             f"this sweep would take ~{shown} ({len(p.cells)} cells, ~{_time(sum(p.costs))} of runs, on "
             f"{where}); the limit is {limit}: fewer cells, shorter runs (e.g. 'duration') "

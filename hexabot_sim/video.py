@@ -6,8 +6,8 @@ import dataclasses
 import math
 from typing import Any
 
+from hexabot_sim.budget import MAX_SECONDS, over
 from hexabot_sim.errors import UsageError
-from hexabot_sim.params import MAX_SECONDS, over
 
 # Video frames: H.264 in yuv420p needs even sides; beyond 4:1 a frame shows a sliver of the scene.
 MIN_SIDE, MAX_SIZE, MAX_ASPECT = 64, (3840, 2160), 4.0

@@ -17,7 +17,7 @@ LOADED_FRACTION: float = 0.05  # a foot counts as loaded above this fraction of 
 
 CSV_FIXED_COLUMNS: int = 13  # columns of timeseries.csv besides the legs' (6 each: contact, 2 forces, 3 joints)
 
-# Cost of a run for params.check_run_cost, measured on the 2-core development machine (10 s vs 60 s
+# Cost of a run for budget.check_run_cost, measured on the 2-core development machine (10 s vs 60 s
 # walks): seconds per physics step (controller + mj_step: 25 us in bench.py, with a margin for a loaded
 # machine), seconds per recorded row (contact replay, derived columns; the CSV is counted apart), peak
 # bytes per recorded row.

@@ -19,10 +19,11 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
+from hexabot_sim.budget import check_duration, check_run_cost
 from hexabot_sim.control.arm_rate import ArmRateController, ArmRateGains, rotation_error
 from hexabot_sim.kinematics import robots
 from hexabot_sim.kinematics.numeric_ik import batch_pose_and_jacobian, pose_and_jacobian
-from hexabot_sim.params import NameOrFile, apart, check_duration, check_run_cost, param
+from hexabot_sim.params import NameOrFile, apart, param
 from hexabot_sim.result import Live, Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.robots.arm import scene
 from hexabot_sim.robots.arm.path import PATHS, PLANES, RAMP_TIME, Path, Plan, plan
@@ -34,7 +35,7 @@ if TYPE_CHECKING:
 ROBOT = NameOrFile(tuple(robots.ROBOTS), "robot file (.toml)", robots.resolve)
 MM: tuple[str, float] = ("mm", 1e-3)  # the unit users type by mistake for a length in m
 MAX_SERVO_STEP: float = 0.5  # largest 2 pi bandwidth * timestep: the servo's stiffness is integrated explicitly
-# Cost of a run for params.check_run_cost, measured on the 2-core development machine: seconds per control period
+# Cost of a run for budget.check_run_cost, measured on the 2-core development machine: seconds per control period
 # (controller, mj_step1/2, the Jacobian check: 0.22-0.31 ms quiet, 0.55-0.7 ms under load, scara to 7 joints; the
 # worst is taken), per recorded row (site replay, columns: 10-40 us), bytes per row.
 RUN_COST: tuple[float, float, float] = (7e-4, 4e-5, 1500.0)

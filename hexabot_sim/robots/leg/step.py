@@ -9,11 +9,12 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
+from hexabot_sim.budget import check_duration, check_run_cost
 from hexabot_sim.control.resolved_rate import ResolvedRateController, ResolvedRateGains
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.kinematics import robots
-from hexabot_sim.params import apart, check_duration, check_run_cost, param
+from hexabot_sim.params import apart, param
 from hexabot_sim.result import Live, Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.robots.leg.model import LEG_ROBOT, MAX_LENGTH, MIN_LENGTH, build_xml, leg_geometry
 from hexabot_sim.simulate import Controller, simulate, site_trajectory, step_count
@@ -36,7 +37,7 @@ MAX_FOOT_SPEED: float = 1.0  # [m/s]
 MIN_OMEGA, MAX_OMEGA = 0.01, 20.0  # [rad/s] periods from 0.3 s to 10.5 min
 MAX_PHASE_STEP: float = 0.5  # [rad] largest omega * timestep: >= 12.6 control periods per command cycle
 CSV_COLUMNS: int = 25  # columns of timeseries.csv
-# Cost of a run for params.check_run_cost, measured on the 2-core development machine: seconds per
+# Cost of a run for budget.check_run_cost, measured on the 2-core development machine: seconds per
 # physics step (controller + mj_step), seconds per recorded row (site replay, derived columns; the
 # CSV is counted apart), peak bytes per recorded row.
 RUN_COST: tuple[float, float, float] = (15e-6, 100e-6, 600.0)

@@ -11,8 +11,9 @@ import mujoco
 import numpy as np
 
 from hexabot_sim import pool
+from hexabot_sim.budget import CSV_BYTES_PER_VALUE, check_budget
 from hexabot_sim.errors import SimulationError
-from hexabot_sim.params import CSV_BYTES_PER_VALUE, apart, check_budget, param
+from hexabot_sim.params import apart, param
 from hexabot_sim.result import Metric, Progress, ScenarioResult
 from hexabot_sim.robots.leg import figures as leg_figures
 from hexabot_sim.robots.leg import step as leg

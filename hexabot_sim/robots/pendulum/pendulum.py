@@ -11,7 +11,8 @@ import mujoco
 import numpy as np
 
 from hexabot_sim import models, render
-from hexabot_sim.params import apart, check_duration, check_run_cost, param
+from hexabot_sim.budget import check_duration, check_run_cost
+from hexabot_sim.params import apart, param
 from hexabot_sim.result import Live, Marker, Metric, Progress, ScenarioResult, at_home
 from hexabot_sim.simulate import simulate, step_count
 
@@ -20,7 +21,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 INTEGRATORS = ("RK4", "Euler", "implicit", "implicitfast")
-# Cost of a run for params.check_run_cost, measured on the 2-core development machine: seconds per
+# Cost of a run for budget.check_run_cost, measured on the 2-core development machine: seconds per
 # mj_step, seconds per recorded row (energies, metrics; the CSV is counted apart), peak bytes per row.
 RUN_COST: tuple[float, float, float] = (10e-6, 15e-6, 400.0)
 SETTLING_BAND: float = 0.02  # settled once |theta - rest| stays within 2 % of |theta0 - rest|

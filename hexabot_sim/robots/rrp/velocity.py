@@ -9,16 +9,17 @@ import mujoco
 import numpy as np
 
 from hexabot_sim import models, render
+from hexabot_sim.budget import check_duration, check_run_cost
 from hexabot_sim.kinematics import robots
 from hexabot_sim.kinematics.mjcf import to_mjcf
-from hexabot_sim.params import check_duration, check_run_cost, param
+from hexabot_sim.params import param
 from hexabot_sim.result import Live, Metric, Progress, ScenarioResult
 from hexabot_sim.simulate import Trajectory, step_count
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-# Cost of a run for params.check_run_cost, measured on the 2-core development machine: no physics
+# Cost of a run for budget.check_run_cost, measured on the 2-core development machine: no physics
 # steps; per sample the Jacobian in Python and mj_forward (~1.1 ms; the CSV is counted apart); peak bytes.
 RUN_COST: tuple[float, float, float] = (0.0, 1.1e-3, 600.0)
 LENGTH_MIN, LENGTH_MAX = robots.LENGTH_MIN, robots.LENGTH_MAX  # [m] the lengths `kin` accepts too
