@@ -162,15 +162,14 @@ class WalkingController:
             model, layout.legs, self.hips, layout.yaws, gains.task_gain, self.dt, planner.stance_time,
             settings.admittance,
         )  # fmt: skip
-        self.force = (
-            None
-            if settings.force is None
-            else StanceForce(
-                model, layout, gains, self.dt, settings.force, -float(np.mean(planner.neutral[:, 2])), False
-            )
-        )
+        self.force = None if settings.force is None else self._stance_force(model, layout, gains, planner)
         self._no_extra = np.zeros(nq)  # the feed correction without an admittance
         self._feed_row = np.zeros(nq)
+
+    def _stance_force(self, model, layout, gains, planner) -> StanceForce:
+        """The stance legs' force control: its height is the plan's stand height, the body not levelled."""
+        stand_height = -float(np.mean(planner.neutral[:, 2]))
+        return StanceForce(model, layout, gains, self.dt, self.settings.force, stand_height, False)
 
     def scale(self, t: np.ndarray | float) -> np.ndarray | float:
         """Fraction of the command in force at t (vectorised): 0 while settling, then a linear ramp to 1."""
@@ -357,9 +356,9 @@ class GroundController(WalkingController):
     def __init__(
         self, model, data, layout, planner, gains, settings, q_start, ground: GroundSettings, source=None
     ) -> None:
+        self.ground = ground  # before the base's __init__: its _stance_force reads it
         super().__init__(model, data, layout, planner, gains, settings, q_start, source)
         K = self.kernels
-        self.ground = ground
         n = layout.n_legs
         touch_adr = [int(model.sensor_adr[model.sensor(f"{leg}_touch").id]) for leg in layout.legs]
         feet = legged.feet_body(layout, np.asarray(q_start).reshape(n, 3))  # (n, 3)
@@ -396,11 +395,17 @@ class GroundController(WalkingController):
         self._events = np.zeros((n, 3))  # swings that ended in one step (kernels.targets): one a leg at most
         self._row_prev = np.zeros(3 * n)  # the targets at the current time (hip frames)
         self._started = False
-        if self.force is not None:  # its height and levelling are the ground's
-            self.force = StanceForce(model, layout, gains, self.dt, settings.force, ground.stand_height, ground.level)
-            self.force.par[self.force.fk.EARLY_AFTER] = math.inf  # the ground's own touchdown modes say when
         self._down = np.zeros(n, dtype=bool)
         self._down_modes = np.array([K.STANCE, K.EARLY], dtype=np.int64)  # with GROUNDED: the leg is down
+
+    def _stance_force(self, model, layout, gains, planner) -> StanceForce:
+        """The stance legs' force control with the ground's height and levelling; the ground's own touchdown
+        modes say when a leg is down."""
+        force = StanceForce(
+            model, layout, gains, self.dt, self.settings.force, self.ground.stand_height, self.ground.level
+        )
+        force.par[force.fk.EARLY_AFTER] = math.inf
+        return force
 
     def _swing_time(self, planner: GaitPlanner) -> None:
         """The kernel's swing time and late-touchdown seek speed (half the swing's peak) from the planner's gait."""
