@@ -40,6 +40,12 @@ class OutputError(HexabotError):
     exit_code = 1
 
 
+class InstallError(HexabotError):
+    """The installation is incomplete: a file the package ships (its MJCF models) is missing."""
+
+    exit_code = 1
+
+
 def lookup(table: dict, name: str, what: str):
     """table[name], or a UsageError "unknown <what> '<name>'; known: ..." listing the allowed names."""
     try:

@@ -6,7 +6,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
-from hexabot_sim.errors import UsageError
+from hexabot_sim.errors import InstallError, UsageError
 
 _PKG_DIR = Path(__file__).resolve().parent
 # Installed wheel: models are packaged as hexabot_sim/_models; source tree: top-level models/.
@@ -18,7 +18,10 @@ def models_dir() -> Path:
     for candidate in _CANDIDATES:
         if candidate.is_dir() and any(candidate.glob("*.xml")):
             return candidate
-    raise FileNotFoundError(f"MJCF models not found in any of: {', '.join(map(str, _CANDIDATES))}")
+    raise InstallError(
+        f"the package's MJCF models are missing (looked in {', '.join(map(str, _CANDIDATES))}): the installation is "
+        "incomplete; reinstall hexabot-sim"
+    )
 
 
 def model_path(name: str) -> Path:

@@ -66,3 +66,15 @@ def test_scene_includes_are_inlined():
     root = models.load_tree("pendulum_scene")
     assert root.find(".//include") is None
     assert models.find(root, "joint", "hinge").get("name") == "hinge"
+
+
+def test_an_install_without_its_models_says_so_in_one_line(tmp_path, monkeypatch, capsys):
+    """A copy of the package without models/ (a broken install) once read "writing the run folder failed"."""
+    from hexabot_sim.__main__ import main
+
+    monkeypatch.setattr(models, "_CANDIDATES", (tmp_path / "_models", tmp_path / "models"))
+    code = main(["run", "pendulum", "--set", "duration=0.5", "--no-plots", "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 1 and len(err.strip().splitlines()) == 1, err
+    assert "MJCF models are missing" in err and "reinstall" in err and "run folder" not in err, err
+    assert not (tmp_path / "out").exists()
