@@ -156,7 +156,7 @@ def test_the_worker_count_of_a_killed_scheduler_is_refused_within_the_bound(tmp_
             started = time.monotonic()
             with pytest.raises(pool.WorkerFailed, match="lost the Dask scheduler"):
                 pool._dask_workers(client)
-            assert time.monotonic() - started < pool.SCHEDULER_ANSWER + 1.5
+            assert time.monotonic() - started < 6.0  # the reconnect timeout is 10 s; SCHEDULER_ANSWER 2 s
     finally:
         scheduler.kill()
         scheduler.wait(timeout=10)
