@@ -211,7 +211,7 @@ def _forces_figure(result: ScenarioResult, show: np.ndarray) -> Any:
 
     def fmt(name: str, spec: str) -> str:
         value = m[name].value
-        return "-" if value is None else format(value, spec)
+        return "n/a" if value is None else format(value, spec)
 
     text = (
         f"foot forces: {fmt('foot_bounces', 'd')} bounces, impact ratio {fmt('touchdown_impact_ratio', '.2f')}, "
