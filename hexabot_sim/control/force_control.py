@@ -11,7 +11,8 @@ force (a virtual model controller with a force distribution, as legged robots wi
   weighted plane z = a + b x + c y through the stance feet (body frame); height error a + stand_height, slope
   errors (b, c) (with `level_body=on` the IMU's pitch and roll instead). They move with the feet that are down
   (the plane through the same feet with the same weights now and a step ago), drawn to the plane's own values over
-  `filter_time`: a foot that lands or lifts changes the plane at once, which would be a step in the wrench;
+  `filter_time` (the height) and `slope_filter_time` (the slopes): a foot that lands or lifts changes the plane at
+  once, which would be a step in the wrench;
 - its distribution: the vertical forces on the stance feet with the least weighted norm sum f_i^2 / w_i that sum
   to Fz, the moments soft (force_kernels.distribute, a closed form); a foot's weight ramps up from `least_weight`
   over `ramp_in` after its touchdown and down over `ramp_out` before its planned lift-off (with a `duty` above the
@@ -51,7 +52,10 @@ class ForceSettings:
         blend_out: ... and back over this time after lift-off [s].
         height_gain, height_integral: PI on the body's height [N/m, N/(m s)].
         attitude_gain, attitude_integral: PI on the slopes [N m, N m / s] per unit slope.
-        filter_time: The errors are drawn to the stance plane's with this time constant [s].
+        filter_time: The height error is drawn to the stance plane's with this time constant [s].
+        slope_filter_time: ... and the slope errors with this one [s] (without `level_body`): on uneven ground
+            the plane through the stance feet tilts in steps as feet land and lift, which at 50 ms swung the
+            moments asked for by tens of N m and left stance feet commanded no force (1 cm rough ground).
         integral_limit: The integrals' bound [m s or s].
         return_time: In swing the target's height offset returns to the plan with this time constant [s].
         soft: The moments' softness r in the distribution [m^2] (0: exact; see force_kernels.distribute).
@@ -86,6 +90,7 @@ class ForceSettings:
     from_plan: bool = False
     force_gain: float = 0.0
     landing_lift: float = 0.0
+    slope_filter_time: float = 0.5
 
 
 def for_overlap(overlap: float) -> ForceSettings:
@@ -140,6 +145,7 @@ class StanceForce:
         p[fk.TOUCH_THRESHOLD], p[fk.EARLY_AFTER] = s.touch_threshold, s.early_after
         p[fk.SMOOTH], p[fk.FROM_PLAN], p[fk.K_F] = float(s.smooth), float(s.from_plan), s.force_gain
         p[fk.LIFT] = s.landing_lift
+        p[fk.SLOPE_FILTER] = s.slope_filter_time
         femur, tibia = model.body(f"{layout.legs[0]}_femur"), model.body(f"{layout.legs[0]}_tibia")
         gravity = float(-model.opt.gravity[2])
         p[fk.G_FEMUR] = float(femur.mass[0]) * gravity * float(femur.ipos[0])

@@ -12,8 +12,8 @@ from hexabot_sim.control.kernels import jit, servo
 # Scalars `par`.
 (DT, WEIGHT, T_IN, T_OUT, S_IN, S_OUT, W_MIN, K_H, I_H, K_T, I_T, STAND, LEVEL, QUAT_ADR, RETURN_TIME, TASK_GAIN,
  L1, L2, L3, FILTER, I_LIMIT, SOFT, G_FEMUR, G_TIBIA, TIBIA_COM, TOUCH_THRESHOLD, EARLY_AFTER, SMOOTH,
- FROM_PLAN, K_F, LIFT) = range(31)  # fmt: skip
-NPAR = 31
+ FROM_PLAN, K_F, LIFT, SLOPE_FILTER) = range(32)  # fmt: skip
+NPAR = 32
 # Per-leg constants `geo` (n, 5).
 COS, SIN, HIP_X, HIP_Y, TOUCH_ADR = range(5)
 # Per-leg state `state` (n, NSTATE): force-mode blend s, time down, the target's vertical offset and its rate,
@@ -167,14 +167,16 @@ def force_pre(par, geo, state, body, qpos, trims, sensordata, row, down, until, 
             state[i, W] = 0.0
             state[i, FORCE] = 0.0
     # The errors move with the feet that are down (the same weights now and a step ago: a foot that lands or lifts
-    # does not make them jump) and are drawn to the stance plane's (or the IMU's) over FILTER.
+    # does not make them jump) and are drawn to the stance plane's over FILTER (the height) and SLOPE_FILTER (the
+    # slopes: on uneven ground the plane's slope steps with the set of feet; the IMU's replace them when levelling).
     fit, before = np.empty(3), np.empty(3)
     if plane(xs[:m], ys[:m], zs[:m], ws[:m], fit) and plane(xs[:m], ys[:m], zp[:m], ws[:m], before):
         err = np.empty(3)
         err[0] = fit[0] + par[STAND]  # > 0: the body is low over its feet
         err[1], err[2] = fit[1], fit[2]  # > 0: the feet ahead (left) stand high: lift the body's front (left)
-        pull = dt / (par[FILTER] + dt) if body[STARTED] != 0.0 else 1.0
         for k in range(3):
+            tau = par[FILTER] if k == 0 else par[SLOPE_FILTER]
+            pull = dt / (tau + dt) if body[STARTED] != 0.0 else 1.0
             body[E + k] += (fit[k] - before[k]) + pull * (err[k] - body[E + k] - (fit[k] - before[k]))
         if par[LEVEL] != 0.0:
             a = int(par[QUAT_ADR])

@@ -120,25 +120,59 @@ def test_force_mode_walks_and_is_a_choice_of_load_sharing():
     assert m["foot_bounces"].value == 0
 
 
-def test_force_control_on_stairs_without_the_pad_is_refused(tmp_path, capsys):
-    """On rigid feet hexabot-stairs' tripod fell with load_sharing=force (the body bounced 10 cm, 25 deg of pitch):
-    the walk is refused before it starts, in one line naming the remedy."""
+@pytest.mark.parametrize(
+    "scenario, sets",
+    [("hexabot-stairs", []), ("hexabot-stairs", ["feet=pad", "swing=quintic", "gait=ripple"]),
+     ("hexabot-kerb", ["feet=pad", "swing=quintic"])],
+)  # fmt: skip
+def test_force_control_on_stairs_or_a_kerb_is_refused(tmp_path, capsys, scenario, sets):
+    """On feet at two levels the force control's errors step: on rigid feet hexabot-stairs' tripod fell (the body
+    bounced 10 cm, 25 deg of pitch); with the pad the ripple gait rolled up to 30 deg on the steps and 15 deg at the
+    kerb (pad alone: 5.6 and 1.8 deg). The walk is refused before it starts, in one line naming the remedy."""
     from helpers import cli
 
     out = tmp_path / "out"
-    code, _, err = cli(capsys, "run", "hexabot-stairs", "--set", "load_sharing=force", "--out", str(out))
+    args = [a for s in ["load_sharing=force", *sets] for a in ("--set", s)]
+    code, _, err = cli(capsys, "run", scenario, *args, "--out", str(out))
     assert code == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
-    assert "load_sharing' = force on stairs needs feet=pad" in err and not out.exists()
+    assert "'load_sharing' = force is not for" in err and "load_sharing=off or admittance" in err and not out.exists()
 
 
-@pytest.mark.slow
-def test_force_control_with_the_pad_climbs_the_stairs():
-    """What the refusal above promises: with feet=pad swing=quintic the force-controlled tripod climbs hexabot-stairs'
-    three 4 cm steps without a fall (the body ends on the landing, 12 cm up, from MuJoCo's free joint)."""
-    import hexabot_sim as hs
+def test_the_height_and_slope_errors_are_drawn_to_the_stance_plane_over_their_own_times():
+    """Six feet down, one standing 3.6 mm lower; it lifts, so the plane through the other five steps (its height and
+    slopes): with no foot moving, each error approaches the new plane's as err + (e0 - err)(1 - dt/(tau + dt))^k,
+    the height with filter_time (50 ms) and the slopes with slope_filter_time (0.5 s: on uneven ground the plane
+    tilts in steps as feet land and lift), against that closed form and numpy's least-squares plane."""
+    from test_force_overlap import DT, _geo, _par
 
-    r = hs.run("hexabot-stairs", load_sharing="force", feet="pad", swing="quintic")
-    z = r.raw.columns["z"]  # the body's height [m]
-    assert not r.metrics["fell"].value
-    assert r.metrics["distance_made_good"].value > 1.2
-    assert z[-1] - z[0] > 0.11
+    par, geo = _par(0.01), _geo()
+    par[fk.FILTER], par[fk.SLOPE_FILTER] = 0.05, 0.5
+    state, body = np.zeros((6, fk.NSTATE)), np.zeros(fk.NBODY)
+    state[:, fk.SINCE], state[:, fk.S] = 1.0, 1.0
+    qpos = np.zeros(25)
+    qpos[7:] = np.tile([0.0, 0.5, 1.2], 6)
+    qpos[8] = 0.55  # leg 0's femur lower: its foot 3.6 mm below the others'
+    extra, row, touch, until = np.zeros(18), np.zeros(18), np.zeros(6), np.full(6, 1e9)
+
+    def plane_of(down):
+        feet = np.array([fk.foot(par, *qpos[7 + 3 * i : 10 + 3 * i])[:3] for i in range(6)])
+        c, s = geo[:, fk.COS], geo[:, fk.SIN]
+        x, y = c * feet[:, 0] - s * feet[:, 1] + geo[:, fk.HIP_X], s * feet[:, 0] + c * feet[:, 1] + geo[:, fk.HIP_Y]
+        a = np.stack([np.ones(6), x, y], axis=1)[down]
+        return np.linalg.lstsq(a, feet[down, 2], rcond=None)[0]
+
+    all_down = np.ones(6, dtype=np.bool_)
+    fk.force_pre(par, geo, state, body, qpos, np.zeros(18), touch, row, all_down, until, extra)
+    e0 = body[fk.E : fk.E + 3].copy()
+    first = plane_of(all_down)
+    np.testing.assert_allclose(e0, [first[0] + par[fk.STAND], first[1], first[2]], atol=1e-12)
+    five = all_down.copy()
+    five[0] = False
+    new = plane_of(five)
+    err = np.array([new[0] + par[fk.STAND], new[1], new[2]])
+    assert abs(err[0] - e0[0]) > 5e-4 and abs(err[1] - e0[1]) > 2e-3  # the plane steps
+    for k in range(1, 301):
+        fk.force_pre(par, geo, state, body, qpos, np.zeros(18), touch, row, five, until, extra)
+        for j, tau in enumerate((0.05, 0.5, 0.5)):
+            expect = err[j] + (e0[j] - err[j]) * (1.0 - DT / (tau + DT)) ** k
+            assert abs(body[fk.E + j] - expect) < 1e-12, (k, j)
