@@ -91,6 +91,12 @@ def _curve(p: Plan, t: Table, name: str, values: np.ndarray, failed: np.ndarray)
         for xf in x[failed]:
             ax.axvline(xf, color="tab:red", alpha=0.3, lw=6)
         ax.plot([], [], color="tab:red", alpha=0.3, lw=6, label="cell failed (see the error column)")
+    null = ~failed & ~np.isfinite(values)  # cells that ran without a value (e.g. a pendulum not yet settled)
+    if null.any():  # marked as the heatmap's grey cells are, so the grid's ends are not silently cut off
+        for xn in x[null]:
+            ax.axvline(xn, color="0.5", alpha=0.3, lw=6)
+        ax.plot([], [], color="0.5", alpha=0.3, lw=6, label="cell without a value (null)")
+    if failed.any() or null.any():
         plots.legend_above(ax, ncol=2)
     if categorical:
         ax.set_xticks(x, [cell_text(v) for v in axis.values])
@@ -103,7 +109,7 @@ def _curve(p: Plan, t: Table, name: str, values: np.ndarray, failed: np.ndarray)
     ax.set_xlabel(_axis_label(axis.name, t.units.get(axis.name, "")))
     ax.set_ylabel(_axis_label(name, t.units.get(name, "")))
     ax.grid(alpha=0.3, which="both")
-    ax.set_title(_title(p, t, name), fontsize=plots.TITLE_FONTSIZE)
+    fig.suptitle(_title(p, t, name), fontsize=plots.TITLE_FONTSIZE)  # above the legend of marked cells
     return fig
 
 

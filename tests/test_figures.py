@@ -145,6 +145,25 @@ def test_leg_sweep_figure_on_a_small_grid():
     assert one.axes[0].get_ylim()[0] > 0 and not [line for line in one.axes[0].get_lines() if line.get_marker() == "o"]
 
 
+def test_walk_body_figure_plans_the_height_over_the_ground_and_the_legend_says_what_the_command_is():
+    """On a slope the planned body height rises with the ground under the body (it was a constant line at the
+    flat floor's 98 mm while the body climbed 150 mm); the command's legend names heading hold only when it is on."""
+    from hexabot_sim.walking import figures as walk_figures
+
+    result = _run("hexabot-slope", duration=3)
+    figures = walk_figures.figures(result)
+    c, ground = result.columns, result.extras["terrain"]
+    body, planned = figures["body"].axes[0].get_lines()[:2]
+    assert planned.get_label().startswith("planned: ground under")
+    expected = (ground.height(c["x"], c["y"]) + result.params.stand_height + 0.008) * 1000  # sphere foot 8 mm
+    assert np.allclose(planned.get_ydata(), expected, atol=1e-9)
+    z = np.asarray(body.get_ydata())
+    assert np.ptp(planned.get_ydata()) > 20  # the body climbs, and the plan with it
+    assert np.max(np.abs(z - planned.get_ydata())) < 10  # the level body stays near its plan above the slope [mm]
+    labels = {line.get_label() for ax in figures["velocity"].axes for line in ax.get_lines()}
+    assert "command (with ramp)" in labels and not any("heading hold" in label for label in labels)
+
+
 @pytest.mark.slow
 def test_plots_module_picks_no_matplotlib_backend():
     code = "import matplotlib; matplotlib.use('svg'); import hexabot_sim.plots; print(matplotlib.get_backend())"

@@ -31,6 +31,31 @@ def test_a_real_walk_keeps_its_ratios(tmp_path):
     assert r.metrics["cost_of_transport"].value is not None
 
 
+def test_the_cost_of_transport_is_per_distance_walked_not_per_displacement():
+    """On an arc (0.1 m/s turning at 0.3 rad/s: a circle of 0.33 m) the 8 s steady walk's displacement is a chord 22 %
+    shorter than the 0.8 m walked; the cost of transport divided the joint work by it (and by 0.19 m for the 6.3 m
+    figure-eight course: 29 instead of 0.9). Reference: the joint work replayed here with mj_forward, over the
+    integral of the body's horizontal speed."""
+    import mujoco
+    import numpy as np
+
+    r = hs.run("hexabot-walk", vx=0.1, yaw_rate=0.3, duration=10.5)
+    model, traj = r.raw.model, r.raw.trajectory
+    n, dt = len(traj.t), traj.t[1] - traj.t[0]
+    rows = np.flatnonzero((traj.t >= 2.5 - 1e-9) & (traj.t <= 10.5 + 1e-9))  # the steady walk: 0.5 s + two periods on
+    data, power = mujoco.MjData(model), []
+    for k in rows:  # the controls in force during the step from row k are ctrl[k + 1]
+        data.qpos[:], data.qvel[:], data.ctrl[:] = traj.qpos[k], traj.qvel[k], traj.ctrl[min(k + 1, n - 1)]
+        mujoco.mj_forward(model, data)
+        power.append(np.abs(data.qfrc_actuator[6:] * data.qvel[6:]).sum())
+    work = float(np.sum(power) * dt)
+    walked = float(np.hypot(traj.qvel[rows[:-1], 0], traj.qvel[rows[:-1], 1]).sum() * dt)
+    chord = float(np.hypot(*(traj.qpos[rows[-1], :2] - traj.qpos[rows[0], :2])))
+    weight = float(model.body_subtreemass[1]) * 9.81
+    assert chord < 0.85 * walked
+    assert r.metrics["cost_of_transport"].value == pytest.approx(work / (weight * walked), rel=0.015)
+
+
 @pytest.mark.parametrize("theta0_deg", [1e-9, 1e-4, 1e-3])
 def test_the_energy_balance_of_a_swing_below_rounding_is_null(theta0_deg):
     r = hs.run("pendulum-undamped", theta0_deg=theta0_deg, duration=1)

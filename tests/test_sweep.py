@@ -236,6 +236,27 @@ def test_sweep_figures_print_full_values_not_an_offset(grid):
     assert n == 4
 
 
+def test_a_curve_marks_its_null_cells_and_keeps_the_whole_grid_in_view():
+    """A metric with no value in some cells (settling_time of a pendulum that has not settled) was drawn as a curve
+    over the other cells only: the grid's low end vanished from the axis, unmarked (the heatmap greys them)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    p = sweep.plan("pendulum", ["damping=log:0.001:0.1:5"], {}, {})
+    rows = tuple((cell.damping, None if i < 2 else 1.0 / (i + 1), "") for i, cell in enumerate(p.cells))
+    table = sweep.Table(("damping",), ("settle",), ("settle",), rows, {"settle": "s"}, {"settle": "a metric"})
+    fig = sweep_figures.figures(p, table)["settle"]
+    FigureCanvasAgg(fig).draw()
+    ax = fig.axes[0]
+    low, high = ax.get_xlim()
+    assert low < 0.001 and high > 0.1  # every grid value on the axis
+    marks = [line.get_xdata()[0] for line in ax.get_lines() if line.get_color() == "0.5" and len(line.get_xdata())]
+    assert sorted(marks) == pytest.approx([0.001, 10**-2.5])
+    legend = ax.get_legend()
+    assert any("null" in text.get_text() for text in legend.get_texts())
+    renderer = FigureCanvasAgg(fig).get_renderer()  # the legend sits between the title and the axes, on neither
+    assert legend.get_window_extent(renderer).y1 <= fig._suptitle.get_window_extent(renderer).y0 + 1
+
+
 def test_a_stopped_worker_removes_the_cell_folder_it_was_writing(tmp_path):
     """The sweep stops workers with SIGTERM: a --keep-runs cell half-written in the temporary folder goes with the
     worker (10 of 12 interrupted sweeps left ~1 MB cell folders behind, found by fuzzing)."""

@@ -96,6 +96,7 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     # Commanded vs achieved body velocity (body frame), raw and averaged over one gait period.
     fig, axes = plots.figure(3, 1, figsize=(9, 8), sharex=True)
     n = max(1, round(p.period / p.timestep))
+    command_label = "command (with ramp and heading hold)" if p.heading_hold == "on" else "command (with ramp)"
     for ax, key, cmd, label, unit in (
         (axes[0], "vx_body", "cmd_vx", "forward speed", "m/s"),
         (axes[1], "vy_body", "cmd_vy", "sideways speed", "m/s"),
@@ -103,7 +104,7 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     ):
         ax.plot(t, c[key], color="0.75", lw=0.6, label="measured")
         ax.plot(t, _moving_mean(c[key], n), color="tab:blue", lw=1.5, label="measured, mean over one period")
-        ax.plot(t, c[cmd], **plots.TARGET_STYLE, label="command (with ramp and heading hold)")
+        ax.plot(t, c[cmd], **plots.TARGET_STYLE, label=command_label)
         ax.set_ylabel(f"{label} [{unit}]")
         ax.grid(True, alpha=0.3)
     plots.legend_above(axes[0])
@@ -114,8 +115,13 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     # Body height and attitude.
     fig, axes = plots.figure(2, 1, figsize=(9, 6), sharex=True)
     planned_h = (p.stand_height + p.ROBOT.layout.foot_radius) * 1000
+    ground: Ground = result.extras["terrain"]
     axes[0].plot(t, c["z"] * 1000, color="tab:blue", label="body height")
-    axes[0].axhline(planned_h, **plots.TARGET_STYLE, label="planned height")
+    if ground.flat:
+        axes[0].axhline(planned_h, **plots.TARGET_STYLE, label="planned height")
+    else:  # the planned height is above the ground under the body, which rises on a slope, a kerb or stairs
+        planned = ground.height(c["x"], c["y"]) * 1000 + planned_h  # (n,) [mm]
+        axes[0].plot(t, planned, **plots.TARGET_STYLE, label=f"planned: ground under\nthe body + {planned_h:.3g} mm")
     axes[0].set_ylabel("height [mm]")
     plots.plain(axes[0])
     plots.min_span(axes[0], 2.0)
@@ -151,7 +157,6 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     follower = result.extras.get("follower")
     if follower is not None:
         out["course"] = course.course_figure(result, follower, LEG_COLOURS)
-    ground: Ground = result.extras["terrain"]
     if not ground.flat:
         out["terrain"] = _terrain_figure(result, ground)
     return out

@@ -286,9 +286,14 @@ def run(name: str, p: PendulumParams, progress: Progress | None = None) -> Scena
     crossings = upward_crossings(t, theta, omega, level=rest if rest is not None else 0.0)
     measured = float((crossings[-1] - crossings[0]) / (len(crossings) - 1)) if len(crossings) >= 2 else None
     metrics["period_measured"] = Metric(measured, "s", "mean time between upward crossings of the rest angle")
-    if mgc > 0:
+    # Small oscillations about the rest angle: the restoring stiffness there is k + m g c cos(rest) (a spring pulls
+    # the rest angle off 0, where gravity's part is m g c; 2 pi sqrt(I / (m g c + k)) is right only at rest = 0).
+    linear = k + mgc * math.cos(rest if rest is not None else 0.0)  # [N*m/rad]
+    if mgc > 0 and linear > 0:
         metrics["period_small_angle"] = Metric(
-            2 * math.pi * math.sqrt(inertia / (mgc + k)), "s", "2 pi sqrt(I / (m g c + k))"
+            2 * math.pi * math.sqrt(inertia / linear),
+            "s",
+            "2 pi sqrt(I / (k + m g c cos(rest))): undamped small oscillations about the rest angle",
         )
     if b == 0 and k == 0 and mgc > 0 and abs(theta0) < math.pi and omega[0] == 0:
         exact = exact_period(inertia, mgc, theta0)

@@ -112,6 +112,21 @@ def test_spring_rest_angle_balances_gravity():
     assert 3 < 30 - math.degrees(rest) < 10
 
 
+def test_small_angle_period_is_about_the_spring_rest_angle():
+    """With the spring the pendulum oscillates about the rest angle (23.3 deg), where the restoring stiffness is
+    k + m g c cos(rest): the small-angle period is 2 pi sqrt(I / (k + m g c cos(rest))), not the 2 pi sqrt(I /
+    (k + m g c)) of oscillations about 0 (0.9 % shorter, which the metric once reported)."""
+    p, result = run("pendulum", damping=0.0, theta0_deg=24.0, duration=3.0)  # 0.68 deg from rest, undamped
+    inertia, mgc = constants(p.mass, p.length, p.radius)
+    rest = spring_rest_angle(mgc, p.stiffness, math.radians(p.target_deg))
+    expected = 2 * math.pi * math.sqrt(inertia / (p.stiffness + mgc * math.cos(rest)))
+    assert result.metrics["period_small_angle"].value == pytest.approx(expected, rel=1e-12)
+    assert result.metrics["period_measured"].value == pytest.approx(expected, rel=1e-4)  # the small swing's own
+    assert not result.metrics["period_measured"].value == pytest.approx(
+        2 * math.pi * math.sqrt(inertia / (p.stiffness + mgc)), rel=1e-3
+    )
+
+
 def test_spring_without_gravity_rests_at_target():
     _, result = run("pendulum", gravity=0.0, target_deg=30.0)
     assert abs(result.columns["theta"][-1] - math.radians(30)) <= 1e-4
