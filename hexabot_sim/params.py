@@ -117,7 +117,11 @@ def _number(value: float) -> str:
 def apart(value: float, bound: float, toward: str, least: int = 3) -> tuple[str, str]:
     """`value` and `allowed(bound, toward)` with as many digits as it takes for the two texts to differ
     ("a 32.004 mm kerb is above the largest climbable, 32.003 mm", not "32 mm ... 32 mm"). Every refusal that
-    prints a value against its bound formats the pair with this."""
+    prints a value against its bound formats the pair with this; a value equal to its (excluded) bound is shown
+    as it is, twice ("smaller than 'length' (0.3 m); got 0.3", not "(0.29999999999999999 m)")."""
+    if value == bound:
+        text = f"{value:.{least}g}" if float(f"{value:.{least}g}") == value else repr(float(value))
+        return text, text
     for digits in range(least, 18):
         shown, limit = f"{value:.{digits}g}", allowed(bound, toward, digits)
         if float(shown) != float(limit):
@@ -239,7 +243,8 @@ def _convert(name: str, raw: Any, info: ParamInfo, kind: type) -> Any:
             typo_unit, size = info.typo
             if info.contains(value * size):
                 hint = f"; did you mean {_number(value)} {typo_unit} = {_number(value * size)} {info.unit}?"
-        raise UsageError(f"parameter '{name}' must be a number with {allowed}; got {_show(raw)}{hint}")
+        what = "a whole number" if kind is int else "a number"
+        raise UsageError(f"parameter '{name}' must be {what} with {allowed}; got {_show(raw)}{hint}")
     if kind is int:
         if value != int(value):
             raise UsageError(f"parameter '{name}' must be a whole number with {allowed}; got {_show(raw)}")

@@ -182,7 +182,8 @@ def test_every_parameter_range(scenario, name, info, kind):
         with pytest.raises(UsageError) as bad:
             params.resolve(cls, scenario.defaults, extra, {name: repr(outside)})
         message = str(bad.value)
-        assert f"parameter '{name}' must be a number with" in message and "\n" not in message, message
+        what = "a whole number" if kind is int else "a number"
+        assert f"parameter '{name}' must be {what} with" in message and "\n" not in message, message
         assert params.describe_range(info, name) in message
         if cls.__name__ not in CHECKED_HERE:  # a newer scenario: its own tests cover its cross-checks
             info.contains(inside) or pytest.fail(f"{name}: {inside} should be inside")
@@ -424,3 +425,15 @@ def test_the_kin_limits_are_printed_apart_from_the_value(capsys):
     assert main(["kin", "leg", "--q", "1.5708,0,0"]) == 0  # a warning, not "1.5708 outside [.., 1.5708]"
     err = capsys.readouterr().err
     assert "coxa = 1.5708 rad is outside its joint range [-1.5708, 1.570796] rad" in err, err
+
+
+def test_a_value_equal_to_its_excluded_bound_is_shown_as_it_is(capsys, tmp_path):
+    """radius=0.3 with length 0.3 read "smaller than 'length' (0.29999999999999999 m); got 0.3": no digit count
+    tells equal numbers apart, so both are shown as they are; an out-of-range whole number says "whole number"."""
+    assert params.apart(0.3, 0.3, "down") == ("0.3", "0.3")
+    assert params.apart(1 / 3, 1 / 3, "up") == (repr(1 / 3), repr(1 / 3))
+    assert main(["run", "pendulum", "--set", "radius=0.3", "--out", str(tmp_path / "a")]) == 2
+    err = capsys.readouterr().err
+    assert "smaller than 'length' (0.3 m); got 0.3" in err and "0.2999" not in err, err
+    assert main(["run", "hexabot-walk", "--set", "seed=-1", "--out", str(tmp_path / "b")]) == 2
+    assert "'seed' must be a whole number with" in capsys.readouterr().err
