@@ -13,7 +13,7 @@ from gymnasium import spaces
 from hexabot_sim.control.commands import Segment
 from hexabot_sim.control.gait import Command
 from hexabot_sim.control.walker import WalkingController
-from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward
+from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward, unknown_keywords
 from hexabot_sim.envs.scene import STAIRS, check_range, check_stairs, robot_params
 from hexabot_sim.walking.constants import SETTLE_TIME
 from hexabot_sim.walking.parameters import WalkParams
@@ -159,7 +159,9 @@ class LeggedCommandEnv(LeggedEnv):
         width: int = 640,
         height: int = 480,
         camera: str = "track",
+        **kwargs,
     ) -> None:
+        unknown_keywords(type(self), kwargs)  # a misspelt keyword: a ValueError naming the known ones, not a TypeError
         try:
             rows = [tuple(r) for r in (TWIST_RANGE if twist_range is None else twist_range)]
         except TypeError:
