@@ -228,10 +228,16 @@ def feasibility(p: WalkParams) -> str:
     standing = _cycle_problem(p, Command())
     if standing:
         faster = " (or raise 'max_joint_speed')" if standing.startswith("joints would turn") else ""
+        # A duty of one's own shortens the swing to (1 - duty) x period: say so (duty=0.99 was blamed on the rest).
+        duty = f", duty {p.duty:g}: a swing of {(1 - p.duty) * p.period:.3g} s" if p.duty else ""
+        fixes = (
+            "lengthen 'period', lower 'duty' or lower 'step_height'"
+            if p.duty
+            else ("lengthen 'period' or lower 'step_height'")
+        )
         return (
             f"even stepping in place is infeasible with the {p.gait} gait at period {p.period:g} s "
-            f"(stand_height {p.stand_height:g} m, step_height {p.step_height:g} m): {standing}; "
-            f"lengthen 'period' or lower 'step_height'{faster}"
+            f"(stand_height {p.stand_height:g} m, step_height {p.step_height:g} m{duty}): {standing}; {fixes}{faster}"
         )
     if p.schedule or p.waypoints:  # they replace vx, vy and yaw_rate (commands.problem checks their commands)
         return ""
