@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
+import os
 import re
 from collections.abc import Callable
 from pathlib import Path
@@ -59,6 +60,8 @@ def _rows(name: str, raw: Any, columns: tuple[str, ...], required: int) -> list[
     allowed = f"columns {', '.join(columns[:required])}" + (
         f" and optionally {', '.join(columns[required:])}" if len(columns) > required else ""
     )
+    if isinstance(raw, os.PathLike):  # a pathlib.Path from the Python API, as `robot` takes it
+        raw = os.fsdecode(raw)
     if isinstance(raw, str):
         if raw.strip() == "":
             return []
@@ -151,7 +154,7 @@ def _number(where: str, column: str, value: Any, low: float, high: float, unit: 
     text = value.strip() if isinstance(value, str) else None
     try:  # float() reads "0_0.5" as 0.5 and "５" as 5: a slip, or not our digits (as params' numbers)
         number = math.nan if text is not None and ("_" in text or not text.isascii()) else float(value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):  # OverflowError: an int of hundreds of digits (from the API)
         number = math.nan
     if isinstance(value, bool) or not math.isfinite(number) or not low <= number <= high:
         raise UsageError(f"{where}: {column} must be a number from {low:g} to {high:g} {unit}; got {value!r:.40}")
