@@ -61,6 +61,8 @@ def export(
             continue
         raw = os.fspath(value)
         shown = printable(os.fsdecode(raw))
+        if not raw:  # Path("") is '.': it was refused as "MJCF file '.' is a folder"
+            raise UsageError(f"{what} needs a file name; got an empty one")
         if raw.endswith((os.sep, os.altsep or os.sep) if isinstance(raw, str) else os.fsencode(os.sep)):
             raise UsageError(f"{what} {shown!r} ends with '{os.sep}': that names a folder; give a file name")
         path = Path(os.fsdecode(raw))

@@ -83,6 +83,7 @@ def test_nothing_is_written_when_one_model_is_refused(tmp_path, capsys):
             "the folder 'no/such/folder' for the MJCF file does not",
         ),
         (["export", "elbow", "--mjcf", "same", "--urdf", "same"], "--mjcf and --urdf name the same file 'same'"),
+        (["export", "elbow", "--urdf", ""], "URDF file needs a file name; got an empty one"),  # was: "'.' is a folder"
         (["export", "elbow", "--mjcf", "x.xml", "--set", "a2=0"], "length 'a2' of elbow must be 0.001 to 10 m"),
     ],
 )
