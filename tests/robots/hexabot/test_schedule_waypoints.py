@@ -122,7 +122,8 @@ def test_waypoint_refusals_name_the_follower_s_parameters(tmp_path, capsys):
     assert err.rstrip().endswith("lower path_speed or path_yaw_rate")
     long = ("--set", "duration=600")
     code, _, err = cli(capsys, "run", "hexabot-walk", "--set", f"waypoints={far}", *long, "--out", str(tmp_path / "o"))
-    assert code == 2 and "longer than the longest walk (3600 s): shorten the course or raise path_speed" in err
+    # The longest walk the run budget takes at 2 ms (1999.998 s), not the 3600 s the duration's range allows.
+    assert code == 2 and "longer than the longest walk (1.99e+03 s at timestep 0.002 s): shorten the course" in err
     assert not (tmp_path / "o").exists()
 
 
