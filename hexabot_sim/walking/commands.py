@@ -320,8 +320,7 @@ def waypoints_problem(p: Any, check: Callable[[Any], str], settle: float) -> str
             "raise 'duration' to at least that"
             if needed <= limit
             else f"that is longer than the longest walk ({allowed(limit, 'down')} s at timestep {p.timestep:g} s): "
-            "shorten the "
-            "course or raise path_speed"
+            "shorten the course or raise path_speed"
         )
         return (
             f"waypoints: the course is {follower.total:.3g} m long; at path_speed {p.path_speed:g} m/s the walk needs "
