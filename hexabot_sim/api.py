@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import os
+import secrets
 import time
 import warnings
 from collections.abc import Callable, Mapping
@@ -383,7 +384,9 @@ class Result:
         if not os.access(folder, os.W_OK | os.X_OK):
             raise OutputError(f"the folder {str(folder)!r} for the video cannot be written")
         folders.check_replace(path, force)
-        staging = path.with_name(f".{path.name}.partial-{os.getpid()}.mp4")
+        # The name cut short (a 250-byte name is legal; '.NAME.partial-PID.mp4' was not: a raw OSError), with a
+        # random part so two renders to one path in one process do not share it.
+        staging = path.with_name(f".{path.name[:48]}.partial-{os.getpid()}-{secrets.token_hex(4)}.mp4")
         try:
             record, _ = output.write_video(folder, self.raw, settings, backend, progress, name=staging.name)
             if not record["written"]:

@@ -4,6 +4,7 @@ with the run's own cost model (each scenario's measured seconds per step and per
 from __future__ import annotations
 
 import contextlib
+import math
 from collections.abc import Iterator
 from typing import Any
 
@@ -107,3 +108,15 @@ def check_run_cost(
     output = float(rows) * columns * CSV_BYTES_PER_VALUE
     seconds = steps * step_seconds + rows * (row_seconds + columns * CSV_SECONDS_PER_VALUE)
     check_budget(steps, float(rows) * row_bytes, output, seconds, fix)
+
+
+def most_rows(columns: int, step_seconds: float, row_seconds: float, row_bytes: float) -> int:
+    """The most CSV rows a run recording one row per physics step can have within check_run_cost's limits
+    (steps, memory, output, time): the inverse of its cost model, n + 1 rows after n steps."""
+    rows = min(
+        MAX_MEMORY_BYTES / row_bytes,
+        MAX_OUTPUT_BYTES / (columns * CSV_BYTES_PER_VALUE),
+        (MAX_SECONDS + step_seconds) / (step_seconds + row_seconds + columns * CSV_SECONDS_PER_VALUE),
+        MAX_STEPS + 1,
+    )
+    return math.floor(rows)

@@ -28,6 +28,11 @@ def dask_executor(address: str, timeout: float = 10.0) -> Iterator[tuple[concurr
     _silence_logs("distributed", "tornado", "asyncio", "bokeh")  # Dask's own log lines are not the user's business
     try:
         client = _connect(Client, address, timeout)
+    except MemoryError:  # its first bytes read as a frame length: "Unable to allocate 3.07 EiB ..."
+        raise UsageError(
+            f"cannot reach the Dask scheduler at {address!r}: the peer answered, but not as a Dask scheduler (is it "
+            "one?)"
+        ) from None
     except Exception as e:
         text = " ".join(str(e).split())[:200]
         raise UsageError(f"cannot reach the Dask scheduler at {address!r}: {text or type(e).__name__}") from None
@@ -67,6 +72,7 @@ def _connect(client_type: Any, address: str, timeout: float) -> Any:
         try:
             box.append(client_type(address, timeout=timeout, set_as_default=False))
         except BaseException as e:
+            _disarm(e, client_type)
             box.append(e)
 
     thread = threading.Thread(target=connect, name="hexabot-sim-dask-connect", daemon=True)
@@ -77,6 +83,20 @@ def _connect(client_type: Any, address: str, timeout: float) -> Any:
     if isinstance(box[0], BaseException):
         raise box[0]
     return box[0]
+
+
+def _disarm(error: BaseException, client_type: Any) -> None:
+    """Marks closed the Client whose constructor raised `error`: collected, it closed itself against a scheduler
+    that never was, waited 2 x its timeout (20 s) and printed "Exception ignored in: Client.__del__" with a
+    traceback (a peer that answers but is no scheduler, found by fuzzing). Its event loop is stopped here."""
+    tb = error.__traceback__
+    while tb is not None:
+        owner = tb.tb_frame.f_locals.get("self")
+        if isinstance(owner, client_type):
+            with contextlib.suppress(Exception):
+                owner.status = "closed"
+                owner._loop_runner.stop()
+        tb = tb.tb_next
 
 
 def scheduler_address(text: str) -> str:

@@ -61,6 +61,8 @@ def export(
             continue
         raw = os.fspath(value)
         shown = printable(os.fsdecode(raw))
+        if not raw:  # Path("") is '.': it was refused as "MJCF file '.' is a folder"
+            raise UsageError(f"{what} needs a file name; got an empty one")
         if raw.endswith((os.sep, os.altsep or os.sep) if isinstance(raw, str) else os.fsencode(os.sep)):
             raise UsageError(f"{what} {shown!r} ends with '{os.sep}': that names a folder; give a file name")
         path = Path(os.fsdecode(raw))
@@ -81,6 +83,8 @@ def export(
             raise UsageError(f"{what} {shown!r} is a folder; give a file name")
         if not path.parent.is_dir():
             raise UsageError(f"the folder {printable(str(path.parent))!r} for the {what} does not exist")
+        if not os.access(path.parent, os.W_OK | os.X_OK):  # a read-only folder or file system: exit 2, not 1
+            raise UsageError(f"the folder {printable(str(path.parent))!r} for the {what} cannot be written")
         if spec.file_id is not None and _is_file(path, spec.file_id):
             raise UsageError(f"{what} {shown!r} is the robot file being exported; it is never written over")
         folders.check_replace(path, force, what, "add --force (force=True)")
@@ -90,7 +94,8 @@ def export(
     written = []
     try:
         for path, (what, text) in texts.items():
-            staging = path.with_name(f".{path.name}.partial-{os.getpid()}-{secrets.token_hex(4)}")
+            # The name cut short: a 250-byte file name is legal, its staging name must be too (it was ENAMETOOLONG).
+            staging = path.with_name(f".{path.name[:48]}.partial-{os.getpid()}-{secrets.token_hex(4)}")
             try:
                 with open(staging, "x", encoding="utf-8") as f:
                     staged[path] = staging

@@ -42,23 +42,30 @@ def check_out(out: str | os.PathLike[str], force: bool = False) -> None:
     """
     text = os.fspath(out)
     out = Path(out)
-    last = text.rstrip("/").rsplit("/", 1)[-1]
-    if out.name in ("", ".", "..") or last in ("", ".", ".."):
-        raise UsageError(f"output folder {text!r} must end in a folder name (not '.' or '..')")
-    if len(os.fsencode(out.name)) > 255:
-        raise UsageError(f"output folder name is {len(os.fsencode(out.name))} bytes long; the limit is 255")
+    _check_name(out, text)
     try:
         _check_existing(out, text, force)
     except OSError as e:
         raise UsageError(f"output folder {text!r} cannot be used: {e.strerror or e}") from None
 
 
+def _check_name(out: Path, text: str) -> None:
+    """Refuses an --out that names no folder ('', '.', '..', 'a/..') or a name over 255 bytes."""
+    last = text.rstrip("/").rsplit("/", 1)[-1]
+    if out.name in ("", ".", "..") or last in ("", ".", ".."):
+        raise UsageError(f"output folder {text!r} must end in a folder name (not '.' or '..')")
+    if len(os.fsencode(out.name)) > 255:
+        raise UsageError(f"output folder name is {len(os.fsencode(out.name))} bytes long; the limit is 255")
+
+
 def check_not_input(out: str | os.PathLike[str], inputs: list[str]) -> None:
     """Refuses an --out that is, contains or lies inside one of a command's inputs (with or without --force).
 
     Raises:
-        UsageError: naming the input; a command never writes over what it reads.
+        UsageError: naming the input; a command never writes over what it reads; first, an --out that names no
+            folder (check_out's first refusal: --out '' was 'output folder '.' is, contains ... the input').
     """
+    _check_name(Path(out), os.fspath(out))
     targets = {Path(os.path.abspath(out)), Path(os.path.realpath(out))}
     for item in inputs:
         sources = {Path(os.path.abspath(item)), Path(os.path.realpath(item))}

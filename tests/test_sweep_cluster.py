@@ -81,6 +81,47 @@ def test_a_peer_that_accepts_but_is_no_scheduler_is_refused_in_bounded_time():
     assert time.monotonic() - started < 10
 
 
+@pytest.mark.slow  # ~2.3 s: a fresh interpreter imports distributed
+def test_a_peer_that_answers_but_is_no_scheduler_is_one_line_at_once(tmp_path):
+    """A TCP server that answers with bytes of its own (an HTTP error here; a proxy on an unroutable address did it):
+    the refusal was 'Unable to allocate 3.07 EiB ...', then 20 s later "Exception ignored in: Client.__del__" and a
+    traceback (the half-built Client closing itself at exit). Found by fuzzing. A separate process: at its exit."""
+    import os
+    import socket
+    import subprocess
+    import sys
+    import threading
+    import time
+
+    pytest.importorskip("distributed", reason="the 'cluster' extra (distributed) is not installed")
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(8)
+
+    def answer() -> None:
+        while True:
+            try:
+                peer, _ = server.accept()
+            except OSError:
+                return
+            with peer:
+                peer.sendall(b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n" * 4)
+
+    threading.Thread(target=answer, daemon=True).start()
+    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    argv = ["sweep", "pendulum", *GRID, "--scheduler", address, "--out", str(tmp_path / "s")]
+    started = time.monotonic()
+    try:
+        run = subprocess.run([sys.executable, "-m", "hexabot_sim", *argv], capture_output=True, text=True, env=env,
+                             timeout=60)  # fmt: skip
+    finally:
+        server.close()
+    assert run.returncode == 2 and run.stderr.count("\n") == 1, run.stderr
+    assert "the peer answered, but not as a Dask scheduler" in run.stderr
+    assert time.monotonic() - started < 15 and not (tmp_path / "s").exists()
+
+
 class _FakeClient:
     def __init__(self, nthreads):
         self._nthreads, self.status = nthreads, "running"

@@ -92,6 +92,12 @@ def test_result_video_never_replaces_a_file_without_force(tmp_path, gl_backend):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fifo", "results.csv"]  # no partial file left
 
 
+def test_result_video_to_a_250_byte_name_is_written(tmp_path, gl_backend):
+    """Found by fuzzing: its staging name '.NAME.partial-PID.mp4' went over 255 bytes, a raw OSError (ENAMETOOLONG)."""
+    path = hs.run("pendulum", duration=0.05).video(tmp_path / ("v" * 250 + ".mp4"), size=(64, 64), fps=10)
+    assert output.mp4_problem(path) is None and [p.name for p in tmp_path.iterdir()] == [path.name]
+
+
 @pytest.mark.parametrize("path", ["a" * 300 + ".mp4", "/".join(["b" * 200] * 30), "v\0.mp4"])
 def test_result_video_to_an_impossible_name_is_a_usage_error(tmp_path, monkeypatch, path):
     monkeypatch.chdir(tmp_path)

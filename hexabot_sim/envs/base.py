@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 from typing import TYPE_CHECKING, Any
 
@@ -23,6 +24,13 @@ TOUCH_THRESHOLD: float = 0.3  # [N] a foot's touch reading above this counts as 
 SIGMA_MIN: float = 1e-6  # [m/s or rad/s] the smallest tracking scale of a Reward (its square stays a normal number)
 WEIGHT_MAX: float = 1e6  # the largest weight or scale of a Reward (the reward stays finite)
 COMMAND_RANGE: tuple[tuple[float, float], ...] = ((0.0, 0.1), (-0.05, 0.05), (-0.2, 0.2))  # vx, vy [m/s], yaw rate
+
+
+def unknown_keywords(cls: type, given: dict[str, Any]) -> None:
+    """A ValueError naming the first of `given` (keywords the environment does not take) and the ones it takes."""
+    if given:
+        known = [name for name in inspect.signature(cls.__init__).parameters if name not in ("self", "kwargs")]
+        raise ValueError(f"unknown keyword {next(iter(given))!r} of {cls.__name__}; known: {', '.join(known)}")
 
 
 def real_array(value, what: str) -> np.ndarray:
@@ -118,8 +126,13 @@ class LeggedEnv(gymnasium.Env):
         height: int,
         camera: str,
     ) -> None:
-        if isinstance(frame_skip, bool) or not isinstance(frame_skip, int | np.integer) or frame_skip < 1:
-            raise ValueError(f"frame_skip must be an integer >= 1; got {frame_skip!r}")
+        # At most one episode per action: a larger one overflowed MuJoCo's nstep (a TypeError at the first step).
+        most = round(EPISODE_SECONDS / p.timestep)
+        if isinstance(frame_skip, bool) or not isinstance(frame_skip, int | np.integer) or not 1 <= frame_skip <= most:
+            raise ValueError(
+                f"frame_skip must be an integer >= 1 and <= {most} (a control period of at most "
+                f"{EPISODE_SECONDS:g} s); got {frame_skip!r}"
+            )
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise ValueError(
                 f"unknown render_mode {render_mode!r}; known: None, {', '.join(self.metadata['render_modes'])}"

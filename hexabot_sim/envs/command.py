@@ -13,8 +13,8 @@ from gymnasium import spaces
 from hexabot_sim.control.commands import Segment
 from hexabot_sim.control.gait import Command
 from hexabot_sim.control.walker import WalkingController
-from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward
-from hexabot_sim.envs.scene import STAIRS, check_range, check_stairs, robot_params
+from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward, unknown_keywords
+from hexabot_sim.envs.scene import MAX_SLOPE_DEG, STAIRS, _number, check_range, check_stairs, robot_params
 from hexabot_sim.walking.constants import SETTLE_TIME
 from hexabot_sim.walking.parameters import WalkParams
 from hexabot_sim.walking.scene import acceleration_limit, make_controller
@@ -159,7 +159,9 @@ class LeggedCommandEnv(LeggedEnv):
         width: int = 640,
         height: int = 480,
         camera: str = "track",
+        **kwargs,
     ) -> None:
+        unknown_keywords(type(self), kwargs)  # a misspelt keyword: a ValueError naming the known ones, not a TypeError
         try:
             rows = [tuple(r) for r in (TWIST_RANGE if twist_range is None else twist_range)]
         except TypeError:
@@ -182,6 +184,13 @@ class LeggedCommandEnv(LeggedEnv):
             base = _on_stairs(robot_params(robot, **overrides), rise, run, count, float(self.ranges[3, 0]))
         else:
             base = robot_params(robot, **overrides)
+        if terrain == "slope" and _number(slope_deg) and 0.0 < slope_deg <= MAX_SLOPE_DEG:
+            # The walk's own check of a level body on this slope (it was an IKError from the start pose's IK).
+            try:
+                dataclasses.replace(base, slope_deg=float(slope_deg))
+            except ValueError as e:
+                reason = str(e).removesuffix(" (or set level_body=off)")
+                raise ValueError(f"slope_deg {slope_deg:g} is too steep for this controller: {reason}") from None
         if twist_range is None:  # the default: TWIST_RANGE, or the largest part of it this robot's legs can deliver
             self.ranges[:3] *= _feasible_scale(base, self.ranges)
         self.p_controller = _controller_params(base, self.ranges)

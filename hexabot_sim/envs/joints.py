@@ -6,7 +6,7 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
-from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward
+from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward, unknown_keywords
 from hexabot_sim.envs.scene import STAIRS, robot_params
 
 SETTLE_TIME: float = 0.25  # [s] at a reset the robot stands on its servos' home targets this long (it lands)
@@ -73,8 +73,11 @@ class LeggedJointsEnv(LeggedEnv):
         width: int = 640,
         height: int = 480,
         camera: str = "track",
+        **kwargs,
     ) -> None:
-        if not (isinstance(reset_noise_scale, int | float) and 0.0 <= reset_noise_scale <= 0.5):
+        unknown_keywords(type(self), kwargs)  # a misspelt keyword: a ValueError naming the known ones, not a TypeError
+        number = isinstance(reset_noise_scale, int | float) and not isinstance(reset_noise_scale, bool)
+        if not (number and 0.0 <= reset_noise_scale <= 0.5):
             raise ValueError(f"reset_noise_scale must be a number from 0 to 0.5 rad; got {reset_noise_scale!r}")
         p = robot_params(robot)
         super().__init__(
@@ -82,7 +85,7 @@ class LeggedJointsEnv(LeggedEnv):
             randomize_mass, randomize_servo_gain, render_mode, width, height, camera,
         )  # fmt: skip
         self.robot = robot
-        self.reset_noise_scale = float(reset_noise_scale)
+        self.reset_noise_scale = float(reset_noise_scale) + 0.0  # -0.0: uniform(0, -0) raised at reset
         n = self.n_joints
         self.action_space = spaces.Box(-1.0, 1.0, (n,), np.float32)
         pos = self.scene.pos_act

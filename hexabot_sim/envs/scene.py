@@ -83,6 +83,8 @@ def check_range(name: str, value, low: float = 0.0, high: float = math.inf) -> t
     if value is None:
         return None
     try:
+        if isinstance(value, str | bytes):  # "12" would be the pair (1.0, 2.0)
+            raise TypeError(value)
         lo, hi = (float(v) for v in value)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a pair (low, high) or None; got {value!r}") from None

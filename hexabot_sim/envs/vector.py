@@ -32,8 +32,13 @@ class LeggedJointsVectorEnv(VectorEnv):
     metadata: dict[str, Any] = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}  # noqa: RUF012
 
     def __init__(self, num_envs: int = 8, max_episode_steps: int = 1000, threads: int | None = None, **kwargs) -> None:
-        if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
             raise ValueError(f"num_envs must be an integer >= 1; got {num_envs!r}")
+        num_envs = int(num_envs)
+        # threads=-1 was MuJoCo's "The list of data instances is empty" at construction, 1.5 or "2" a TypeError.
+        whole = isinstance(threads, int | np.integer) and not isinstance(threads, bool)
+        if threads is not None and not (whole and threads >= 1):
+            raise ValueError(f"threads must be an integer >= 1 or None (one per core); got {threads!r}")
         steps_ok = isinstance(max_episode_steps, int | np.integer) and not isinstance(max_episode_steps, bool)
         if not steps_ok or max_episode_steps < 1:
             raise ValueError(f"max_episode_steps must be an integer >= 1; got {max_episode_steps!r}")

@@ -112,7 +112,7 @@ def loaded_joint_inertia(layout: legged.Layout, q: np.ndarray, stance_legs: int)
     inertia = np.zeros(3)
     for j, (axis, origin) in enumerate(axes):
         for mass, length, start, end in links[j:]:
-            direction = (end - start) / length
+            direction = (end - start) / length if length > 0 else axis  # l1 = 0 (allowed): a disc, no rod
             i_axial, i_perp, _ = link_inertia(mass, length)
             # Rod inertia about the parallel axis through its centre, then Steiner.
             cos_a = float(direction @ axis)
@@ -165,10 +165,11 @@ def _leg_lines(layout: legged.Layout, i: int, name: str, indent: str) -> list[st
             f'{inner}<geom name="{name}_{joint}_servo" type="cylinder" '
             f'fromto="0 0 {num(-servo[j])} 0 0 {num(servo[j])}" size="{num(servo[j])}" material="{materials[j]}"/>'
         )
-        lines.append(
-            f'{inner}<geom name="{name}_{joint}" fromto="0 0 0 {num(length)} 0 0" size="{num(radii[j])}" '
-            f'material="{materials[j]}"/>'
-        )
+        if length > 0:  # l1 = 0 (allowed): no coxa rod (MuJoCo refuses a fromto of one point), its servo only
+            lines.append(
+                f'{inner}<geom name="{name}_{joint}" fromto="0 0 0 {num(length)} 0 0" size="{num(radii[j])}" '
+                f'material="{materials[j]}"/>'
+            )
         depth = inner
     foot = num(rows[3][1])
     lines.append(f'{depth}<geom name="{name}_foot" class="foot" pos="{foot} 0 0"/>')

@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
+import os
 import re
 from collections.abc import Callable
 from pathlib import Path
@@ -23,7 +24,7 @@ from hexabot_sim.control.follower import PathFollower
 from hexabot_sim.control.gait import Command, GaitPlanner
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import legged
-from hexabot_sim.params import _show, read_bounded
+from hexabot_sim.params import _show, allowed, read_bounded
 
 # Rows of a table. Each schedule row's check plans its cycle (~6 ms for a new twist: 200 distinct rows took 1.2 s),
 # so a schedule is kept to what a few seconds check; a waypoint costs nothing to check.
@@ -59,6 +60,8 @@ def _rows(name: str, raw: Any, columns: tuple[str, ...], required: int) -> list[
     allowed = f"columns {', '.join(columns[:required])}" + (
         f" and optionally {', '.join(columns[required:])}" if len(columns) > required else ""
     )
+    if isinstance(raw, os.PathLike):  # a pathlib.Path from the Python API, as `robot` takes it
+        raw = os.fsdecode(raw)
     if isinstance(raw, str):
         if raw.strip() == "":
             return []
@@ -151,7 +154,7 @@ def _number(where: str, column: str, value: Any, low: float, high: float, unit: 
     text = value.strip() if isinstance(value, str) else None
     try:  # float() reads "0_0.5" as 0.5 and "５" as 5: a slip, or not our digits (as params' numbers)
         number = math.nan if text is not None and ("_" in text or not text.isascii()) else float(value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):  # OverflowError: an int of hundreds of digits (from the API)
         number = math.nan
     if isinstance(value, bool) or not math.isfinite(number) or not low <= number <= high:
         raise UsageError(f"{where}: {column} must be a number from {low:g} to {high:g} {unit}; got {value!r:.40}")
@@ -311,12 +314,13 @@ def waypoints_problem(p: Any, check: Callable[[Any], str], settle: float) -> str
     follower = course(p, settle)
     needed = settle + p.period + follower.total / p.path_speed * 1.2 + 1.0
     if p.duration < needed:
-        # The duration's upper bound, as `hexabot-sim list` shows it.
-        limit = next(f.metadata["param"].le for f in dataclasses.fields(p) if f.name == "duration")
+        # The longest walk this timestep's run budget takes (it advised a duration the budget then refused).
+        limit = p.longest_duration()
         advice = (
             "raise 'duration' to at least that"
-            if limit is None or needed <= limit
-            else f"that is longer than the longest walk ({limit:g} s): shorten the course or raise path_speed"
+            if needed <= limit
+            else f"that is longer than the longest walk ({allowed(limit, 'down')} s at timestep {p.timestep:g} s): "
+            "shorten the course or raise path_speed"
         )
         return (
             f"waypoints: the course is {follower.total:.3g} m long; at path_speed {p.path_speed:g} m/s the walk needs "

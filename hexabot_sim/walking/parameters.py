@@ -9,7 +9,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from hexabot_sim.budget import check_run_cost
+from hexabot_sim.budget import check_run_cost, most_rows
 from hexabot_sim.control.gait import GAITS, PROFILES, Command, Gait, gaits_for
 from hexabot_sim.kinematics import legged
 from hexabot_sim.params import allowed, param
@@ -131,6 +131,19 @@ class WalkParams:
     path_speed: float = param(0.1, "m/s", "the path follower's walking speed (waypoints)", gt=0.0, le=1.0)
     path_yaw_rate: float = param(0.5, "rad/s", "the path follower's largest yaw rate (waypoints)", gt=0.0, le=3.0)
 
+    def _run_cost(self) -> tuple[float, float, float]:
+        """RUN_COST: (seconds per physics step, seconds per row, bytes per row), on terrain its step's cost."""
+        step_s, row_s, row_bytes = RUN_COST
+        if self.on_ground() or self.slope_deg or self.roughness or self.kerb_height or self.stairs_rise:
+            step_s = TERRAIN_STEP_SECONDS
+        return step_s, row_s, row_bytes
+
+    def longest_duration(self) -> float:
+        """The longest walk [s] at this timestep that params.check_run_cost takes (its steps, memory, output and
+        time limits, one row per step), at most the duration's upper bound."""
+        rows = most_rows(csv_columns(self.ROBOT), *self._run_cost())
+        return min((rows - 1) * self.timestep, _bound(type(self), "duration"))
+
     def __post_init__(self) -> None:
         if not self.stand_height:  # the robot's own (resolved here: everything downstream reads the number)
             object.__setattr__(self, "stand_height", self.ROBOT.layout.stand_height)
@@ -158,12 +171,14 @@ class WalkParams:
                 f"{MEASURE_TIME:g} s to measure the walk: {shortest:.15g} s; got {self.duration}"
             )
         n = step_count(self.duration, self.timestep)
-        step_s, row_s, row_bytes = RUN_COST
-        if self.on_ground() or self.slope_deg or self.roughness or self.kerb_height or self.stairs_rise:
-            step_s = TERRAIN_STEP_SECONDS
-        check_run_cost(
-            n, n + 1, csv_columns(self.ROBOT), step_s, row_s, row_bytes, "lower 'duration' or raise 'timestep'"
-        )
+        step_s, row_s, row_bytes = self._run_cost()
+        # The advice names what can change: the longest walk that fits, and 'timestep' only below its largest
+        # (it suggested raising the timestep already at its 0.002 s maximum).
+        longest = self.longest_duration()
+        fix = f"lower 'duration' to at most {allowed(longest, 'down')} s at timestep {self.timestep:g} s"
+        if self.timestep < _bound(type(self), "timestep"):
+            fix += " or raise 'timestep'"
+        check_run_cost(n, n + 1, csv_columns(self.ROBOT), step_s, row_s, row_bytes, fix)
         problem = feasibility(self)
         if problem:
             raise ValueError(problem)
@@ -232,10 +247,16 @@ def feasibility(p: WalkParams) -> str:
     standing = _cycle_problem(p, Command())
     if standing:
         faster = " (or raise 'max_joint_speed')" if standing.startswith("joints would turn") else ""
+        # A duty of one's own shortens the swing to (1 - duty) x period: say so (duty=0.99 was blamed on the rest).
+        duty = f", duty {p.duty:g}: a swing of {(1 - p.duty) * p.period:.3g} s" if p.duty else ""
+        fixes = (
+            "lengthen 'period', lower 'duty' or lower 'step_height'"
+            if p.duty
+            else ("lengthen 'period' or lower 'step_height'")
+        )
         return (
             f"even stepping in place is infeasible with the {p.gait} gait at period {p.period:g} s "
-            f"(stand_height {p.stand_height:g} m, step_height {p.step_height:g} m): {standing}; "
-            f"lengthen 'period' or lower 'step_height'{faster}"
+            f"(stand_height {p.stand_height:g} m, step_height {p.step_height:g} m{duty}): {standing}; {fixes}{faster}"
         )
     if p.schedule or p.waypoints:  # they replace vx, vy and yaw_rate (commands.problem checks their commands)
         return ""
@@ -265,6 +286,11 @@ def feasibility(p: WalkParams) -> str:
         f"the legs cannot deliver this command at period {p.period:g} s (stride {stride:.3g} m): {problem}; "
         f"the largest feasible in this direction is {', '.join(parts) or 'standing still'}; {advice}"
     )
+
+
+def _bound(cls: type, name: str) -> float:
+    """A parameter's upper bound (its `le`), as `hexabot-sim list` shows it."""
+    return next(f.metadata["param"].le for f in dataclasses.fields(cls) if f.name == name)
 
 
 def csv_columns(robot: WalkingRobot) -> int:

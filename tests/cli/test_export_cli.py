@@ -83,6 +83,7 @@ def test_nothing_is_written_when_one_model_is_refused(tmp_path, capsys):
             "the folder 'no/such/folder' for the MJCF file does not",
         ),
         (["export", "elbow", "--mjcf", "same", "--urdf", "same"], "--mjcf and --urdf name the same file 'same'"),
+        (["export", "elbow", "--urdf", ""], "URDF file needs a file name; got an empty one"),  # was: "'.' is a folder"
         (["export", "elbow", "--mjcf", "x.xml", "--set", "a2=0"], "length 'a2' of elbow must be 0.001 to 10 m"),
     ],
 )
@@ -91,6 +92,24 @@ def test_bad_exports_are_one_line(tmp_path, capsys, monkeypatch, argv, message):
     code, out, err = cli(capsys, *argv)
     assert code == 2 and out == "" and err.count("\n") == 1 and message in err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_file_name_of_250_bytes_is_exported(tmp_path, capsys):
+    """Found by fuzzing: its staging name ('.NAME.partial-PID-HEX') went over 255 bytes, an exit 1 'File name too
+    long' for a name the file system takes."""
+    mjcf = tmp_path / ("a" * 250 + ".xml")
+    code, _, err = cli(capsys, "export", "leg", "--mjcf", str(mjcf))
+    assert code == 0 and err == "" and [p.name for p in tmp_path.iterdir()] == [mjcf.name]
+
+
+def test_a_folder_that_cannot_be_written_is_refused_up_front(tmp_path, capsys, monkeypatch):
+    """Found by fuzzing: a read-only file system was an exit 1 'writing the MJCF file ... failed' after the models were
+    made, not exit 2 before. (os.access stands in for the read-only mount: chmod does not stop root.)"""
+    real = os.access
+    monkeypatch.setattr(os, "access", lambda path, mode, **kw: path != tmp_path and real(path, mode, **kw))
+    code, out, err = cli(capsys, "export", "leg", "--mjcf", str(tmp_path / "leg.xml"))
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert f"the folder '{tmp_path}' for the MJCF file cannot be written" in err and list(tmp_path.iterdir()) == []
 
 
 def test_the_api_exports_a_spec_and_refuses_a_folder(tmp_path):

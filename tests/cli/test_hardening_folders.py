@@ -132,6 +132,22 @@ def test_run_and_sweep_never_write_over_their_config(tmp_path, capsys):
         assert config.read_text() == "damping = 0.01\n"
 
 
+@pytest.mark.parametrize("command", ["run", "sweep"])
+def test_an_empty_out_is_named_as_such_even_beside_an_input(tmp_path, capsys, monkeypatch, command):
+    """Found by fuzzing: with a config file in the working folder, --out '' was refused as "output folder '.' is,
+    contains or lies inside the input 'cfg.toml'", naming neither the empty --out nor what is allowed."""
+    monkeypatch.chdir(tmp_path)
+    Path("cfg.toml").write_text("damping = 0.01\n")
+    grid = ["--grid", "mass=0.1,0.2"] if command == "sweep" else []
+    code, out, err = cli(capsys, command, "pendulum", *grid, "--config", "cfg.toml", *FAST, "--out", "")
+    assert (
+        code == 2
+        and out == ""
+        and err == "hexabot-sim: error: output folder '' must end in a folder name (not '.' or '..')\n"
+    )
+    assert sorted(os.listdir(tmp_path)) == ["cfg.toml"]
+
+
 @pytest.mark.slow
 def test_a_folder_name_that_is_not_utf8_is_a_legal_out(tmp_path):
     """b'r\\xff' is a legal Linux name: the run and the sweep are written there, and say so on stdout."""

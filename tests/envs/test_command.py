@@ -67,6 +67,22 @@ def test_ranges_the_legs_cannot_deliver_are_refused():
         env.step(np.zeros(3))
 
 
+def test_an_unknown_keyword_is_a_value_error_naming_the_known_ones():
+    """gymnasium.make(..., reset_noise_scale=0.1) (a joints environment's keyword) was a TypeError naming nothing."""
+    with pytest.raises(ValueError, match="unknown keyword 'reset_noise_scale' of LeggedCommandEnv; known: robot, "):
+        gymnasium.make("hexabot_sim/HexabotCommand-v0", reset_noise_scale=0.1)
+    with pytest.raises(ValueError, match=r"frame_skip must be an integer >= 1 and <= 10000"):
+        LeggedCommandEnv(frame_skip=10**30)
+
+
+def test_a_slope_too_steep_for_a_level_body_says_the_steepest():
+    """terrain="slope", slope_deg=30 (allowed: <= 30) was the start pose's IKError, 'foot target (0.13, ...) m is
+    out of reach', naming no keyword."""
+    with pytest.raises(ValueError, match=r"^slope_deg 30 is too steep for this controller: a level body on a 30 deg "
+                       r"slope .* the steepest levelled slope is 21\.5 deg$"):  # fmt: skip
+        LeggedCommandEnv(terrain="slope", slope_deg=30)
+
+
 def test_a_slower_robot_gets_the_largest_part_of_the_default_ranges_its_legs_deliver():
     """The quadbot's crawl cannot deliver the hexabot's default twists (it was refused with the defaults): its default
     ranges are TWIST_RANGE scaled to the largest feasible part (to 1 %), and it walks at the twist it is given."""

@@ -137,6 +137,11 @@ def test_target_mapping_reaches_the_servo_ranges():
         ({"camera": 3}, "unknown camera 3; known: track, top"),
         ({"render_mode": "human"}, "unknown render_mode 'human'"),
         ({"width": 0}, "width must be an integer from 1 to 8192 pixels"),
+        # Found by fuzzing: a TypeError (from Python, or from mj_step at the first step), or a string taken as a pair.
+        ({"terain": "flat"}, "unknown keyword 'terain' of LeggedJointsEnv; known: robot, frame_skip, terrain,"),
+        ({"frame_skip": 2**70}, "frame_skip must be an integer >= 1 and <= 10000 (a control period of at most 20 s)"),
+        ({"randomize_friction": "12"}, "randomize_friction must be a pair (low, high) or None; got '12'"),
+        ({"reset_noise_scale": False}, "reset_noise_scale must be a number from 0 to 0.5 rad; got False"),
     ],
 )
 def test_bad_arguments_say_what_is_allowed(kwargs, words):
@@ -160,6 +165,12 @@ def test_bad_actions_say_what_is_allowed(action, words):
     with pytest.raises(ValueError, match=words) as info:
         env.step(action)
     assert "\n" not in str(info.value)
+
+
+def test_a_negative_zero_reset_noise_resets():
+    """reset_noise_scale=-0.0 was accepted, then every reset raised numpy's 'high - low < 0'."""
+    obs, _ = LeggedJointsEnv(reset_noise_scale=-0.0).reset(seed=0)
+    assert np.isfinite(obs).all()
 
 
 def test_step_before_reset_says_so():

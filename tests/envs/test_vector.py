@@ -69,3 +69,15 @@ def test_bad_actions_and_arguments_say_what_is_allowed():
         vec.step(np.full((2, 18), np.nan))
     with pytest.raises(ValueError, match="num_envs must be an integer >= 1"):
         LeggedJointsVectorEnv(num_envs=0)
+
+
+@pytest.mark.parametrize("threads", [-1, 0.5, "2", True])
+def test_bad_threads_say_what_is_allowed(threads):
+    """Found by fuzzing: threads=-1 was MuJoCo's 'The list of data instances is empty', 0.5 and "2" TypeErrors."""
+    with pytest.raises(ValueError, match=r"threads must be an integer >= 1 or None \(one per core\); got "):
+        LeggedJointsVectorEnv(num_envs=1, threads=threads)
+
+
+def test_a_numpy_integer_is_a_number_of_environments():
+    """num_envs=np.int64(2) was refused as 'not an integer' (max_episode_steps takes numpy integers)."""
+    assert LeggedJointsVectorEnv(num_envs=np.int64(2)).num_envs == 2

@@ -396,6 +396,38 @@ def test_the_values_a_refusal_suggests_are_accepted(overrides, pattern, fix):
     params.resolve(HexabotParams, {}, {**overrides, **suggested})  # no UsageError
 
 
+def test_a_walk_too_long_for_the_run_budget_is_told_a_duration_it_takes():
+    """Found by fuzzing: duration=2400 (allowed: <= 3600) was refused with "lower 'duration' or raise 'timestep'" at
+    the largest timestep, and a long waypoint course advised "raise 'duration' to at least 2.4e+03 s", which the
+    budget then refused: advice that could not be followed."""
+    import re
+
+    with pytest.raises(UsageError) as refused:
+        params.resolve(HexabotParams, {}, {"duration": 2400})
+    message = str(refused.value)
+    assert "raise 'timestep'" not in message  # 0.002 s is its largest
+    longest = re.search(r"lower 'duration' to at most (\S+) s at timestep 0\.002 s$", message)
+    assert longest, message
+    params.resolve(HexabotParams, {}, {"duration": float(longest.group(1))})  # the advice is taken
+    assert "or raise 'timestep'" in str(_refusal({"duration": 1500, "timestep": 0.001}))
+    course = _refusal({"waypoints": [[100, 0], [0, 0.5]], "duration": 100})
+    assert f"longer than the longest walk ({longest.group(1)} s at timestep 0.002 s)" in str(course)
+
+
+def _refusal(overrides: dict) -> UsageError:
+    with pytest.raises(UsageError) as refused:
+        params.resolve(HexabotParams, {}, overrides)
+    return refused.value
+
+
+def test_a_duty_too_long_to_step_in_place_is_named():
+    """duty=0.99 was refused as 'even stepping in place is infeasible ... lengthen 'period' or lower 'step_height''
+    without a word about the duty that left a 10 ms swing (found by fuzzing)."""
+    words = r"duty 0\.99: a swing of 0\.01 s\): joints would turn .*; lengthen 'period', lower 'duty'"
+    with pytest.raises(UsageError, match=words):
+        params.resolve(HexabotParams, {}, {"duty": 0.99})
+
+
 def test_refused_largest_feasible_command_is_feasible():
     with pytest.raises(UsageError) as info:
         params.resolve(HexabotParams, {}, {"vx": 0.6})

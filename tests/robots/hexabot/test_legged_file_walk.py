@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 from helpers import cli, walk_params
 
@@ -42,6 +43,16 @@ def _variant(tmp_path: Path, old: str, new: str) -> Path:
     path = tmp_path / "robot.toml"
     path.write_text(text.replace(old, new, 1))
     return path
+
+
+def test_a_leg_without_a_coxa_compiles_and_stands(tmp_path: Path) -> None:
+    """l1 = 0 is allowed (docs/robot-files.md) but was an internal error: a NaN in the servo inertia (a rod of length
+    0) and MuJoCo's 'fromto points too close in geom lf_coxa'. Found by fuzzing."""
+    path = _variant(tmp_path, "l1 = 0.04", "l1 = 0.0")
+    result = hs.run("hexabot-walk", robot=str(path), duration=1.6)
+    model = result.raw.model
+    assert np.isfinite(model.actuator_gainprm).all() and np.isfinite(model.actuator_biasprm).all()
+    assert result.metrics["fell"].value is False
 
 
 @pytest.mark.parametrize(

@@ -122,7 +122,8 @@ def test_waypoint_refusals_name_the_follower_s_parameters(tmp_path, capsys):
     assert err.rstrip().endswith("lower path_speed or path_yaw_rate")
     long = ("--set", "duration=600")
     code, _, err = cli(capsys, "run", "hexabot-walk", "--set", f"waypoints={far}", *long, "--out", str(tmp_path / "o"))
-    assert code == 2 and "longer than the longest walk (3600 s): shorten the course or raise path_speed" in err
+    # The longest walk the run budget takes at 2 ms (1999.998 s), not the 3600 s the duration's range allows.
+    assert code == 2 and "longer than the longest walk (1.99e+03 s at timestep 0.002 s): shorten the course" in err
     assert not (tmp_path / "o").exists()
 
 
@@ -137,6 +138,20 @@ def test_the_api_takes_rows_as_lists_or_arrays_and_fills_what_they_leave_out(tmp
         walk_params(schedule=[[0, 0.1, 0, 0], [3, 0.1]])
     with pytest.raises(UsageError, match="a schedule or waypoints, not both"):
         walk_params(schedule=rows, waypoints=[[0.2, 0]], duration=20)
+
+
+def test_the_api_takes_a_path_and_refuses_an_int_too_large_for_a_float(tmp_path):
+    """Found by fuzzing: schedule=Path(...) was refused as not 'a CSV file' (robot=Path(...) is taken), and an int of
+    hundreds of digits in a row was an OverflowError from float(), not a refusal naming the row."""
+    csv = tmp_path / "s.csv"
+    csv.write_text("t,vx,vy,yaw_rate\n0,0.1,0,0\n")
+    assert walk_params(schedule=csv, duration=6).schedule == ((0.0, 0.1, 0.0, 0.0, None, None, None),)
+    (tmp_path / "w.csv").write_text("x,y\n0.2,0\n")
+    assert walk_params(waypoints=tmp_path / "w.csv", duration=20).waypoints == ((0.2, 0.0, None),)
+    with pytest.raises(UsageError, match=r"^schedule row 1: vx must be a number from -1 to 1 m/s; got 1000000000"):
+        walk_params(schedule=[[0, 10**400, 0, 0]])
+    with pytest.raises(UsageError, match=r"^waypoints row 1: x must be a number from -1000 to 1000 m; got 1000000000"):
+        walk_params(waypoints=[[10**400, 0]])
 
 
 @pytest.mark.slow
