@@ -276,13 +276,20 @@ def _name_or_file(name: str, raw: Any, kind: NameOrFile) -> str:
 
 
 def parse_assignments(items: list[str]) -> dict[str, str]:
-    """Parses repeated `name=value` strings from the command line."""
+    """Parses repeated `name=value` strings from the command line. An empty value goes to the parameter's own check
+    (a table such as a walk's schedule reads it as none, clearing a config file's; a number refuses it), and a
+    parameter given twice with different values is refused (the last one silently won)."""
     out: dict[str, str] = {}
     for item in items:
         name, sep, value = item.partition("=")
         name = name.strip()
-        if not sep or not name or not value.strip():
+        if not sep or not name:
             raise UsageError(f"malformed --set {_show(item)}: expected name=value, e.g. --set mass=0.2")
+        if name in out and out[name] != value:
+            raise UsageError(
+                f"parameter {_show(name)} is given twice with --set ({_show(out[name])} and {_show(value)}): "
+                "give it once"
+            )
         out[name] = value
     return out
 

@@ -187,7 +187,7 @@ def test_ik_branches_reports_what_ik_drops():
         (["scara", "--set", "d4=1e-9"], "length 'd4' of scara must be 0 or 0.001 to 10 m; got 1e-09"),
         (["stanford", "--set", "d6=nan"], "length 'd6' must be a finite number"),
         (["rrp", "--set", "d1=1,2"], "length 'd1' takes one number in [m]; got '1,2'"),
-        (["rrp", "--set", "d1="], "malformed --set 'd1='"),
+        (["rrp", "--set", "d1="], "length 'd1' must be comma-separated numbers; got ''"),
         (["scara", "--target", "0.4,0.2", "--deg"], "scara needs --target x,y,z[,yaw] (m, deg); got 2 values"),
         (["leg", "--symbolic", "--q", "1,2"], "leg has 3 joints (coxa [rad], femur [rad], tibia [rad]); got 2"),
     ],
