@@ -189,7 +189,10 @@ def _show(v: Any) -> str:
         return str(v).lower()
     if isinstance(v, float):
         return f"{v:.6g}"
-    if isinstance(v, tuple):
+    if isinstance(v, (tuple, list)):
+        if any(isinstance(x, (tuple, list)) for x in v):  # a table (a schedule, a course): rows by "; "
+            return "; ".join(" ".join(_show(x) for x in row) if isinstance(row, (tuple, list)) else _show(row)
+                             for row in v)  # fmt: skip
         return ",".join(_show(x) for x in v)
     return str(v)
 

@@ -4,6 +4,7 @@ import json
 
 import pytest
 
+from hexabot_sim import compare
 from hexabot_sim.__main__ import main
 
 SHORT = ["--set", "duration=0.5", "--no-plots"]
@@ -64,3 +65,11 @@ def test_needs_two_different_runs(two_runs, capsys):
     assert "at least two run folders" in capsys.readouterr().err
     assert main(["compare", str(two_runs / "soft"), str(two_runs / "soft")]) == 2
     assert "is the same run folder" in capsys.readouterr().err
+
+
+def test_a_table_parameter_reads_as_rows():
+    """A walk's schedule (a list of rows in run.json) was written to compare.csv as Python reprs
+    ("[0.0, 0.05, 0.0, 0.0, 'tripod', None, None],[...]"): rows now read "t vx ... ; t vx ...", a missing cell "-"."""
+    rows = ((0.0, 0.05, 0.0, 0.0, "tripod", None, None), [2.0, 0.05, 0.0, 0.0, "ripple", None, None])
+    assert compare._show(rows) == "0 0.05 0 0 tripod - -; 2 0.05 0 0 ripple - -"
+    assert compare._show((0.1, 0.2)) == "0.1,0.2" and compare._show(()) == ""
