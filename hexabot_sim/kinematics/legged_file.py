@@ -19,7 +19,7 @@ import numpy as np
 from hexabot_sim.errors import UsageError, printable
 from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.kinematics import legged, legged_mjcf
-from hexabot_sim.kinematics.robot_file import LENGTH_MAX, MASS_MAX, NAME, brief, load_toml, read_text
+from hexabot_sim.kinematics.robot_file import LENGTH_MAX, MASS_MAX, NAME, brief, load_toml, one_line, read_text
 
 GRAVITY: float = 9.81  # [m/s^2] as MuJoCo's default
 TOP_KEYS = ("name", "summary", "leg", "body", "stance", "legs")
@@ -142,7 +142,7 @@ class _Reader:
             raise self.fail("", f"'name' must be 1 to 64 letters, digits, _ . - (starting with a letter or _); "
                             f"got {brief(name)}")  # fmt: skip
         summary = top.get("summary", "")
-        if not isinstance(summary, str) or "\n" in summary or len(summary) > 200:
+        if not one_line(summary) or len(summary) > 200:
             raise self.fail("", f"'summary' must be one line of text (at most 200 characters); got {brief(summary)}")
         leg = self.table(doc, "leg", LEG_KEYS, LEG_KEYS)
         w = "[leg]"

@@ -236,7 +236,7 @@ class _Reader:
         doc = self.keys(self.doc, TOP_KEYS, "", ("name", "convention", "angles", "joints"))
         name = self.name(doc["name"], "", "'name'")
         summary = doc.get("summary", "")
-        if not _one_line(summary) or len(summary) > 200:
+        if not one_line(summary) or len(summary) > 200:
             raise self.fail("", f"'summary' must be one line of text (at most 200 characters); got {brief(summary)}")
         convention = self.choice(doc, "convention", CONVENTIONS, "")
         self.unit = self.choice(doc, "angles", ANGLE_UNITS, "")
@@ -314,7 +314,7 @@ class _Reader:
                 entry = {"value": entry}
             doc = entry.get("doc", "")
             zero = entry.get("zero", False)
-            if not _one_line(doc):
+            if not one_line(doc):
                 raise self.fail(where, f"'doc' must be one line of text; got {brief(doc)}")
             if not isinstance(zero, bool):
                 raise self.fail(where, f"'zero' must be true or false; got {brief(zero)}")
@@ -391,12 +391,12 @@ class _Reader:
         return position, _rz(*cs[2]) @ _ry(*cs[1]) @ _rx(*cs[0]) + 0.0
 
 
-def _one_line(text: Any) -> bool:
+def one_line(text: Any) -> bool:
     """One line of printable text: it goes into the MJCF's and URDF's header comment (XML allows no control
-    characters, U+FFFE or U+FFFF, even in a comment) and onto the terminal (ESC would recolour it)."""
-    return isinstance(text, str) and not any(
-        (unicodedata.category(c) == "Cc" and c != "\t") or c in "\u2028\u2029\ufffe\uffff" for c in text
-    )
+    characters, U+FFFE or U+FFFF, even in a comment) and onto the terminal (ESC would recolour it, a bidi control
+    U+202A-E or U+2066-9 reorder what follows)."""
+    bad = "\u2028\u2029\ufffe\uffff\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069"
+    return isinstance(text, str) and not any((unicodedata.category(c) == "Cc" and c != "\t") or c in bad for c in text)
 
 
 def brief(value: Any) -> str:

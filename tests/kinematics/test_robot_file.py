@@ -161,6 +161,8 @@ def joint_block(i: int) -> str:
          "'summary' must be one line of text (at most 200 characters); got 'a\\x1b[2Jb'"),
         ('name = "x"\nsummary = "a\\u0000b\\uffff"\nconvention = "standard"\nangles = "deg"\n' + joint_block(1),
          "'summary' must be one line of text"),
+        ('name = "x"\nsummary = "a\\u202eb"\nconvention = "standard"\nangles = "deg"\n' + joint_block(1),
+         "'summary' must be one line of text"),  # a bidi override reordered the terminal line
         ('name = "x"\nconvention = "standard"\nangles = "deg"\n[lengths]\nL = { value = 0.1, doc = "a\\u0007" }\n'
          + joint_block(1), "[lengths] L: 'doc' must be one line of text"),
         # 12,000 fixed rows made kin run for minutes, 40,000 lengths took 24 s (each a file under 1 MiB):

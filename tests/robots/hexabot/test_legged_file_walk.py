@@ -62,6 +62,9 @@ def test_a_leg_without_a_coxa_compiles_and_stands(tmp_path: Path) -> None:
         ("height = 0.10", "height = 0.3", "[stance]: the legs cannot reach the ground at height 0.3 m"),
         ("torque_limit = 1.5", "torque_limit = 0.5", "[leg]: the servos are too weak to stand"),
         ('rows = ["f", "m", "r"]', 'rows = ["f", "r"]', "4 legs; hexabot-walk walks 6-legged robots"),
+        # A bidi override or ESC went raw to the terminal and the MJCF comment (found by fuzzing):
+        ('summary = "six', 'summary = "a\\u202eb six', "'summary' must be one line of text"),
+        ('summary = "six', 'summary = "a\\u001b[2J six', "'summary' must be one line of text"),
     ],
 )
 def test_bad_robot_files_exit_2_with_one_line_and_nothing_written(
