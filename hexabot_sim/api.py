@@ -10,19 +10,32 @@ import time
 import warnings
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
-from hexabot_sim import folders, gl, output, registry
+from hexabot_sim import folders, registry
 from hexabot_sim import params as params_mod
 from hexabot_sim import video as video_options
 from hexabot_sim.errors import HexabotError, OutputError, UsageError
 from hexabot_sim.exporting import export
-from hexabot_sim.result import Metric
 from hexabot_sim.scenario import Scenario
 
+# numpy, MuJoCo (hexabot_sim.result, gl) and the writers (output) are imported where a run or a save needs them:
+# listing the scenarios (`hexabot-sim list`, `scenarios()`) imports none of them.
+if TYPE_CHECKING:
+    import numpy as np
+
+    from hexabot_sim import output
+    from hexabot_sim.result import Metric
+
 __all__ = ["Columns", "Metric", "Parameter", "Result", "ScenarioInfo", "export", "run", "scenarios"]
+
+
+def __getattr__(name: str) -> Any:
+    if name == "Metric":  # hexabot_sim.result imports MuJoCo: loaded on first use
+        from hexabot_sim.result import Metric
+
+        return Metric
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -93,6 +106,8 @@ class Columns(dict):
 
 def _plain(value: Any) -> Any:
     """A numpy scalar or array as the Python value the CLI's parser takes (a number or a list of numbers)."""
+    import numpy as np
+
     if isinstance(value, np.ndarray):
         return value.tolist()
     if isinstance(value, (list, tuple)):
@@ -187,6 +202,8 @@ def _check_path(name: str, value: Any, optional: bool = True) -> None:
 
 def _check_flag(name: str, value: Any) -> None:
     """A yes/no argument is a bool: force="no" is true in Python, and would replace a folder."""
+    import numpy as np
+
     if not isinstance(value, (bool, np.bool_)):
         raise UsageError(f"'{name}' must be True or False; got {value!r}")
 
@@ -254,6 +271,8 @@ class Result:
                 "Result.to_pandas() needs pandas, which hexabot-sim does not install: pip install pandas "
                 "(the columns are also in Result.columns as numpy arrays)"
             ) from e
+        import numpy as np
+
         frame = pd.DataFrame({name: np.asarray(values) for name, values in self.columns.items()})
         frame.attrs["units"] = dict(self.columns.units)
         return frame
@@ -264,6 +283,8 @@ class Result:
         They are made without pyplot, in matplotlib's default style, whatever the global rcParams
         are; no backend is chosen and no rcParams are changed.
         """
+        from hexabot_sim import output
+
         with output.package_style():
             return dict(self._scenario.figures(self.raw))
 
@@ -301,8 +322,10 @@ class Result:
         for flag, value in (("force", force), ("plots", plots), ("video", video)):
             _check_flag(flag, value)
         _check_callable("progress", progress)
+        from hexabot_sim import gl
+
         settings = video_options.settings(quality, size, fps) if video else None
-        backend, reason = None, output.NOT_REQUESTED
+        backend, reason = None, video_options.NOT_REQUESTED
         if video:
             backend, reason = gl.video_backend()
         try:
@@ -322,11 +345,13 @@ class Result:
         plots: bool = True,
         video: video_options.VideoSettings | None = None,
         backend: str | None = None,
-        no_video_reason: str = output.NOT_REQUESTED,
+        no_video_reason: str = video_options.NOT_REQUESTED,
         video_progress: Callable[[int, int], None] | None = None,
     ) -> output.Written:
         """Writes the run's files into `path`, an empty folder made for them (`save` and the command line give
         it their staging folder, which they publish); `backend` is the working OpenGL backend for `video`."""
+        from hexabot_sim import output
+
         return output.write_run(
             path,
             self._scenario,
@@ -372,6 +397,8 @@ class Result:
         settings = video_options.settings(quality, size, fps)
         if self.raw.camera is None or self.raw.trajectory is None:
             raise UsageError(f"{self.scenario} produces no trajectory to film")
+        from hexabot_sim import gl, output
+
         backend, reason = gl.video_backend()
         if backend is None:
             raise OutputError(f"no video: {reason}")

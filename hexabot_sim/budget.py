@@ -22,6 +22,11 @@ CSV_BYTES_PER_VALUE: int = 25  # '%.17g' plus a comma
 CSV_SECONDS_PER_VALUE: float = 8e-6  # np.savetxt with '%.17g', measured
 
 
+def step_count(duration: float, timestep: float) -> int:
+    """Number of steps that covers `duration` (the last recorded time is >= duration)."""
+    return max(1, math.ceil(duration / timestep - 1e-9))
+
+
 def check_duration(duration: float, timestep: float) -> None:
     """Cross-field check shared by time-stepped scenarios (raises ValueError, reported as a usage error)."""
     if timestep > duration:

@@ -15,7 +15,8 @@ class ScenarioModule(Protocol):
     A module may serve several scenarios (hexabot-walk, -turn, -crab differ in defaults only). It has:
 
     - a frozen parameter dataclass (named by `Scenario.params_class`) whose fields carry `params.param(...)`
-      metadata (unit, meaning, range) and whose `__post_init__` refuses what cannot run, in one line;
+      metadata (unit, meaning, range) and whose `__post_init__` refuses what cannot run, in one line (defined in
+      the light `Scenario.params_module` and imported from it, so that listing needs no MuJoCo);
     - `run(name, params, progress=None) -> result.ScenarioResult`: the simulation, writing nothing;
     - `figures(result) -> {file stem: matplotlib Figure}`: its figures, made without pyplot;
     - optionally `live(params) -> result.Live`: the model ready to be stepped in the viewer.
@@ -41,6 +42,9 @@ class Scenario:
         defaults: Scenario-specific defaults applied over the dataclass defaults.
         smoke: Parameters of a short run that still exercises the scenario (the tests run every
             scenario with them; a new scenario needs no edit to any test).
+        params_module: Dotted path of a light module (no MuJoCo, no matplotlib) that holds the parameter
+            dataclass, which `module` imports from it; "" when it is `module` itself. Listing the scenarios
+            and their parameters imports only these.
     """
 
     name: str
@@ -49,13 +53,14 @@ class Scenario:
     params_class: str
     defaults: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     smoke: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    params_module: str = ""
 
     def _module(self) -> Any:
         return importlib.import_module(self.module)
 
     @property
     def params_type(self) -> type:
-        return getattr(self._module(), self.params_class)
+        return getattr(importlib.import_module(self.params_module or self.module), self.params_class)
 
     @property
     def runner(self) -> Callable[..., Any]:

@@ -10,6 +10,7 @@ from collections.abc import Callable, Iterator
 import mujoco
 import numpy as np
 
+from hexabot_sim.budget import step_count as step_count  # here since the start; lives in budget (no MuJoCo)
 from hexabot_sim.errors import SimulationError
 from hexabot_sim.signals import RECEIVED_SIGNALS, stop_request
 
@@ -39,11 +40,6 @@ class Trajectory:
     qpos: np.ndarray  # (n, nq)
     qvel: np.ndarray  # (n, nv)
     ctrl: np.ndarray | None = None  # (n, nu) controls in force during the step that ended at row i (row 0: initial)
-
-
-def step_count(duration: float, timestep: float) -> int:
-    """Number of steps that covers `duration` (the last recorded time is >= duration)."""
-    return max(1, math.ceil(duration / timestep - 1e-9))
 
 
 def warning_counts(data: mujoco.MjData) -> np.ndarray:

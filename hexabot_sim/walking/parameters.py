@@ -9,11 +9,10 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from hexabot_sim.budget import check_run_cost, most_rows
+from hexabot_sim.budget import check_run_cost, most_rows, step_count
 from hexabot_sim.control.gait import GAITS, PROFILES, Command, Gait, gaits_for
 from hexabot_sim.kinematics import legged
 from hexabot_sim.params import allowed, param
-from hexabot_sim.simulate import step_count
 from hexabot_sim.walking import commands
 from hexabot_sim.walking.constants import (
     CSV_FIXED_COLUMNS,

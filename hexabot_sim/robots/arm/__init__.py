@@ -10,5 +10,6 @@ SCENARIOS = (
         "ArmTrackParams",
         defaults={},
         smoke={"robot": "scara", "duration": 1.0},
+        params_module="hexabot_sim.robots.arm.parameters",
     ),
 )

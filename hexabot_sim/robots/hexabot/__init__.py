@@ -10,6 +10,7 @@ SCENARIOS = (
         "HexabotParams",
         defaults={},
         smoke={"duration": 1.6},
+        params_module="hexabot_sim.robots.hexabot.parameters",
     ),
     Scenario(
         "hexabot-turn",
@@ -18,6 +19,7 @@ SCENARIOS = (
         "HexabotParams",
         defaults={"vx": 0.0, "yaw_rate": 0.3},
         smoke={"duration": 1.6},
+        params_module="hexabot_sim.robots.hexabot.parameters",
     ),
     Scenario(
         "hexabot-crab",
@@ -26,6 +28,7 @@ SCENARIOS = (
         "HexabotParams",
         defaults={"vx": 0.0, "vy": 0.1},
         smoke={"duration": 1.6},
+        params_module="hexabot_sim.robots.hexabot.parameters",
     ),
     Scenario(
         "hexabot-slope",
@@ -34,6 +37,7 @@ SCENARIOS = (
         "HexabotParams",
         defaults={"slope_deg": 10.0, "touchdown": "sensed", "level_body": "on", "duration": 10.0},
         smoke={"duration": 1.6},
+        params_module="hexabot_sim.robots.hexabot.parameters",
     ),
     Scenario(
         "hexabot-rough",
@@ -42,6 +46,7 @@ SCENARIOS = (
         "HexabotParams",
         defaults={"roughness": 0.01, "touchdown": "sensed"},
         smoke={"duration": 1.6},
+        params_module="hexabot_sim.robots.hexabot.parameters",
     ),
     Scenario(
         "hexabot-kerb",
@@ -56,6 +61,7 @@ SCENARIOS = (
             "duration": 14.0,
         },
         smoke={"duration": 1.6},
+        params_module="hexabot_sim.robots.hexabot.parameters",
     ),
     Scenario(
         "hexabot-stairs",
@@ -65,5 +71,6 @@ SCENARIOS = (
         "HexabotParams",
         defaults={"stairs_rise": 0.04, "touchdown": "sensed", "level_body": "on", "duration": 18.0},
         smoke={"duration": 1.6},
+        params_module="hexabot_sim.robots.hexabot.parameters",
     ),
 )

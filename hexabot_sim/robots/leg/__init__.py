@@ -10,6 +10,7 @@ SCENARIOS = (
         "LegStepParams",
         defaults={},
         smoke={"duration": 0.5, "mode": "kinematic"},
+        params_module="hexabot_sim.robots.leg.parameters",
     ),
     Scenario(
         "leg-sweep",
@@ -18,5 +19,6 @@ SCENARIOS = (
         "LegSweepParams",
         defaults={},
         smoke={"amplitudes": [0.02, 0.05], "omegas": [1, 2], "periods": 0.5, "workers": 1},
+        params_module="hexabot_sim.robots.leg.parameters",
     ),
 )

@@ -17,7 +17,7 @@ if TYPE_CHECKING:
     import xml.etree.ElementTree as ET
 
     from hexabot_sim.kinematics.robot_file import RobotSpec
-    from hexabot_sim.robots.leg.step import LegParams
+    from hexabot_sim.robots.leg.parameters import LegParams
 
 JOINTS = ("coxa", "femur", "tibia")
 MIN_LENGTH, MAX_LENGTH = 0.01, 1.0  # [m] each of l1, l2, l3

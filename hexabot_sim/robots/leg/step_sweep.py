@@ -2,105 +2,21 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
-import os
 from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
 
 from hexabot_sim import pool
-from hexabot_sim.budget import CSV_BYTES_PER_VALUE, check_budget
 from hexabot_sim.errors import SimulationError
-from hexabot_sim.params import apart, param
 from hexabot_sim.result import Metric, Progress, ScenarioResult
 from hexabot_sim.robots.leg import figures as leg_figures
 from hexabot_sim.robots.leg import step as leg
-from hexabot_sim.simulate import step_count
+from hexabot_sim.robots.leg.parameters import CELL_METRICS, LegSweepParams
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
-
-# Grid columns written to grid.csv, from each cell's leg-step metrics.
-CELL_METRICS = (
-    "max_lateral_deviation",
-    "max_vertical_deviation",
-    "max_x_error",
-    "min_abs_det_j",
-    "min_sigma",
-    "max_joint_speed_reached",
-    "singular_duration",
-    "excursion_forward",
-    "reach_forward",
-)
-
-
-MAX_CELLS: int = 400  # grid cells (amplitudes x omegas)
-MAX_WORKERS: int = 64  # parallel processes; more than the cells or the cores only costs memory
-
-
-@dataclasses.dataclass(frozen=True)
-class LegSweepParams(leg.LegParams):
-    """Parameters of the leg-sweep scenario: a grid of leg-step runs over amplitude x omega."""
-
-    amplitudes: tuple = param(
-        (0.01, 0.02, 0.03, 0.04, 0.05, 0.06, 0.07, 0.08, 0.09, 0.10),
-        "m/s", "grid of amplitudes A (report: 10, 50, 100 mm/s at 1 rad/s, 80 mm/s at 1 and pi/6)",
-        gt=0.0, le=leg.MAX_FOOT_SPEED, typo=("mm/s", 1e-3),
-    )  # fmt: skip
-    omegas: tuple = param(
-        (math.pi / 6, 0.75, 1.0, 1.5, 2.0, 3.0), "rad/s", "grid of omegas (comma-separated)",
-        ge=leg.MIN_OMEGA, le=leg.MAX_OMEGA, typo=("deg/s", math.pi / 180),
-    )  # fmt: skip
-    periods: float = param(2.0, "1", "simulated periods of the command per cell", gt=0.0, le=100.0)
-    workers: int = param(0, "1", "parallel processes; 0 = one per core", ge=0, le=MAX_WORKERS)
-    mode: str = param(
-        "kinematic", "", "kinematic (default here: the reports' setup, fastest) or dynamic",
-        choices=("dynamic", "kinematic"),
-    )  # fmt: skip
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        cells = len(self.amplitudes) * len(self.omegas)
-        if cells > MAX_CELLS:
-            raise ValueError(
-                f"the grid must have at most {MAX_CELLS} cells (amplitudes x omegas); "
-                f"got {len(self.amplitudes)} x {len(self.omegas)} = {cells}"
-            )
-        fastest = max(self.omegas)
-        leg.check_command(fastest, self.timestep)
-        if self.periods * 2 * math.pi / fastest < self.timestep:
-            last, least = apart(self.periods * 2 * math.pi / fastest, self.timestep, "up")
-            raise ValueError(
-                f"parameter 'periods' must give every cell at least one 'timestep' ({least} s); "
-                f"{self.periods!r} periods at omega = {fastest!r} rad/s last {last} s"
-            )
-        # The whole grid's cost: cells run `parallel` at a time, each holding its own recorded rows.
-        n = [step_count(self.periods * 2 * math.pi / w, self.timestep) for w in self.omegas]
-        per_period = self.substeps if self.mode == "dynamic" else 1
-        step_s, row_s, row_bytes = leg.RUN_COST
-        parallel = min(self.workers or os.cpu_count() or 1, cells)
-        check_budget(
-            len(self.amplitudes) * sum(k * per_period for k in n),
-            parallel * (max(n) + 1) * row_bytes,
-            cells * (len(CELL_METRICS) + 5) * CSV_BYTES_PER_VALUE,
-            len(self.amplitudes) * sum(k * per_period * step_s + (k + 1) * row_s for k in n) / parallel,
-            "use fewer cells, fewer 'periods' or a larger 'timestep'",
-        )
-        for a in self.amplitudes:  # every cell is a valid leg-step run
-            for w in self.omegas:
-                try:
-                    self.cell(a, w)
-                except ValueError as e:
-                    raise ValueError(f"grid cell amplitude = {a:g} m/s, omega = {w:g} rad/s: {e}") from None
-
-    def cell(self, amplitude: float, omega: float) -> leg.LegStepParams:
-        """The leg-step parameters of one grid cell."""
-        common = {f.name: getattr(self, f.name) for f in dataclasses.fields(leg.LegParams)}
-        return leg.LegStepParams(
-            **common, amplitude=amplitude, omega=omega, duration=self.periods * 2 * math.pi / omega
-        )
 
 
 def run(name: str, p: LegSweepParams, progress: Progress | None = None) -> ScenarioResult:

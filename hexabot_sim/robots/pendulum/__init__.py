@@ -10,6 +10,7 @@ SCENARIOS = (
         "PendulumParams",
         defaults={"damping": 0.0, "stiffness": 0.0},
         smoke={"duration": 0.5},
+        params_module="hexabot_sim.robots.pendulum.parameters",
     ),
     Scenario(
         "pendulum-damped",
@@ -18,6 +19,7 @@ SCENARIOS = (
         "PendulumParams",
         defaults={"damping": 0.01, "stiffness": 0.0},
         smoke={"duration": 0.5},
+        params_module="hexabot_sim.robots.pendulum.parameters",
     ),
     Scenario(
         "pendulum",
@@ -26,5 +28,6 @@ SCENARIOS = (
         "PendulumParams",
         defaults={},
         smoke={"duration": 0.5},
+        params_module="hexabot_sim.robots.pendulum.parameters",
     ),
 )

@@ -10,6 +10,7 @@ SCENARIOS = (
         "QuadbotParams",
         defaults={},
         smoke={"duration": 2.1},
+        params_module="hexabot_sim.robots.quadbot.parameters",
     ),
     Scenario(
         "quadbot-trot",
@@ -18,6 +19,7 @@ SCENARIOS = (
         "QuadbotParams",
         defaults={"gait": "trot", "vx": 0.1, "period": 0.3},
         smoke={"duration": 1.6},
+        params_module="hexabot_sim.robots.quadbot.parameters",
     ),
     Scenario(
         "quadbot-rough",
@@ -26,6 +28,7 @@ SCENARIOS = (
         "QuadbotParams",
         defaults={"roughness": 0.01, "touchdown": "sensed", "level_body": "on"},
         smoke={"duration": 2.1},
+        params_module="hexabot_sim.robots.quadbot.parameters",
     ),
     Scenario(
         "quadbot-trot-rough",
@@ -41,5 +44,6 @@ SCENARIOS = (
             "level_body": "on",
         },
         smoke={"duration": 1.6},
+        params_module="hexabot_sim.robots.quadbot.parameters",
     ),
 )

@@ -10,5 +10,6 @@ SCENARIOS = (
         "RrpVelocityParams",
         defaults={},
         smoke={"duration": 1.0},
+        params_module="hexabot_sim.robots.rrp.parameters",
     ),
 )

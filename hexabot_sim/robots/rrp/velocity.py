@@ -2,45 +2,23 @@
 
 from __future__ import annotations
 
-import dataclasses
 from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
 
 from hexabot_sim import models, render
-from hexabot_sim.budget import check_duration, check_run_cost
 from hexabot_sim.kinematics import robots
 from hexabot_sim.kinematics.mjcf import to_mjcf
-from hexabot_sim.params import param
 from hexabot_sim.result import Live, Metric, Progress, ScenarioResult
+from hexabot_sim.robots.rrp.parameters import RrpVelocityParams
 from hexabot_sim.simulate import Trajectory, step_count
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-# Cost of a run for budget.check_run_cost, measured on the 2-core development machine: no physics
-# steps; per sample the Jacobian in Python and mj_forward (~1.1 ms; the CSV is counted apart); peak bytes.
-RUN_COST: tuple[float, float, float] = (0.0, 1.1e-3, 600.0)
-LENGTH_MIN, LENGTH_MAX = robots.LENGTH_MIN, robots.LENGTH_MAX  # [m] the lengths `kin` accepts too
-MM: tuple[str, float] = ("mm", 1e-3)  # the unit users type by mistake for a length in m
 SINGULAR_TOL: float = 1e-9  # |a2 + d3| or |cos q2| below this counts as singular
 VIDEO_LINK_RADIUS: float = 0.04  # [m] link capsules of the generated arm (to_mjcf default: 0.02)
-
-
-@dataclasses.dataclass(frozen=True)
-class RrpVelocityParams:
-    """Parameters of the rrp-velocity scenario (joint trajectory fixed by the report)."""
-
-    d1: float = param(1.0, "m", "height of the q2 axis (report: 1 m)", ge=LENGTH_MIN, le=LENGTH_MAX, typo=MM)
-    a2: float = param(1.0, "m", "offset of the prismatic stage (report: 1 m)", ge=LENGTH_MIN, le=LENGTH_MAX, typo=MM)
-    duration: float = param(20.0, "s", "t from 0 to duration (report: 20 s)", gt=0.0, le=86400.0)
-    timestep: float = param(0.001, "s", "sample period", ge=1e-6, le=0.1)
-
-    def __post_init__(self) -> None:
-        check_duration(self.duration, self.timestep)
-        n = step_count(self.duration, self.timestep)
-        check_run_cost(n, n + 1, 20, *RUN_COST, "raise 'timestep' or lower 'duration'")
 
 
 def joint_trajectory(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
