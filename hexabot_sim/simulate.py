@@ -10,7 +10,6 @@ from collections.abc import Callable, Iterator
 import mujoco
 import numpy as np
 
-from hexabot_sim.budget import step_count as step_count  # here since the start; lives in budget (no MuJoCo)
 from hexabot_sim.errors import SimulationError
 from hexabot_sim.signals import RECEIVED_SIGNALS, stop_request
 

@@ -72,10 +72,11 @@ import numpy as np
 from bench_env import bench_env, fmt_env
 
 from hexabot_sim import gl, params, registry, render
+from hexabot_sim.budget import step_count
 from hexabot_sim.result import at_home
 from hexabot_sim.robots.leg import step as leg
 from hexabot_sim.robots.pendulum import pendulum
-from hexabot_sim.simulate import simulate, step_count
+from hexabot_sim.simulate import simulate
 from hexabot_sim.walking import scene as hexabot_scene
 
 

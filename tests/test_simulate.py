@@ -5,8 +5,9 @@ import numpy as np
 import pytest
 
 from hexabot_sim import models
+from hexabot_sim.budget import step_count
 from hexabot_sim.errors import SimulationError
-from hexabot_sim.simulate import simulate, step_count
+from hexabot_sim.simulate import simulate
 
 
 @pytest.fixture

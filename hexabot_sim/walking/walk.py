@@ -10,10 +10,11 @@ import time
 import mujoco
 import numpy as np
 
+from hexabot_sim.budget import step_count
 from hexabot_sim.control.commands import Steering
 from hexabot_sim.kinematics import legged
 from hexabot_sim.result import Live, Metric, Progress, ScenarioResult, at_home
-from hexabot_sim.simulate import simulate, step_count
+from hexabot_sim.simulate import simulate
 from hexabot_sim.walking import course
 from hexabot_sim.walking.constants import SETTLE_TIME
 from hexabot_sim.walking.figures import _moving_mean, figures

@@ -10,7 +10,8 @@ import pytest
 
 from hexabot_sim import gl
 from hexabot_sim.__main__ import main
-from hexabot_sim.simulate import simulate, step_count
+from hexabot_sim.budget import step_count
+from hexabot_sim.simulate import simulate
 
 SHORT = ["--set", "duration=1"]
 

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
+from hexabot_sim.budget import step_count
 from hexabot_sim.control.arm_rate import ArmRateController, ArmRateGains, rotation_error
 from hexabot_sim.kinematics import robots
 from hexabot_sim.kinematics.numeric_ik import batch_pose_and_jacobian, pose_and_jacobian
@@ -23,7 +24,7 @@ from hexabot_sim.result import Live, Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.robots.arm import scene
 from hexabot_sim.robots.arm.parameters import ArmTrackParams, plan_for
 from hexabot_sim.robots.arm.path import RAMP_TIME, Plan
-from hexabot_sim.simulate import Controller, simulate, site_trajectory, step_count
+from hexabot_sim.simulate import Controller, simulate, site_trajectory
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

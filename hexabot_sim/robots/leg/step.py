@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
+from hexabot_sim.budget import step_count
 from hexabot_sim.control.resolved_rate import ResolvedRateController, ResolvedRateGains
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import leg as leg_kin
@@ -18,7 +19,7 @@ from hexabot_sim.robots.leg.parameters import GEOMETRY, LegStepParams, reachable
 from hexabot_sim.robots.leg.parameters import JOINT_LOWER as JOINT_LOWER  # the joint ranges, here since the start
 from hexabot_sim.robots.leg.parameters import JOINT_UPPER as JOINT_UPPER
 from hexabot_sim.robots.leg.parameters import LegParams as LegParams
-from hexabot_sim.simulate import Controller, simulate, site_trajectory, step_count
+from hexabot_sim.simulate import Controller, simulate, site_trajectory
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

@@ -10,9 +10,10 @@ import mujoco
 import numpy as np
 
 from hexabot_sim import models, render
+from hexabot_sim.budget import step_count
 from hexabot_sim.result import Live, Marker, Metric, Progress, ScenarioResult, at_home
 from hexabot_sim.robots.pendulum.parameters import PendulumParams
-from hexabot_sim.simulate import simulate, step_count
+from hexabot_sim.simulate import simulate
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

@@ -8,11 +8,12 @@ import mujoco
 import numpy as np
 
 from hexabot_sim import models, render
+from hexabot_sim.budget import step_count
 from hexabot_sim.kinematics import robots
 from hexabot_sim.kinematics.mjcf import to_mjcf
 from hexabot_sim.result import Live, Metric, Progress, ScenarioResult
 from hexabot_sim.robots.rrp.parameters import RrpVelocityParams
-from hexabot_sim.simulate import Trajectory, step_count
+from hexabot_sim.simulate import Trajectory
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
