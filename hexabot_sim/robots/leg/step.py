@@ -16,9 +16,6 @@ from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.result import Live, Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.robots.leg.model import build_xml
 from hexabot_sim.robots.leg.parameters import GEOMETRY, LegStepParams, reachable
-from hexabot_sim.robots.leg.parameters import JOINT_LOWER as JOINT_LOWER  # the joint ranges, here since the start
-from hexabot_sim.robots.leg.parameters import JOINT_UPPER as JOINT_UPPER
-from hexabot_sim.robots.leg.parameters import LegParams as LegParams
 from hexabot_sim.simulate import Controller, simulate, site_trajectory
 
 if TYPE_CHECKING:

@@ -9,7 +9,7 @@ import pytest
 
 from hexabot_sim import models
 from hexabot_sim.kinematics import leg
-from hexabot_sim.robots.leg import step as leg_scenario
+from hexabot_sim.robots.leg import parameters as leg_parameters
 from hexabot_sim.robots.leg.step import GEOMETRY
 
 JOINTS = ("coxa", "femur", "tibia")
@@ -222,9 +222,8 @@ def test_joint_ranges_are_the_stated_ones_and_the_scenarios(leg_model):
     assert np.array_equal(lower, [-math.pi / 2, -math.pi / 2, 0.0])
     assert upper == pytest.approx([math.pi / 2, math.pi / 2, math.radians(160)], abs=1e-15)
     assert all(model.jnt_limited[model.joint(j).id] for j in JOINTS)
-    scenario_lower = getattr(leg_scenario, "JOINT_LOWER", None)
-    if scenario_lower is not None:  # the scenario's own copy of the ranges (used for its reach)
-        assert np.array_equal(scenario_lower, lower) and np.array_equal(leg_scenario.JOINT_UPPER, upper)
+    # the scenario's own copy of the ranges (used for its reach)
+    assert np.array_equal(leg_parameters.JOINT_LOWER, lower) and np.array_equal(leg_parameters.JOINT_UPPER, upper)
 
 
 def test_inertials_are_the_stated_rods(leg_model):
