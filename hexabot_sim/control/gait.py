@@ -23,6 +23,9 @@ from collections.abc import Callable
 import numpy as np
 
 CHUNK_TIME: float = 1.0  # [s] targets planned at once
+# [s] every foot down at a gait switch before the new gait lifts its first foot: the load the landing feet take
+# over settles before it is handed on (0.1 s: no bounce across tripod <-> wave, measured in docs/hexabot.md)
+SETTLE: float = 0.1
 # Columns of GaitPlanner.timing (plan_kernels' `timing`): phase offset [cycles], the swing under way at the last
 # switch [lift-off, touchdown) [s], no lift-off before [s], latest touchdown [s].
 OFFSET, FINISH_LIFT, FINISH, NO_LIFT, TOUCHDOWN = range(5)
@@ -251,13 +254,15 @@ class GaitPlanner:
         """(lift-off, touchdown) [s] of the leg's swing under way at the last switch (-inf, -inf: none)."""
         return float(self.timing[leg, FINISH_LIFT]), float(self.timing[leg, FINISH])
 
-    def switch(self, gait: Gait, min_down: int = 3, candidates: int = 48) -> None:
+    def switch(self, gait: Gait, min_down: int = 3, candidates: int = 48, settle: float = SETTLE) -> None:
         """Walks with another gait (same period) from the planner's time on (the next chunk).
 
         Every leg's swing and stance stay continuous: a swing under way finishes at its planned touchdown; no leg
-        lifts under the new gait's clock before t and before every such swing has landed (a swing the new clock
-        would have begun earlier is skipped: the foot stays down until its next lift-off; otherwise a tripod's
-        swing under way and the new gait's first swings would leave too few feet down). The new clock's phase is chosen
+        lifts under the new gait's clock before t and before every such swing has landed and `settle` [s] has passed
+        with every foot down (a swing the new clock would have begun earlier is skipped: the foot stays down until its
+        next lift-off; otherwise a tripod's swing under way and the new gait's first swings would leave too few feet
+        down; without the settling time the load a landing tripod takes over is handed on at once, docs/hexabot.md).
+        The new clock's phase is chosen
         among `candidates` shifts of a period: the one whose longest stance across the switch (from a foot's
         last touchdown to its first lift-off under the new gait) is shortest (the foot travels least far), then
         whose shortest is longest, with at least `min_down` feet down at every time of the next two periods.
@@ -268,12 +273,17 @@ class GaitPlanner:
         n, t = self.n_legs, max(self.time, self.start_time)
         stance = self.in_stance(np.array(t))
         finish, lift = self.timing[:, FINISH].copy(), self.timing[:, FINISH_LIFT].copy()
+        touched = self.timing[:, TOUCHDOWN].copy()
         for leg in np.flatnonzero(~stance).tolist():
             if not lift[leg] <= t < finish[leg]:  # a swing of the current gait
-                finish[leg] = self._next_touchdown(leg, t)
-                lift[leg] = finish[leg] - self.swing_time
-        landed = np.where(stance, self.timing[:, TOUCHDOWN], finish)  # (n,) each foot's latest (or coming) touchdown
-        no_lift = np.full(n, max(float(finish.max()), t))  # the new gait lifts no foot before the last has landed
+                coming = self._next_touchdown(leg, t)
+                if coming - t > self.swing_time + 1e-9:  # its phase a rounding error short of 1: it lands at t
+                    stance[leg], touched[leg] = True, t
+                    continue
+                finish[leg], lift[leg] = coming, coming - self.swing_time
+        landed = np.where(stance, touched, finish)  # (n,) each foot's latest (or coming) touchdown
+        # The new gait lifts no foot before the last has landed and every foot has been down for `settle`.
+        no_lift = np.full(n, max(float(finish.max()), t) + settle)
         offsets = np.array(gait.offsets)
         samples = t + self.period * np.arange(0, 2 * 96) / 96  # the next two periods
         best = None

@@ -8,21 +8,21 @@ import math
 import numpy as np
 import pytest
 
-from hexabot_sim.control.gait import GAITS, Command, GaitPlanner
+from hexabot_sim.control.gait import FINISH, FINISH_LIFT, GAITS, SETTLE, Command, GaitPlanner
 from hexabot_sim.robots.hexabot.model import DEFAULT_LAYOUT
 
 DT = 0.002
 PERIOD = 1.0
 
 
-def _walk(gaits: list[tuple[float, str]], cmd: Command, until: float):
+def _walk(gaits: list[tuple[float, str]], cmd: Command, until: float, settle: float = SETTLE):
     """Plans chunk by chunk, switching gait at the given times: (times, targets (n, legs, 3), stance (n, legs))."""
     planner = GaitPlanner(GAITS[gaits[0][1]], PERIOD, 0.03, DEFAULT_LAYOUT.neutral_feet_body(), DT, start_time=0.5)
     pending = list(gaits[1:])
     times, rows, flags = [], [], []
     while planner.time < until - 1e-9:
         if pending and planner.time >= pending[0][0] - 1e-9:
-            planner.switch(GAITS[pending.pop(0)[1]])
+            planner.switch(GAITS[pending.pop(0)[1]], settle=settle)
         n = planner.max_chunk // 4
         if pending:
             n = min(n, max(1, round((pending[0][0] - planner.time) / DT)))
@@ -79,3 +79,31 @@ def test_after_a_switch_the_feet_lift_in_the_new_gaits_order(new):
     implied = np.mod(np.array(lifts) / PERIOD + offsets, 1.0)
     spread = np.abs(np.angle(np.exp(2j * math.pi * (implied - implied[0])))).max()
     assert spread < 2 * math.pi * 2 * DT / PERIOD
+
+
+@pytest.mark.parametrize("at", [6.5, 7.0, 11.0])
+def test_a_switch_at_the_instant_a_foot_lands_takes_it_as_landed(at):
+    # A wave clock started at 14/3 s (a phase a switch chose in a walk) has a foot land at each of these times with
+    # its phase a rounding error short of 1. That once read as a swing under way whose touchdown was a whole period
+    # later: after the switch to the tripod the plan had the robot stand on a foot in the air (its speed fell 86 %).
+    planner = GaitPlanner(GAITS["wave"], PERIOD, 0.03, DEFAULT_LAYOUT.neutral_feet_body(), DT, start_time=14 / 3)
+    while planner.time < at - 1e-9:
+        planner.plan(Command(0.05, 0.0, 0.0), min(planner.max_chunk, max(1, round((at - planner.time) / DT))))
+    planner.switch(GAITS["tripod"])
+    lift, land = planner.timing[:, FINISH_LIFT], planner.timing[:, FINISH]
+    swinging = land > at
+    assert (land[swinging] - at <= (1 - GAITS["wave"].duty) * PERIOD + 1e-9).all(), land
+    assert (land[swinging] - lift[swinging] == pytest.approx((1 - GAITS["wave"].duty) * PERIOD)), (lift, land)
+
+
+@pytest.mark.parametrize("settle", [SETTLE, 0.25])
+@pytest.mark.parametrize("sequence", [("tripod", "wave"), ("wave", "tripod"), ("tripod", "ripple"), ("ripple", "wave")])
+def test_after_a_switch_every_foot_is_down_for_the_settling_time_before_the_new_gait_lifts_one(sequence, settle):
+    t, _, stance, planner = _walk([(0.0, sequence[0]), (3.3, sequence[1])], Command(0.05, 0.0, 0.0), 7.0, settle)
+    switched = planner.switches[0][0]
+    swings = [run for leg in range(stance.shape[1]) for run in _runs(stance[:, leg], t, False)]
+    last_old = max([lift + n for lift, n in swings if switched - 1.0 < lift <= switched] + [switched])
+    first_new = min(lift for lift, _ in swings if lift > switched)
+    assert first_new >= last_old + settle - DT / 2
+    assert stance[(t >= last_old) & (t < last_old + settle)].all()
+    assert not stance[(t >= first_new) & (t < first_new + DT / 2)].all()
