@@ -93,7 +93,7 @@ def test_a_switch_at_the_instant_a_foot_lands_takes_it_as_landed(at):
     lift, land = planner.timing[:, FINISH_LIFT], planner.timing[:, FINISH]
     swinging = land > at
     assert (land[swinging] - at <= (1 - GAITS["wave"].duty) * PERIOD + 1e-9).all(), land
-    assert (land[swinging] - lift[swinging] == pytest.approx((1 - GAITS["wave"].duty) * PERIOD)), (lift, land)
+    assert land[swinging] - lift[swinging] == pytest.approx((1 - GAITS["wave"].duty) * PERIOD), (lift, land)
 
 
 @pytest.mark.parametrize("settle", [SETTLE, 0.25])
