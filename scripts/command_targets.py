@@ -13,7 +13,7 @@ Usage: python scripts/command_targets.py [--seeds N] [--quick]
               steady gait after that                                                target dip <= 10 %
               the same with load_sharing=admittance, with feet=pad swing=quintic (issue 19), with that at a
               2 s period and with load_sharing=force on the pad, and on 1 cm rough ground (hexabot-rough, sensed
-              touchdown), seeds 0 and 1
+              touchdown), seeds 0 and 1, with the defaults and with load_sharing=force on the pad
 
 Prints one line per measurement; --quick runs the figure-eight on flat ground only.
 """
@@ -111,6 +111,7 @@ def main(argv: list[str] | None = None) -> int:
     switch(load_sharing="force", feet="pad", swing="quintic")  # the stance force control on the pad
     for seed in range(min(args.seeds, 2)):
         switch("hexabot-rough", seed)
+        switch("hexabot-rough", seed, load_sharing="force", feet="pad", swing="quintic")
     return 0
 
 
