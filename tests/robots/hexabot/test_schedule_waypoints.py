@@ -213,6 +213,20 @@ def test_a_tripod_to_wave_switch_walks_on_without_a_dip_or_extra_bounces():
     assert "gait_switch_1" in figures(r)
 
 
+@pytest.mark.slow
+def test_a_tripod_wave_tripod_change_does_not_bounce_when_the_legs_share_the_load():
+    """With issue 19's stance force control on the pad the change has no bounce at all, there and back: the switch
+    leaves every foot down for gait.SETTLE before the wave lifts one (lifting it as the tripod landed bounced lf)."""
+    from hexabot_sim.walking import course
+
+    rows = [[0, 0.05, 0, 0, "tripod"], [5, 0.05, 0, 0, "wave"], [8.5, 0.05, 0, 0, "tripod"]]
+    r = walk(schedule=rows, duration=10.5, load_sharing="force", feet="pad", swing="quintic")
+    t = r.columns["t"]
+    assert [g for _, g in r.extras["gait_switches"]] == ["wave", "tripod"] and not r.metrics["fell"].value
+    loaded = r.extras["contacts"].loaded(float(r.model.body_subtreemass[r.model.body("torso").id]))
+    assert course.count_bounces(loaded, t, 2.0, 10.5) == 0
+
+
 def test_schedule_scale_multiplies_the_rows_twists_and_is_checked_like_them(tmp_path):
     from hexabot_sim import sweep
     from hexabot_sim.walking import commands
