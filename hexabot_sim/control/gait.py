@@ -262,10 +262,10 @@ class GaitPlanner:
         with every foot down (a swing the new clock would have begun earlier is skipped: the foot stays down until its
         next lift-off; otherwise a tripod's swing under way and the new gait's first swings would leave too few feet
         down; without the settling time the load a landing tripod takes over is handed on at once, docs/hexabot.md).
-        The new clock's phase is chosen
-        among `candidates` shifts of a period: the one whose longest stance across the switch (from a foot's
-        last touchdown to its first lift-off under the new gait) is shortest (the foot travels least far), then
-        whose shortest is longest, with at least `min_down` feet down at every time of the next two periods.
+        The new clock's phase is chosen among `candidates` shifts of a period: the one whose longest stance across
+        the switch (from a foot's last touchdown to its first lift-off under the new gait) is shortest (the foot
+        travels least far), then whose shortest is longest, with at least `min_down` feet down at every time of the
+        next two periods.
         """
         if len(gait.offsets) != self.n_legs:
             raise ValueError(f"the {gait.name} gait is for {len(gait.offsets)} legs; the robot has {self.n_legs}")
