@@ -118,3 +118,8 @@ def random_q(table: dict, rng: np.random.Generator) -> np.ndarray:
     return np.array([
         rng.uniform(r["lower"], r["upper"]) * (1.0 if r["type"] == "prismatic" else scale) for r in table["joints"]
     ])  # fmt: skip
+
+
+def staging_left(folder: Any) -> list[Any]:
+    """The staging folders a run left under `folder` (a run publishes atomically: none should be left)."""
+    return [p for p in folder.rglob(".hexabot-sim-*")]
