@@ -107,13 +107,14 @@ FORCE_MODES: dict[str, tuple[str, ...]] = {  # the force figures' stance modes: 
     "off": ("load_sharing=off",),
     "admittance": ("load_sharing=admittance",),
     "pad": ("feet=pad", "swing=quintic"),
+    "force": ("load_sharing=force", "feet=pad", "swing=quintic"),
 }
 
 
 def force_figures(modes: tuple[str, ...] = tuple(FORCE_MODES), stairs: bool = True) -> None:
     """The feet's forces against the gait plan (issue 19): each gait at the issue's speed with stiff stance legs
-    (the default), with the admittance (load_sharing=admittance) and with the foot pad and quintic swing, and the
-    stairs."""
+    (the default), with the admittance (load_sharing=admittance), with the foot pad and quintic swing, and with the
+    stance force control on the pad; and the stairs."""
     for gait, vx in (("tripod", "0.1"), ("ripple", "0.1"), ("wave", "0.05")):
         for mode in modes:
             sets = [word for value in FORCE_MODES[mode] for word in ("--set", value)]

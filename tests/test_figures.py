@@ -258,3 +258,38 @@ def test_video_has_exactly_the_requested_size_and_odd_sizes_are_refused(tmp_path
         with pytest.raises(ValueError, match="even"):
             render.render_video(result.model, t, qpos, tmp_path / "odd.mp4", camera="side", width=width, height=height)
     assert not (tmp_path / "odd.mp4").exists()
+
+
+def _labels_inside(fig):
+    """Every axis label and drawn tick label lies inside the figure (the saved PNG shows all of it)."""
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    fig.draw(renderer)
+    width, height = fig.bbox.width, fig.bbox.height
+    for ax in fig.axes:
+        texts = [ax.xaxis.label, ax.yaxis.label]
+        for axis in (ax.xaxis, ax.yaxis):
+            texts += [tick.label1 for tick in axis.get_major_ticks() if tick.get_visible() and tick.label1.get_text()
+                      and _shown(axis, tick)]  # fmt: skip
+        for text in texts:
+            if not text.get_visible() or not text.get_text():
+                continue
+            box = text.get_window_extent(renderer)
+            assert box.x0 >= -0.5 and box.x1 <= width + 0.5 and box.y0 >= -0.5 and box.y1 <= height + 0.5, (
+                f"{text.get_text()!r} outside the figure: {box}"
+            )
+
+
+def _shown(axis, tick) -> bool:
+    low, high = sorted(axis.get_view_interval())
+    return low - 1e-9 * (high - low) <= tick.get_loc() <= high + 1e-9 * (high - low)
+
+
+@pytest.mark.slow
+def test_walk_figures_keep_their_labels_inside_the_figure():
+    """The foot-force figure's y labels once sat 9 px left of the figure's edge (cut off in the PNG) when the
+    forces' axis ended between two ticks: the tick beyond it (not drawn) still pushed the label left."""
+    from hexabot_sim.walking import figures as walk_figures
+
+    result = _run("hexabot-walk", gait="wave", vx=0.05, duration=4, load_sharing="force", feet="pad", swing="quintic")
+    for fig in walk_figures.figures(result).values():
+        _labels_inside(fig)

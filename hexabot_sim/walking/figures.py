@@ -209,6 +209,9 @@ def _forces_figure(result: ScenarioResult, show: np.ndarray) -> Any:
                 label="tangential force" if i == 0 else None)  # fmt: skip
         ax.axhline(share, color="k", lw=0.6, ls=":", label="weight / legs" if i == 0 else None)
         ax.set_ylim(0, top)
+        # Only the ticks inside the axis: one beyond its top is not drawn but still pushes the y label left (by
+        # its wider label: 'lf [N]' was cut off at the figure's edge).
+        ax.set_yticks([v for v in ax.get_yticks() if v <= top])
         ax.set_ylabel(f"{leg} [N]")
     axes[-1].set_xlabel("t [s]")
     axes[-1].set_xlim(t[0], t[-1])
