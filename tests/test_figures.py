@@ -95,6 +95,7 @@ def test_leg_figures_legends_ticks_and_labels(leg_outside):
     for fig in figures.values():
         _legend_outside_data(fig)
         _readable_ticks(fig)
+        _labels_inside(fig)
     sing = figures["singularity"].axes
     assert "det J" in sing[0].get_ylabel() and "σ_min" in sing[0].get_ylabel()
     # The world-frame figure states its start in the world frame too.
