@@ -271,6 +271,11 @@ class GaitPlanner:
             raise ValueError(f"the {gait.name} gait is for {len(gait.offsets)} legs; the robot has {self.n_legs}")
         # The planner's own clock (its phases and events agree on it), and no earlier than the gait clock's start.
         n, t = self.n_legs, max(self.time, self.start_time)
+        if self.time < self.start_time:  # standing before the clock starts (no foot has lifted): walk the new gait
+            self._set_gait(gait)  # from the start, as if it had been the first (its swings were planned mid-swing)
+            self.switches.append((t, gait.name))
+            self.clock_from = t
+            return
         stance = self.in_stance(np.array(t))
         finish, lift = self.timing[:, FINISH].copy(), self.timing[:, FINISH_LIFT].copy()
         touched = self.timing[:, TOUCHDOWN].copy()
@@ -303,13 +308,16 @@ class GaitPlanner:
             key = (down < min(min_down, n), longest, -shortest)  # shortest longest stance; then no stutter step
             if best is None or key < best[0]:
                 best = (key, start)
-        self.gait = gait
-        self.timing[:, OFFSET] = offsets
-        self.stance_time, self.swing_time = gait.duty * self.period, (1 - gait.duty) * self.period
+        self._set_gait(gait)
         self.start_time = best[1]  # type: ignore[index]
         self.timing[:, FINISH], self.timing[:, FINISH_LIFT], self.timing[:, NO_LIFT] = finish, lift, no_lift
         self.switches.append((t, gait.name))
         self.clock_from = float(no_lift[0])  # [s] the old gait's swings have landed: the new gait's may begin
+
+    def _set_gait(self, gait: Gait) -> None:
+        self.gait = gait
+        self.timing[:, OFFSET] = gait.offsets
+        self.stance_time, self.swing_time = gait.duty * self.period, (1 - gait.duty) * self.period
 
     def plan(self, cmd: Command, n_steps: int, scale: Scale | None = None) -> np.ndarray:
         """Targets (n_steps + 1, n_legs, 3) at time, time + dt, ..., time + n_steps dt; advances the planner n_steps dt.

@@ -107,3 +107,31 @@ def test_after_a_switch_every_foot_is_down_for_the_settling_time_before_the_new_
     assert first_new >= last_old + settle - DT / 2
     assert stance[(t >= last_old) & (t < last_old + settle)].all()
     assert not stance[(t >= first_new) & (t < first_new + DT / 2)].all()
+
+
+@pytest.mark.parametrize("before", [0.3, 0.05, DT])
+@pytest.mark.parametrize("new", ["wave", "ripple"])
+def test_a_switch_while_standing_before_the_gait_clock_starts_walks_the_new_gait_from_the_start(new, before):
+    # The viewer's steering plans 0.05 s chunks from t = 0, so a gait key pressed in the first half second switches
+    # before the clock's start. That once finished the old gait's swings "under way" at the start from a planner
+    # still standing: a foot's target jumped 28 mm in one step (~14 m/s) when the next chunk found it mid-swing.
+    start, cmd = 0.5, Command(0.03, 0.0, 0.0)
+    neutral = DEFAULT_LAYOUT.neutral_feet_body()
+    planner = GaitPlanner(GAITS["tripod"], PERIOD, 0.03, neutral, DT, start_time=start)
+    fresh = GaitPlanner(GAITS[new], PERIOD, 0.03, neutral, DT, start_time=start)
+    rows, expected = [], []
+    switched = False
+    while planner.time < 4.0 - 1e-9:
+        n = 25
+        if not switched and planner.time + n * DT > start - before:  # switch `before` ahead of the start
+            n = max(1, round((start - before - planner.time) / DT))
+            if planner.time >= start - before - DT / 2:
+                planner.switch(GAITS[new])
+                switched = True
+                n = 25
+        rows.append(planner.plan(cmd, n)[1:])
+        expected.append(fresh.plan(cmd, n)[1:])
+    assert [g for _, g in planner.switches] == [new]
+    rows = np.concatenate(rows)
+    assert np.abs(np.diff(rows, axis=0)).max() < 1.0 * DT  # continuous targets
+    np.testing.assert_allclose(rows, np.concatenate(expected), atol=1e-12)  # as if it had begun in the new gait
