@@ -285,7 +285,9 @@ class GaitPlanner:
                 if coming - t > self.swing_time + 1e-9:  # its phase a rounding error short of 1: it lands at t
                     stance[leg], touched[leg] = True, t
                     continue
-                finish[leg], lift[leg] = coming, coming - self.swing_time
+                # Under way at t: lifted at or before it (touchdown less the swing time can round to after t, and a
+                # swing lifting inside the next chunk would not be planned until the chunk after it, mid-swing).
+                finish[leg], lift[leg] = coming, min(coming - self.swing_time, t)
         landed = np.where(stance, touched, finish)  # (n,) each foot's latest (or coming) touchdown
         # The new gait lifts no foot before the last has landed and every foot has been down for `settle`.
         no_lift = np.full(n, max(float(finish.max()), t) + settle)

@@ -135,3 +135,20 @@ def test_a_switch_while_standing_before_the_gait_clock_starts_walks_the_new_gait
     rows = np.concatenate(rows)
     assert np.abs(np.diff(rows, axis=0)).max() < 1.0 * DT  # continuous targets
     np.testing.assert_allclose(rows, np.concatenate(expected), atol=1e-12)  # as if it had begun in the new gait
+
+
+@pytest.mark.parametrize("period", [1.0, 1.2])
+@pytest.mark.parametrize("new", ["wave", "ripple"])
+def test_a_switch_at_the_instant_a_swing_lifts_plans_that_swing_from_the_switch(new, period):
+    # At the gait clock's start (a schedule's second row before it) half the tripod lifts. Its touchdown less the
+    # swing time came out 1e-16 s after the switch at period 1.2 s (1.1 - 0.6): the swing was not under way at the
+    # chunk's start, the foot stayed down to the chunk's end and then jumped 28 mm up in one step.
+    dt, start = 0.001, 0.5
+    planner = GaitPlanner(GAITS["tripod"], period, 0.03, DEFAULT_LAYOUT.neutral_feet_body(), dt, start_time=start)
+    planner.plan(Command(), round(start / dt))
+    assert planner.time == start
+    planner.switch(GAITS[new])
+    lift = planner.timing[:, FINISH_LIFT]
+    assert (lift[np.isfinite(lift)] <= start).all(), lift
+    rows = np.concatenate([planner.plan(Command(), 250)[1:] for _ in range(8)])
+    assert np.abs(np.diff(rows, axis=0)).max() < 1.0 * dt
