@@ -230,11 +230,17 @@ def schedule_problem(p: Any, check: Callable[[Any], str]) -> str:
     if p.schedule and p.waypoints:
         return "give a schedule or waypoints, not both"
     gaits = p.gaits()
-    for i, row in enumerate(setpoints(p)):
+    rows = setpoints(p)
+    for i, row in enumerate(rows):
         where = f"schedule row {i + 1} (t = {row.t:g} s)"
         if row.gait not in gaits:
             return f"{where}: unknown gait {row.gait!r}; known: {', '.join(gaits)}"
         if row.gait != p.gait and p.duty:
+            if all(r.gait == row.gait for r in rows):  # one gait throughout, not the walk's: it has its own duty
+                return (
+                    f"{where}: its {row.gait} gait is not the walk's {p.gait}, and a walk in a schedule's gait takes "
+                    f"that gait's own duty; set duty=0 or gait={row.gait}"
+                )
             return f"{where}: a schedule that changes gait walks each gait at its own duty; set duty=0"
         c = row.command
         try:

@@ -311,3 +311,16 @@ def test_vx_vy_and_yaw_rate_that_a_schedule_or_waypoints_replace_are_not_checked
         walk_params(gait="wave", schedule=[[0, 0.1, 0, 0]], duration=6)
     with pytest.raises(ValueError, match="even stepping in place is infeasible"):
         walk_params(gait="wave", schedule=rows, period=0.2, duration=6)
+
+
+def test_a_duty_with_a_schedule_in_another_gait_is_refused_naming_both_gaits_not_a_change_the_schedule_lacks():
+    # Every row walks the wave, the walk's gait is the tripod: the duty would be dropped (the walk starts in the
+    # first row's gait at its own duty). The refusal said "a schedule that changes gait" of a schedule keeping one.
+    rows = [[0, 0.03, 0, 0, "wave"], [2, 0.03, 0, 0, "wave"]]
+    with pytest.raises(UsageError, match=r"schedule row 1 \(t = 0 s\): its wave gait is not the walk's tripod") as e:
+        walk_params(schedule=rows, duty=0.6, period=1.5, duration=4)
+    assert "set duty=0 or gait=wave" in str(e.value)
+    assert walk_params(schedule=rows, duty=0.9, period=2.0, duration=4, gait="wave").duty == 0.9
+    changes = [[0, 0.03, 0, 0, "ripple"], [2, 0.03, 0, 0, "wave"]]
+    with pytest.raises(UsageError, match=r"schedule row 2 \(t = 2 s\): a schedule that changes gait walks each gait"):
+        walk_params(schedule=changes, duty=0.7, period=1.5, duration=4, gait="ripple")
