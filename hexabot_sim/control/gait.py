@@ -45,6 +45,15 @@ class Gait:
     duty: float
     doc: str
 
+    def least_down(self, duty: float = 0.0) -> int:
+        """The fewest feet down at any time of a cycle, at `duty` (0: the gait's own)."""
+        duty = duty or self.duty
+        offsets = np.asarray(self.offsets, dtype=float)
+        # The count changes only where a leg's phase crosses 0 or duty: look just after each of those instants.
+        events = np.mod(np.concatenate([-offsets, duty - offsets]), 1.0) + 1e-9
+        phases = np.mod(events[:, None] + offsets[None, :], 1.0)
+        return int((phases < duty).sum(axis=1).min())
+
 
 # The gaits of each leg count. Offsets follow the legs' order in the layout: the left row front to rear,
 # then the right row (kinematics/legged.Layout).
