@@ -233,6 +233,8 @@ def schedule_problem(p: Any, check: Callable[[Any], str]) -> str:
     rows = setpoints(p)
     for i, row in enumerate(rows):
         where = f"schedule row {i + 1} (t = {row.t:g} s)"
+        if p.schedule_scale != 1.0:  # the speeds below are the file's times the scale
+            where = f"schedule row {i + 1} (t = {row.t:g} s, its twist times schedule_scale {p.schedule_scale:g})"
         if row.gait not in gaits:
             return f"{where}: unknown gait {row.gait!r}; known: {', '.join(gaits)}"
         if row.gait != p.gait and p.duty:

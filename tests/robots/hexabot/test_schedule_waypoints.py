@@ -235,7 +235,8 @@ def test_schedule_scale_multiplies_the_rows_twists_and_is_checked_like_them(tmp_
     p = walk_params(schedule=rows, schedule_scale=1.5, duration=6)
     twists = [(s.command.vx, s.command.vy, s.command.yaw_rate) for s in commands.setpoints(p)]
     assert np.array(twists) == pytest.approx(np.array([(0.075, 0.015, 0.0), (0.0, 0.0, 0.3)]))
-    with pytest.raises(UsageError, match=r"schedule row 1 \(t = 0 s\): the legs cannot deliver"):
+    # The refusal's speeds are the scaled ones (a feasible vx 0.096 for a file that says 0.05): it says so.
+    with pytest.raises(UsageError, match=r"schedule row 1 \(t = 0 s, its twist times schedule_scale 10\): the legs"):
         walk_params(schedule=rows, schedule_scale=10, duration=6)
     csv = _write(tmp_path / "s.csv", "t,vx,vy,yaw_rate\n0,0.05,0,0\n3,0,0,0.2\n")
     plan = sweep.plan("hexabot-walk", ["schedule_scale=0.5,1,2"], {}, {"schedule": csv, "duration": "6"})
