@@ -192,9 +192,10 @@ class WalkParams:
 
     def _check_force_gaits(self) -> None:
         """load_sharing=force distributes the weight and the body's moments over the feet down: it needs three
-        (two span no plane), in the walk's gait and in every gait of its schedule."""
+        (two span no plane), in every gait walked: the walk's, or with a schedule its rows' (a row without a gait keeps
+        the one before; a first row's gait replaces the walk's from the start: walking/scene.make_controller)."""
         gaits = self.gaits()
-        names = [self.gait] + [row[4] for row in self.schedule if len(row) > 4 and row[4]]
+        names = [row.gait for row in commands.setpoints(self)] if self.schedule else [self.gait]
         for name in dict.fromkeys(names):
             if name not in gaits:
                 continue  # an unknown gait is refused, with its row, by the schedule's check

@@ -129,3 +129,25 @@ def test_the_stance_force_control_is_refused_for_a_gait_with_two_feet_down(capsy
     scenario = registry.get("quadbot-walk")
     p = params.resolve(scenario.params_type, scenario.defaults, {}, {"load_sharing": "force", "duration": "3"})
     assert p.load_sharing == "force" and p.gait == "crawl"
+
+
+def test_the_stance_force_control_checks_the_gaits_a_schedule_walks_not_the_one_it_replaces():
+    """A schedule whose first row names a gait walks that gait from the start (walking/scene.make_controller): the
+    walk's own gait is never walked then. quadbot-trot with a crawl-only schedule walks the same crawl as quadbot-walk
+    with it (at its period, 1.5 s), and takes load_sharing=force as quadbot-walk does (it was refused: 'the trot gait
+    has 2')."""
+    crawl = {"load_sharing": "force", "schedule": [[0, 0.03, 0, 0, "crawl"]], "period": 1.5}
+    for name in ("quadbot-walk", "quadbot-trot"):
+        scenario = registry.get(name)
+        p = params.resolve(scenario.params_type, scenario.defaults, crawl)
+        assert p.load_sharing == "force"
+    # A row without a gait keeps the walk's: the trot is walked there and still refused.
+    scenario = registry.get("quadbot-trot")
+    trot = {"load_sharing": "force", "schedule": [[0, 0.03, 0, 0]]}
+    with pytest.raises(UsageError, match="the trot gait has 2"):
+        params.resolve(scenario.params_type, scenario.defaults, trot)
+    with pytest.raises(UsageError, match="the trot gait has 2"):
+        params.resolve(
+            scenario.params_type, scenario.defaults,
+            {"load_sharing": "force", "schedule": [[0, 0.03, 0, 0, "crawl"], [4, 0.03, 0, 0, "trot"]]},
+        )  # fmt: skip
