@@ -258,11 +258,27 @@ def _cycle_problem_computed(p: WalkParams, cmd: Command) -> str:
     return ""
 
 
+def _with_gait(p: WalkParams, gait: str) -> WalkParams:
+    """`p` in another of its gaits at that gait's own duty, not checked again (a schedule's rows are checked as walks
+    of their own by commands.schedule_problem)."""
+    q = object.__new__(type(p))
+    for field in dataclasses.fields(p):
+        object.__setattr__(q, field.name, getattr(p, field.name))
+    object.__setattr__(q, "gait", gait)
+    object.__setattr__(q, "duty", 0.0)
+    return q
+
+
 def feasibility(p: WalkParams) -> str:
     """'' if the legs can deliver the command (vx, vy, yaw_rate; only stepping in place with a schedule or waypoints,
     which replace them), else a one-line reason with the largest feasible command."""
     if not math.isfinite(p.vx + p.vy + p.yaw_rate):
         return "vx, vy and yaw_rate must be finite"
+    first = commands.setpoints(p)[0].gait if p.schedule else p.gait
+    if first != p.gait:  # the walk starts in its schedule's first gait, at that gait's duty (scene.make_controller)
+        if first not in p.gaits():
+            return ""  # refused, with its row, by the schedule's check
+        p = _with_gait(p, first)
     standing = _cycle_problem(p, Command())
     if standing:
         faster = " (or raise 'max_joint_speed')" if standing.startswith("joints would turn") else ""

@@ -151,3 +151,20 @@ def test_the_stance_force_control_checks_the_gaits_a_schedule_walks_not_the_one_
             scenario.params_type, scenario.defaults,
             {"load_sharing": "force", "schedule": [[0, 0.03, 0, 0, "crawl"], [4, 0.03, 0, 0, "trot"]]},
         )  # fmt: skip
+
+
+def test_stepping_in_place_is_checked_in_the_gait_a_schedule_starts_in():
+    """A schedule whose first row names another gait walks that gait from the start: the walk's own gait is not checked
+    for stepping in place. quadbot-walk at period 0.3 s with a trot-only schedule is quadbot-trot's walk with it (it
+    was refused: 'even stepping in place is infeasible with the crawl gait'); a duty of the walk's own, not the
+    schedule gait's, gets the schedule's advice (set duty=0 or gait=...), not 'lower duty' for a gait never walked."""
+    trot = {"period": 0.3, "schedule": [[0, 0.1, 0, 0, "trot"]]}
+    for name in ("quadbot-walk", "quadbot-trot"):
+        scenario = registry.get(name)
+        assert params.resolve(scenario.params_type, scenario.defaults, trot).period == 0.3
+    scenario = registry.get("quadbot-walk")
+    with pytest.raises(UsageError, match=r"with the crawl gait at period 0\.3 s"):  # the crawl is walked: still refused
+        params.resolve(scenario.params_type, scenario.defaults, {"period": 0.3, "schedule": [[0, 0.05, 0, 0]]})
+    scenario = registry.get("hexabot-walk")
+    with pytest.raises(UsageError, match=r"set duty=0 or gait=wave$"):
+        params.resolve(scenario.params_type, scenario.defaults, {"duty": 0.9, "schedule": [[0, 0.05, 0, 0, "wave"]]})
