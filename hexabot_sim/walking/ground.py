@@ -97,9 +97,10 @@ def depth_range(p: WalkParams) -> tuple[float, float]:
 
     The steady cycle of the command (stance and swing, with the lift) is shifted up and down as a whole:
     the stance depth may move by as much as every target of the cycle stays inside the reach and the
-    joint ranges (bisection to 0.1 mm).
+    joint ranges (bisection to 0.1 mm). With a schedule or waypoints the walk's own twist is never commanded: the
+    cycle is stepping in place (their commands are checked as walks of their own: walking/commands.py).
     """
-    hip, _ = _plan_cycle(p, p.command())
+    hip, _ = _plan_cycle(p, Command() if p.schedule or p.waypoints else p.command())
 
     def ok(shift: float) -> bool:
         shifted = hip.copy()

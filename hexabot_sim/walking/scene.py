@@ -115,6 +115,22 @@ def _add_terrain(root, p: WalkParams, ground: Ground):
     return start_pose(p, ground)
 
 
+def _walk_depth_range(p: WalkParams) -> tuple[float, float]:
+    """The ground-finding controller's depth range: depth_range, with a schedule the narrowest of it (stepping in
+    place, before the first row) and its rows' (each planned as a walk of its own), not the walk's own vx, vy and
+    yaw_rate the schedule replaces (an ignored vx = 1 m/s left (0.09, 0.09) m: no room to find the ground)."""
+    lo, hi = depth_range(p)
+    for row in commands.setpoints(p):
+        c = row.command
+        q = dataclasses.replace(
+            p, vx=c.vx, vy=c.vy, yaw_rate=c.yaw_rate, gait=row.gait, step_height=row.step_height,
+            stand_height=row.stand_height, schedule=(),
+        )  # fmt: skip
+        row_lo, row_hi = depth_range(q)
+        lo, hi = max(lo, row_lo), min(hi, row_hi)
+    return lo, hi
+
+
 def acceleration_limit(p: WalkParams) -> float:
     """Commanded joint-acceleration limit [rad/s^2]: ACCELERATION_LIMIT, or more where the steady cycle needs it
     (the most any of a schedule's rows needs)."""
@@ -159,6 +175,6 @@ def make_controller(
         return WalkingController(model, data, p.ROBOT.layout, planner, gains, settings, q0, source)
     ground = GroundSettings(
         sensed=p.touchdown == "sensed", level=p.level_body == "on", stand_height=p.stand_height,
-        depth_range=depth_range(p), reflex_lift=p.step_height * REFLEX_LIFT if p.reflex == "on" else 0.0,
+        depth_range=_walk_depth_range(p), reflex_lift=p.step_height * REFLEX_LIFT if p.reflex == "on" else 0.0,
     )  # fmt: skip
     return GroundController(model, data, p.ROBOT.layout, planner, gains, settings, q0, ground, source)

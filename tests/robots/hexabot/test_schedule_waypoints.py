@@ -314,6 +314,24 @@ def test_vx_vy_and_yaw_rate_that_a_schedule_or_waypoints_replace_are_not_checked
         walk_params(gait="wave", schedule=rows, period=0.2, duration=6)
 
 
+def test_the_twist_a_schedule_or_waypoints_replace_does_not_enter_the_terrain_checks():
+    """The kerb, stairs and level-slope checks planned the walk's own vx, vy, yaw_rate, never commanded with a schedule
+    or waypoints: with vx = 1 m/s a kerb's climbable height was 0 mm ('raise stand_height', which did not help) and a
+    level 15 deg slope was refused, where the same schedule with vx = 0.1 m/s walked. The rows and the follower's
+    commands are still checked on the terrain."""
+    rows = [[0, 0.05, 0, 0]]
+    for terrain in ({"kerb_height": 0.02}, {"stairs_rise": 0.02}, {"slope_deg": 15, "level_body": "on"}):
+        assert walk_params(schedule=rows, vx=1.0, duration=6, **terrain).vx == 1.0
+        assert walk_params(waypoints=[[0.6, 0]], vx=1.0, duration=12, **terrain).vx == 1.0
+    with pytest.raises(ValueError, match=r"^schedule row 1 \(t = 0 s\): a 30 mm kerb is above the largest climbable"):
+        walk_params(schedule=rows, kerb_height=0.03, duration=6)
+    # Nor the ground-finding controller's depth range (vx = 1 m/s left it (0.09, 0.09) m: a different walk).
+    from hexabot_sim.walking.scene import _walk_depth_range
+
+    ranges = {_walk_depth_range(walk_params(schedule=rows, vx=vx, touchdown="sensed", duration=6)) for vx in (0.1, 1)}
+    assert len(ranges) == 1 and min(ranges)[0] < 0.05 < 0.15 < min(ranges)[1]
+
+
 def test_a_duty_with_a_schedule_in_another_gait_is_refused_naming_both_gaits_not_a_change_the_schedule_lacks():
     # Every row walks the wave, the walk's gait is the tripod: the duty would be dropped (the walk starts in the
     # first row's gait at its own duty). The refusal said "a schedule that changes gait" of a schedule keeping one.
