@@ -30,7 +30,7 @@ from hexabot_sim.walking.constants import (
     TERRAIN_NOSLIP_ITERATIONS,
 )
 from hexabot_sim.walking.ground import _plan_cycle, depth_range, neutral, start_pose, terrain
-from hexabot_sim.walking.parameters import WalkParams
+from hexabot_sim.walking.parameters import WalkParams, unchecked
 
 
 def _perturbations(p: WalkParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -120,12 +120,13 @@ def _walk_depth_range(p: WalkParams) -> tuple[float, float]:
     place, before the first row) and its rows' (each planned as a walk of its own), not the walk's own vx, vy and
     yaw_rate the schedule replaces (an ignored vx = 1 m/s left (0.09, 0.09) m: no room to find the ground)."""
     lo, hi = depth_range(p)
+    walks = {}  # each distinct row once
     for row in commands.setpoints(p):
         c = row.command
-        q = dataclasses.replace(
-            p, vx=c.vx, vy=c.vy, yaw_rate=c.yaw_rate, gait=row.gait, step_height=row.step_height,
-            stand_height=row.stand_height, schedule=(),
-        )  # fmt: skip
+        key = (c.vx, c.vy, c.yaw_rate, row.gait, row.step_height, row.stand_height)
+        walks[key] = unchecked(p, vx=c.vx, vy=c.vy, yaw_rate=c.yaw_rate, gait=row.gait, step_height=row.step_height,
+                               stand_height=row.stand_height, schedule=())  # fmt: skip
+    for q in walks.values():
         row_lo, row_hi = depth_range(q)
         lo, hi = max(lo, row_lo), min(hi, row_hi)
     return lo, hi
