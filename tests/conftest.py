@@ -17,8 +17,22 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     Tests of a cold cache set their own NUMBA_CACHE_DIR."""
     if hasattr(session.config, "workerinput"):  # an xdist worker: the controller has warmed the cache
         return
-    from hexabot_sim.control import kernels
+    import subprocess
+    import sys
 
+    from hexabot_sim.control import compliance_kernels, force_kernels, kernels
+
+    # On both cores: the gait plan's kernels (independent of the others, ~12 s cold) in a second process while this
+    # one compiles the force and admittance kernels (~13 s); then the rest here, the two loaded from the cache
+    # (38 s cold in one process: CI's first run).
+    plan = subprocess.Popen(
+        [sys.executable, "-c", "from hexabot_sim.control import plan_kernels; plan_kernels.compile_all()"]
+    )
+    try:
+        force_kernels.compile_all()
+        compliance_kernels.compile_all()
+    finally:
+        plan.wait()
     kernels.warm_up()
 
 
