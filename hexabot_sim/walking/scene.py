@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import mujoco
@@ -12,7 +11,7 @@ from hexabot_sim import models
 from hexabot_sim.control.commands import CommandSource
 from hexabot_sim.control.compliance import AdmittanceSettings
 from hexabot_sim.control.force_control import for_overlap
-from hexabot_sim.control.gait import GaitPlanner
+from hexabot_sim.control.gait import Command, GaitPlanner
 from hexabot_sim.control.resolved_rate import ResolvedRateGains
 from hexabot_sim.control.walker import GroundController, GroundSettings, WalkingController, WalkSettings
 from hexabot_sim.kinematics import legged
@@ -115,18 +114,26 @@ def _add_terrain(root, p: WalkParams, ground: Ground):
     return start_pose(p, ground)
 
 
+def _row_walks(p: WalkParams) -> list[tuple[WalkParams, Command]]:
+    """Each distinct row of a schedule as a walk of its own with its twist (not checked again: commands.
+    schedule_problem checked each row so); none without a schedule."""
+    walks: dict[tuple, tuple[WalkParams, Command]] = {}
+    for row in commands.setpoints(p):
+        c = row.command
+        key = (c.vx, c.vy, c.yaw_rate, row.gait, row.step_height, row.stand_height)
+        if key not in walks:
+            q = unchecked(p, vx=c.vx, vy=c.vy, yaw_rate=c.yaw_rate, gait=row.gait, step_height=row.step_height,
+                          stand_height=row.stand_height, schedule=())  # fmt: skip
+            walks[key] = (q, c)
+    return list(walks.values())
+
+
 def _walk_depth_range(p: WalkParams) -> tuple[float, float]:
     """The ground-finding controller's depth range: depth_range, with a schedule the narrowest of it (stepping in
     place, before the first row) and its rows' (each planned as a walk of its own), not the walk's own vx, vy and
     yaw_rate the schedule replaces (an ignored vx = 1 m/s left (0.09, 0.09) m: no room to find the ground)."""
     lo, hi = depth_range(p)
-    walks = {}  # each distinct row once
-    for row in commands.setpoints(p):
-        c = row.command
-        key = (c.vx, c.vy, c.yaw_rate, row.gait, row.step_height, row.stand_height)
-        walks[key] = unchecked(p, vx=c.vx, vy=c.vy, yaw_rate=c.yaw_rate, gait=row.gait, step_height=row.step_height,
-                               stand_height=row.stand_height, schedule=())  # fmt: skip
-    for q in walks.values():
+    for q, _ in _row_walks(p):
         row_lo, row_hi = depth_range(q)
         lo, hi = max(lo, row_lo), min(hi, row_hi)
     return lo, hi
@@ -135,16 +142,8 @@ def _walk_depth_range(p: WalkParams) -> tuple[float, float]:
 def acceleration_limit(p: WalkParams) -> float:
     """Commanded joint-acceleration limit [rad/s^2]: ACCELERATION_LIMIT, or more where the steady cycle needs it
     (the most any of a schedule's rows needs)."""
-    cases = [(p, p.command())]
-    for row in commands.setpoints(p):
-        c = row.command
-        q = dataclasses.replace(
-            p, vx=c.vx, vy=c.vy, yaw_rate=c.yaw_rate, gait=row.gait, step_height=row.step_height,
-            stand_height=row.stand_height, schedule=(),
-        )  # fmt: skip
-        cases.append((q, c))
     peak = 0.0
-    for q_params, cmd in cases:
+    for q_params, cmd in [(p, p.command()), *_row_walks(p)]:
         hip, dt = _plan_cycle(q_params, cmd)
         q, _ = legged.ik_hip_batch(p.ROBOT.layout, hip)  # (n, n_legs, 3)
         peak = max(peak, float(np.abs(np.diff(q, 2, axis=0)).max()) / dt**2)
