@@ -235,6 +235,11 @@ def schedule_problem(p: Any, check: Callable[[Any], str]) -> str:
         where = f"schedule row {i + 1} (t = {row.t:g} s)"
         if p.schedule_scale != 1.0:  # the speeds below are the file's times the scale
             where = f"schedule row {i + 1} (t = {row.t:g} s, its twist times schedule_scale {p.schedule_scale:g})"
+        if row.t >= p.duration:  # never walked: a slip in the file or in 'duration', not something to drop unsaid
+            return (
+                f"{where}: starts at or after the walk's end ({p.duration:g} s); raise 'duration' above "
+                f"{row.t:g} s or leave the row out"
+            )
         if row.gait not in gaits:
             return f"{where}: unknown gait {row.gait!r}; known: {', '.join(gaits)}"
         if row.gait != p.gait and p.duty:
@@ -351,16 +356,31 @@ def source(p: Any, settle: float) -> Schedule | PathFollower | None:
     return None
 
 
-def extent(p: Any, settle: float, margin: float) -> tuple[float, float, float, float]:
-    """(x min, x max, y min, y max) [m] of the ground a schedule or course may cross, with a margin."""
+def path(p: Any, settle: float) -> np.ndarray:
+    """The planned course (k, 2) [m] from the start: the waypoints, or the schedule's twist integrated every 10 ms."""
     if p.waypoints:
-        xy = np.array([[0.0, 0.0], *[(x, y) for x, y, _ in p.waypoints]])
-    else:  # integrate the schedule's twist (the body's planned path)
-        schedule = Schedule(setpoints(p), settle, p.period, p.step_height, p.stand_height)
-        t = np.arange(0.0, p.duration + 0.01, 0.01)
-        v = schedule.value(t)
-        yaw = np.concatenate([[0.0], np.cumsum(v[:-1, 2] * 0.01)])
-        c, s = np.cos(yaw), np.sin(yaw)
-        xy = np.cumsum(np.stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]], -1) * 0.01, axis=0)
-    lo, hi = xy.min(axis=0) - margin, xy.max(axis=0) + margin
+        return np.array([[0.0, 0.0], *[(x, y) for x, y, _ in p.waypoints]])
+    schedule = Schedule(setpoints(p), settle, p.period, p.step_height, p.stand_height)
+    t = np.arange(0.0, p.duration + 0.01, 0.01)
+    v = schedule.value(t)
+    yaw = np.concatenate([[0.0], np.cumsum(v[:-1, 2] * 0.01)])
+    c, s = np.cos(yaw), np.sin(yaw)
+    return np.cumsum(np.stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]], -1) * 0.01, axis=0)
+
+
+HEADING_DISTANCE: float = 0.05  # [m] a course's direction is the one to its first point this far from the start
+
+
+def direction(course: np.ndarray) -> np.ndarray:
+    """Unit vector (2,) from the start to a course's (k, 2) first point HEADING_DISTANCE away (its farthest point if
+    none is; +x if it never leaves the start)."""
+    distance = np.hypot(course[:, 0], course[:, 1])
+    far = np.flatnonzero(distance >= HEADING_DISTANCE)
+    k = int(far[0]) if far.size else int(np.argmax(distance))
+    return course[k] / distance[k] if distance[k] > 1e-9 else np.array([1.0, 0.0])
+
+
+def extent(course: np.ndarray, margin: float) -> tuple[float, float, float, float]:
+    """(x min, x max, y min, y max) [m] of the ground a course (k, 2) may cross, with a margin."""
+    lo, hi = course.min(axis=0) - margin, course.max(axis=0) + margin
     return float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])

@@ -48,7 +48,10 @@ def _plan_cycle(p: WalkParams, cmd: Command, samples: int = 240) -> tuple[np.nda
 
 
 def walking_direction(p: WalkParams) -> np.ndarray:
-    """Horizontal unit vector (2,) of the commanded walk in the world at the start (+x when standing or turning)."""
+    """Horizontal unit vector (2,) of the commanded walk in the world at the start (+x when standing or turning);
+    with a schedule or waypoints, the direction their course sets out in (commands.direction)."""
+    if p.schedule or p.waypoints:
+        return commands.direction(commands.path(p, SETTLE_TIME))
     speed = math.hypot(p.vx, p.vy)
     return np.array([p.vx, p.vy]) / speed if speed > 0 else np.array([1.0, 0.0])
 
@@ -58,8 +61,11 @@ def terrain(p: WalkParams) -> Ground:
     along = walking_direction(p)
     uphill = {"uphill": along, "downhill": -along, "across": np.array([-along[1], along[0]])}[p.slope_heading]
     speed = math.hypot(p.vx, p.vy)
+    distance = speed * p.duration  # the farthest the walk goes from its start
     if p.schedule or p.waypoints:  # a box holding the course (the schedule's planned path)
-        extent = commands.extent(p, SETTLE_TIME, HFIELD_MARGIN)
+        course = commands.path(p, SETTLE_TIME)
+        extent = commands.extent(course, HFIELD_MARGIN)
+        distance = float(np.hypot(course[:, 0], course[:, 1]).max())
     elif p.yaw_rate:  # an arc (or turning on the spot): a box about the start holding the circle
         half = min(speed * p.duration, 2 * speed / abs(p.yaw_rate)) + HFIELD_MARGIN
         extent = (-half, half, -half, half)
@@ -75,7 +81,7 @@ def terrain(p: WalkParams) -> Ground:
     along_xy = (float(along[0]), float(along[1]))
     # The kerb's pavement runs on beyond the walk: 20 m, or as far as this walk could go (a 0.2 m/s walk of 200 s
     # stepped down off its end at 20.5 m, where the terrain's heights still had the kerb).
-    reach = speed * p.duration / math.cos(math.radians(p.slope_deg)) + HFIELD_MARGIN
+    reach = distance / math.cos(math.radians(p.slope_deg)) + HFIELD_MARGIN
     kerb_length, kerb_width = max(KERB_LENGTH, reach - p.kerb_distance), max(KERB_WIDTH, 2 * reach)
     obstacles: tuple[Kerb | Stairs, ...] = ()
     if p.kerb_height:

@@ -30,6 +30,10 @@ BAD_SCHEDULES = {
     "t,vx,vy,yaw_rate,gait\n0,0.1,0,0,trot\n": "schedule row 1 (t = 0 s): unknown gait 'trot'; known: tripod",
     "t,vx,vy,yaw_rate\n0,0.1,0,0\n3,0.6,0,0\n": "schedule row 2 (t = 3 s): the legs cannot deliver this command",
     "t,vx,vy,yaw_rate,stand_height\n0,0.1,0,0,0.19\n": "schedule row 1 (t = 0 s): ",
+    # A row the walk (20 s) never reaches is a slip in the file or in the duration: not dropped without a word.
+    "t,vx,vy,yaw_rate\n0,0.1,0,0\n20,0,0,0.3\n": (
+        "schedule row 2 (t = 20 s): starts at or after the walk's end (20 s); raise 'duration' above 20 s or leave"
+    ),
     "t,speed\n0,1\n": "unknown column 'speed'; it needs columns t, vx, vy, yaw_rate",
     "t,vx,vy,yaw_rate\n": "has a header but no rows",
     "t,vx,vy,yaw_rate,gait\n0,0.1,0,0,tripod\n5,0.15,0,0,ripple\n11,0.25,0,0,tripod\n": (
@@ -330,6 +334,30 @@ def test_the_twist_a_schedule_or_waypoints_replace_does_not_enter_the_terrain_ch
 
     ranges = {_walk_depth_range(walk_params(schedule=rows, vx=vx, touchdown="sensed", duration=6)) for vx in (0.1, 1)}
     assert len(ranges) == 1 and min(ranges)[0] < 0.05 < 0.15 < min(ranges)[1]
+
+
+def test_the_slope_kerb_and_stairs_face_the_way_a_schedule_or_course_sets_out_not_the_replaced_vx_vy():
+    """The terrain's direction came from the walk's own vx, vy (0.1, 0 by default), which a schedule or waypoints
+    replace: a schedule crabbing left (+y) met a kerb laid across +x, beside it. Now the kerb, the stairs and the
+    slope face the course's first 5 cm, and the kerb's pavement runs on as far as the course goes."""
+    from hexabot_sim.walking.ground import terrain, walking_direction
+
+    crab = walk_params(schedule=[[0, 0, 0.08, 0]], kerb_height=0.02, duration=8)
+    assert walking_direction(crab) == pytest.approx([0.0, 1.0])
+    assert terrain(crab).obstacles[0].along == pytest.approx((0.0, 1.0))
+    course = walk_params(waypoints=[[-0.3, -0.3], [-0.6, 0]], slope_deg=5, duration=40)
+    assert walking_direction(course) == pytest.approx([-math.sqrt(0.5), -math.sqrt(0.5)])
+    assert terrain(course).slope.uphill == pytest.approx((-math.sqrt(0.5), -math.sqrt(0.5)))
+    # A quarter turn on the spot (with the schedule's ramps), then forward: the course sets out along its new heading.
+    turn = walk_params(schedule=[[0, 0, 0, 0.3], [5.736, 0.1, 0, 0]], stairs_rise=0.02, duration=20)
+    along = walking_direction(turn)
+    assert abs(math.atan2(along[1], along[0])) > 1.0 and terrain(turn).obstacles[0].along == pytest.approx(along)
+    # Standing or turning on the spot all along: +x, as a walk without a schedule.
+    assert walking_direction(walk_params(schedule=[[0, 0, 0, 0.2]], duration=6)) == pytest.approx([1.0, 0.0])
+    # The pavement runs on past a 0.3 m/s schedule's 29 m (the walk's own 0.01 m/s laid the least, 20 m).
+    fast = walk_params(schedule=[[0, 0.3, 0, 0]], vx=0.01, kerb_height=0.02, duration=100)
+    kerb = terrain(fast).obstacles[0]
+    assert kerb.distance + kerb.length > 0.3 * 98
 
 
 def test_a_duty_with_a_schedule_in_another_gait_is_refused_naming_both_gaits_not_a_change_the_schedule_lacks():
