@@ -52,7 +52,7 @@ def test_keys_sent_to_the_window_steer_the_live_robot(xdisplay, tmp_path):  # no
     env = dict(os.environ, DISPLAY=xdisplay)
     env.pop("WAYLAND_DISPLAY", None)
     env.pop("MUJOCO_GL", None)
-    command = [sys.executable, "-m", "hexabot_sim", "view", "hexabot-walk", "--quit-after", "16"]
+    command = [sys.executable, "-m", "hexabot_sim", "view", "hexabot-walk", "--quit-after", "10"]
     proc = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         started = time.monotonic()
