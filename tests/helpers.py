@@ -123,3 +123,18 @@ def random_q(table: dict, rng: np.random.Generator) -> np.ndarray:
 def staging_left(folder: Any) -> list[Any]:
     """The staging folders a run left under `folder` (a run publishes atomically: none should be left)."""
     return [p for p in folder.rglob(".hexabot-sim-*")]
+
+
+def metric(result: Any, name: str) -> Any:
+    """A run's metric value by name."""
+    return result.metrics[name].value
+
+
+def compiled_scene(p: Any) -> tuple[mujoco.MjModel, mujoco.MjData]:
+    """A walk's scene (hexabot or quadbot parameters) compiled, its start state forwarded."""
+    from hexabot_sim.walking import scene
+
+    model = mujoco.MjModel.from_xml_string(scene.build_xml(p))
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    return model, data
