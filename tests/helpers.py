@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
 
 import mujoco
@@ -138,3 +139,11 @@ def compiled_scene(p: Any) -> tuple[mujoco.MjModel, mujoco.MjData]:
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     return model, data
+
+
+def one_line_error(err: str) -> str:
+    """The single error line of stderr, progress lines ('pendulum: 50% (5/10)') aside."""
+    lines = [line for line in err.strip().splitlines() if not re.match(r"^[\w-]+: \d+% \(\d+/\d+\)$", line)]
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    return lines[0]
