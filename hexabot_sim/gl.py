@@ -117,3 +117,37 @@ def video_backend(announce: Callable[[str], None] | None = None) -> tuple[str | 
         if problem is not None:
             return None, problem
     return backend, reason
+
+
+INSTALL_HINT = 'pip install "hexabot-sim[viewer]"'  # glfw, for a window on a display
+
+
+def display_problem() -> str | None:
+    """None if a viewer window can be opened here, else one line saying why not and what to do."""
+    try:
+        import glfw
+    except ImportError:
+        return f"the viewer needs the 'viewer' extra (glfw): {INSTALL_HINT}"
+    if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
+        return (
+            "no display is available (DISPLAY is not set): run it in a desktop session, over 'ssh -X', "
+            "or under a virtual one: xvfb-run -a hexabot-sim view ..."
+        )
+    where = os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+    errors: list[str] = []
+    previous = glfw.ERROR_REPORTING
+    glfw.ERROR_REPORTING = "ignore"  # our callback below collects the message
+    glfw.set_error_callback(lambda code, text: errors.append(text.decode() if isinstance(text, bytes) else text))
+    try:
+        if not glfw.init():
+            return f"cannot open the display {where!r}: {errors[-1] if errors else 'GLFW failed to initialise'}"
+        glfw.window_hint(glfw.VISIBLE, glfw.FALSE)
+        window = glfw.create_window(64, 64, "hexabot-sim probe", None, None)
+        if not window:
+            return f"no OpenGL window on the display {where!r}: {errors[-1] if errors else 'unknown GLFW error'}"
+        glfw.destroy_window(window)
+        glfw.default_window_hints()
+        return None
+    finally:
+        glfw.set_error_callback(None)  # type: ignore[arg-type]
+        glfw.ERROR_REPORTING = previous

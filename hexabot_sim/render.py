@@ -448,3 +448,26 @@ class Frames:
 
     def close(self) -> None:
         self.renderer.close()
+
+
+def view_camera(
+    cam: mujoco.MjvCamera, model: mujoco.MjModel, data: mujoco.MjData, camera: str | None, track_body: str | None
+) -> None:
+    """Sets a window's free (or tracking) camera `cam` to look from the scene camera the videos use (a name in the
+    model; else left alone); the mouse can move it. `track_body`: the view follows that body."""
+    if camera is None or camera not in [model.camera(i).name for i in range(model.ncam)]:
+        return
+    cam_id = model.camera(camera).id
+    pos, rot = data.cam_xpos[cam_id], data.cam_xmat[cam_id].reshape(3, 3)
+    forward = -rot[:, 2]  # a camera looks along its -z axis
+    centre = data.xpos[model.body(track_body).id] if track_body else model.stat.center
+    distance = max(0.05, float((centre - pos) @ forward))
+    cam.lookat[:] = pos + distance * forward
+    cam.distance = distance
+    cam.azimuth = math.degrees(math.atan2(forward[1], forward[0]))
+    cam.elevation = math.degrees(math.asin(float(np.clip(forward[2], -1.0, 1.0))))
+    if track_body:
+        cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
+        cam.trackbodyid = model.body(track_body).id
+    else:
+        cam.type = mujoco.mjtCamera.mjCAMERA_FREE

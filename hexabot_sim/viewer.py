@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
 import threading
 import time
 from collections import deque
@@ -15,11 +14,11 @@ from typing import Any
 import numpy as np
 
 from hexabot_sim.errors import SimulationError, UsageError
+from hexabot_sim.gl import INSTALL_HINT, display_problem
 from hexabot_sim.recording import Recording, load_recording
 
-__all__ = ["Recording", "live", "live_maker", "load_recording", "replay"]
+__all__ = ["INSTALL_HINT", "Recording", "display_problem", "live", "live_maker", "load_recording", "replay"]
 
-INSTALL_HINT = 'pip install "hexabot-sim[viewer]"'
 FRAME_PERIOD: float = 1 / 60  # [s] wall time between two pushes of the state to the viewer
 SCRUB_FRAME: float = 1 / 30  # [s] simulated time Left/Right step by (one video frame)
 SCRUB_JUMP: float = 1.0  # [s] simulated time Up/Down jump by
@@ -50,37 +49,6 @@ HELP_LIVE = (
     ("Right", "one frame (paused)"),
     ("Home", "restart"),
 )
-
-
-def display_problem() -> str | None:
-    """None if a viewer window can be opened here, else one line saying why not and what to do."""
-    try:
-        import glfw
-    except ImportError:
-        return f"the viewer needs the 'viewer' extra (glfw): {INSTALL_HINT}"
-    if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
-        return (
-            "no display is available (DISPLAY is not set): run it in a desktop session, over 'ssh -X', "
-            "or under a virtual one: xvfb-run -a hexabot-sim view ..."
-        )
-    where = os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
-    errors: list[str] = []
-    previous = glfw.ERROR_REPORTING
-    glfw.ERROR_REPORTING = "ignore"  # our callback below collects the message
-    glfw.set_error_callback(lambda code, text: errors.append(text.decode() if isinstance(text, bytes) else text))
-    try:
-        if not glfw.init():
-            return f"cannot open the display {where!r}: {errors[-1] if errors else 'GLFW failed to initialise'}"
-        glfw.window_hint(glfw.VISIBLE, glfw.FALSE)
-        window = glfw.create_window(64, 64, "hexabot-sim probe", None, None)
-        if not window:
-            return f"no OpenGL window on the display {where!r}: {errors[-1] if errors else 'unknown GLFW error'}"
-        glfw.destroy_window(window)
-        glfw.default_window_hints()
-        return None
-    finally:
-        glfw.set_error_callback(None)  # type: ignore[arg-type]
-        glfw.ERROR_REPORTING = previous
 
 
 # ---------------------------------------------------------------------------------------------
@@ -204,28 +172,6 @@ class Scene:
     lines: list[str] = dataclasses.field(default_factory=list)
 
 
-def _set_camera(cam: Any, model: Any, data: Any, camera: str | None, track_body: str | None) -> None:
-    """A free (or tracking) camera looking from the scene camera the videos use; the mouse can move it."""
-    import mujoco
-
-    if camera is None or camera not in [model.camera(i).name for i in range(model.ncam)]:
-        return
-    cam_id = model.camera(camera).id
-    pos, rot = data.cam_xpos[cam_id], data.cam_xmat[cam_id].reshape(3, 3)
-    forward = -rot[:, 2]  # a camera looks along its -z axis
-    centre = data.xpos[model.body(track_body).id] if track_body else model.stat.center
-    distance = max(0.05, float((centre - pos) @ forward))
-    cam.lookat[:] = pos + distance * forward
-    cam.distance = distance
-    cam.azimuth = math.degrees(math.atan2(forward[1], forward[0]))
-    cam.elevation = math.degrees(math.asin(float(np.clip(forward[2], -1.0, 1.0))))
-    if track_body:
-        cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
-        cam.trackbodyid = model.body(track_body).id
-    else:
-        cam.type = mujoco.mjtCamera.mjCAMERA_FREE
-
-
 def _with_shift(code: int) -> int:
     """The key code, plus SHIFT if a shift key is held (read from the window's thread, where the callback runs)."""
     import glfw
@@ -300,6 +246,8 @@ def replay(
     """
     import mujoco
 
+    from hexabot_sim import render
+
     folder = rec.folder
     try:
         model = mujoco.MjModel.from_xml_string(rec.xml)
@@ -339,7 +287,7 @@ def replay(
     scene = Scene(markers=hook.markers if hook is not None else ())
     with _window(model, data, keys, str(folder)) as handle:
         if hook is not None:
-            _set_camera(handle.cam, model, data, hook.camera, hook.track_body)
+            render.view_camera(handle.cam, model, data, hook.camera, hook.track_body)
         announce(f"replaying {folder} ({rec.scenario or 'unknown scenario'}, {t[-1] - t[0]:.6g} s, {n} states)")
         deadline = _deadline(quit_after)  # from the window's opening (seconds on a loaded machine with software GL)
         last = time.monotonic()
@@ -388,6 +336,8 @@ def live(
     """
     import mujoco
 
+    from hexabot_sim import render
+
     sim = make()
     model = sim.model
     data = mujoco.MjData(model)  # the window's copy: a restart builds a new simulation, the window stays
@@ -403,7 +353,7 @@ def live(
     behind = False
     show()
     with _window(model, data, keys, name) as handle:
-        _set_camera(handle.cam, model, data, sim.camera, sim.track_body)
+        render.view_camera(handle.cam, model, data, sim.camera, sim.track_body)
         announce(f"viewing {name} live ({sim.duration:.6g} s simulated, timestep {sim.timestep:g} s)")
         deadline = _deadline(quit_after)  # from the window's opening
         last = time.monotonic()

@@ -18,6 +18,7 @@ from hexabot_sim.walking.constants import FALL_TILT_DEG
 from hexabot_sim.walking.parameters import WalkParams
 
 if TYPE_CHECKING:
+    from hexabot_sim.envs.window import Window
     from hexabot_sim.render import Frames
 
 TOUCH_THRESHOLD: float = 0.3  # [N] a foot's touch reading above this counts as a foot down (as GroundSettings')
@@ -106,7 +107,7 @@ class LeggedEnv(gymnasium.Env):
     rest is here: the observation, the commanded twist drawn per episode, the reward, a fall, the frames.
     """
 
-    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 50}  # noqa: RUF012 (fps: per instance)
+    metadata: dict[str, Any] = {"render_modes": ["human", "rgb_array"], "render_fps": 50}  # noqa: RUF012 (fps: per instance)
 
     def __init__(
         self,
@@ -162,6 +163,11 @@ class LeggedEnv(gymnasium.Env):
             raise ValueError(f"unknown camera {camera!r}; known: {', '.join(cameras)}")
         self.render_mode, self.width, self.height, self.camera = render_mode, width, height, camera
         self._frames: Frames | None = None
+        self._window: Window | None = None
+        if render_mode == "human":  # a window on the display, drawn at each step: refused now if none can open
+            from hexabot_sim.envs.window import Window
+
+            self._window = Window(self.model, camera, "torso", self.metadata["render_fps"])
         self._addresses(p)
         n = self.n_joints
         # Observation: gravity in the body (3), gyro (3), accelerometer (3), joint angles (n), joint speeds (n),
@@ -302,7 +308,10 @@ class LeggedEnv(gymnasium.Env):
     # ------------------------------------------------------------------------------------------- frames
 
     def render(self) -> np.ndarray | None:
-        """The frame (height, width, 3) of the current state from `camera` (render_mode "rgb_array"), else None."""
+        """The frame (height, width, 3) of the current state from `camera` (render_mode "rgb_array"), else None
+        (render_mode "human": the state drawn in the window, as step() and reset() draw it)."""
+        if self._window is not None:
+            self._window.show(self.data)
         if self.render_mode != "rgb_array":
             return None
         if self._frames is None:
@@ -312,6 +321,8 @@ class LeggedEnv(gymnasium.Env):
         return self._frames(self.data)
 
     def close(self) -> None:
+        if self._window is not None:
+            self._window.close()
         if self._frames is not None:
             self._frames.close()
             self._frames = None

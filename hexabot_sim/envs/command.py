@@ -217,6 +217,8 @@ class LeggedCommandEnv(LeggedEnv):
             controller(m, d)
             mujoco.mj_step(m, d)
         self._warnings = int(self._warning.number)
+        if self.render_mode == "human":
+            self.render()
         return self._observe(), {"command": self.command.copy()}
 
     def step(self, action) -> tuple[np.ndarray, float, bool, bool, dict]:
@@ -235,4 +237,6 @@ class LeggedCommandEnv(LeggedEnv):
         reward, terminated, info = self._reward(obs)
         info["twist"] = (vx, vy, w)
         info["step_height"] = h
+        if self.render_mode == "human":
+            self.render()
         return obs, reward, terminated, False, info

@@ -52,7 +52,8 @@ class LeggedJointsEnv(LeggedEnv):
         randomize_friction, randomize_mass, randomize_servo_gain: (low, high) ranges of factors drawn at every
             reset (scene.Randomization): each foot's friction, the plate's mass and inertia, each servo's kp and kv.
         reset_noise_scale: Uniform noise on the start joint angles [rad].
-        render_mode: None or "rgb_array" (frames of `camera`, width x height, render.py's preview preset).
+        render_mode: None, "rgb_array" (frames of `camera`, width x height, render.py's preview preset) or "human" (a
+            window on the display drawn at each step, paced at the control rate; needs glfw: the viewer extra).
     """
 
     def __init__(
@@ -104,6 +105,8 @@ class LeggedJointsEnv(LeggedEnv):
         d.time = 0.0
         self._warnings = int(self._warning.number)
         self._started = True
+        if self.render_mode == "human":
+            self.render()
         return self._observe(), {"command": self.command.copy()}
 
     def step(self, action) -> tuple[np.ndarray, float, bool, bool, dict]:
@@ -120,4 +123,6 @@ class LeggedJointsEnv(LeggedEnv):
         mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
         obs = self._observe()
         reward, terminated, info = self._reward(obs)
+        if self.render_mode == "human":
+            self.render()
         return obs, reward, terminated, False, info

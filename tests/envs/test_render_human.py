@@ -1,0 +1,104 @@
+"""render_mode="human": the environments' state in a real window under Xvfb (envs/window.py), paced at the control
+rate, the physics untouched; without a display or glfw, one line at construction saying what to do."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+import gymnasium
+import pytest
+from test_viewer import BLUE, GREEN, OPEN_TIMEOUT, ORANGE, colour_pixels, read_xwd, xdisplay  # noqa: F401
+
+from hexabot_sim.envs import window as window_mod
+
+SCRIPT = textwrap.dedent(
+    """
+    import json, subprocess, sys, time
+    import gymnasium as gym
+    import numpy as np
+
+    name, steps, shot = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+    from gymnasium.utils.env_checker import check_env
+    check_env(gym.make(name, width=64, height=48).unwrapped)  # with its render check: every mode, the window too
+    out = {}
+    for mode in ("human", None):  # the same seed and actions with the window and without it
+        env = gym.make(name, render_mode=mode)
+        rng = np.random.default_rng(3)
+        obs, _ = env.reset(seed=7)
+        times, frames = [], []
+        for _ in range(steps):
+            start = time.monotonic()
+            obs, reward, terminated, truncated, _ = env.step(rng.uniform(-1, 1, env.action_space.shape))
+            times.append(time.monotonic() - start)
+            frames.append(env.render() is None)
+        if mode == "human":  # the window as it is after the last step
+            open(shot, "wb").write(subprocess.run(["xwd", "-root", "-silent"], capture_output=True, timeout=60).stdout)
+        env.close()
+        out[str(mode)] = {"obs": obs.tolist(), "dt": env.unwrapped.dt, "step_median": float(np.median(times)),
+                          "render_none": all(frames)}
+    print(json.dumps(out))
+    """
+)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["hexabot_sim/HexabotJoints-v0", "hexabot_sim/HexabotCommand-v0"])
+def test_a_human_window_shows_the_robot_at_the_control_rate_and_leaves_the_physics_alone(xdisplay, tmp_path, name):  # noqa: F811
+    env = dict(os.environ, DISPLAY=xdisplay)
+    env.pop("WAYLAND_DISPLAY", None)
+    steps = 25 if "Joints" in name else 8
+    proc = subprocess.run(
+        [sys.executable, "-c", SCRIPT, name, str(steps), str(tmp_path / "shot.xwd")], env=env, capture_output=True,
+        text=True, timeout=OPEN_TIMEOUT + 120,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    runs = json.loads(proc.stdout.strip().splitlines()[-1])
+    shown = runs["human"]
+    image = read_xwd((tmp_path / "shot.xwd").read_bytes())
+    for rgb in (BLUE, ORANGE, GREEN):  # the robot's links, coxae and tibiae are drawn
+        assert colour_pixels(image, rgb) >= 50, f"robot colour {rgb} missing from the window"
+    assert shown["render_none"]  # render() draws in the window and returns None, as Gymnasium's human mode does
+    assert shown["step_median"] >= 0.9 * shown["dt"]  # paced at the control rate (real time), not faster
+    # The window draws a copy: the same seed and actions end in the same observation without it, bit for bit.
+    assert runs["None"]["obs"] == shown["obs"]
+
+
+def test_without_a_display_or_glfw_human_mode_is_refused_at_construction_in_one_line(monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    with pytest.raises(RuntimeError, match=r"^render_mode='human' cannot open a window: no display is available") as e:
+        gymnasium.make("hexabot_sim/HexabotJoints-v0", render_mode="human")
+    assert "xvfb-run" in str(e.value) and "\n" not in str(e.value)
+    real = window_mod.importlib.util.find_spec
+    monkeypatch.setattr(window_mod.importlib.util, "find_spec", lambda n, *a: None if n == "glfw" else real(n, *a))
+    with pytest.raises(
+        gymnasium.error.DependencyNotInstalled, match=r"needs glfw: pip install \"hexabot-sim\[viewer\]"
+    ):
+        gymnasium.make("hexabot_sim/QuadbotJoints-v0", render_mode="human")
+
+
+class _Handle:
+    """A passive viewer's handle the user has closed."""
+
+    def __init__(self) -> None:
+        self.closes = 0
+
+    def is_running(self) -> bool:
+        return False
+
+    def close(self) -> None:
+        self.closes += 1
+
+
+def test_a_window_the_user_closed_ends_the_showing_not_the_environment():
+    w = window_mod.Window.__new__(window_mod.Window)  # past the display checks: no window is opened here
+    handle = _Handle()
+    w._handle, w._threads, w.closed, w._last, w.period = handle, [], False, 0.0, 0.02
+    w.show(None)  # the closed window is noticed: closed once, no error
+    w.show(None)
+    w.close()
+    assert w.closed and handle.closes == 1 and w._handle is None
