@@ -6,8 +6,9 @@ runs one and returns a `Result` (params, metrics, columns, to_pandas(), figures(
 Importing the package imports neither MuJoCo nor matplotlib's pyplot and never picks a matplotlib backend.
 """
 
+from __future__ import annotations
+
 import os as _os
-from typing import Any as _Any
 
 from hexabot_sim._version import __version__
 
@@ -19,6 +20,11 @@ _os.environ.setdefault("MUJOCO_GL", "egl")
 # and MuJoCo is not imported before the CLI has chosen its OpenGL backend.
 _API = ("run", "scenarios", "export", "Result", "ScenarioInfo", "Parameter", "Columns", "Metric")
 __all__ = ["__version__", *_API]
+
+
+TYPE_CHECKING = False  # typing is not imported at run time: a Ctrl-C at start-up finds the CLI's handler sooner
+if TYPE_CHECKING:
+    from typing import Any as _Any
 
 
 def __getattr__(name: str) -> _Any:

@@ -9,20 +9,24 @@ def console() -> None:
     SIGTERM and SIGHUP 143 and 129 (they killed the process without a word, as a signal death, not an exit code)."""
     import signal
 
-    from hexabot_sim.signals import RECEIVED_SIGNALS, quiet_interruptions
+    received: list[int] = []  # hexabot_sim.signals.RECEIVED_SIGNALS once imported (the handler comes first)
 
     def interrupted(signum: int, frame: object) -> None:
-        RECEIVED_SIGNALS.append(signum)  # remembered even if an import swallows the exception
+        received.append(signum)  # remembered even if an import swallows the exception
         raise KeyboardInterrupt
 
     try:  # from the first handler on: a stop request between two of these lines was a traceback
         for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
             if signal.getsignal(sig) is not signal.SIG_IGN:
                 signal.signal(sig, interrupted)
-        quiet_interruptions()
+        from hexabot_sim import signals
+
+        before, received = received, signals.RECEIVED_SIGNALS  # the handler appends there from now on
+        received.extend(before)
+        signals.quiet_interruptions()
         from hexabot_sim.cli import console as run
 
-        if RECEIVED_SIGNALS:
+        if received:
             raise KeyboardInterrupt
     except BaseException as error:  # KeyboardInterrupt, or an ImportError a C extension wrapped it in
         cause: BaseException | None = error
@@ -30,7 +34,7 @@ def console() -> None:
             cause = cause.__cause__ or cause.__context__
         if cause is None:
             raise
-        signum = RECEIVED_SIGNALS[-1] if RECEIVED_SIGNALS else signal.SIGINT
+        signum = received[-1] if received else signal.SIGINT
         what = "interrupted" if signum == signal.SIGINT else f"stopped by {signal.Signals(signum).name}"
         try:
             sys.stderr.write(f"hexabot-sim: {what}; nothing written\n")
