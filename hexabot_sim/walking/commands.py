@@ -24,7 +24,7 @@ from hexabot_sim.control.follower import PathFollower
 from hexabot_sim.control.gait import Command, GaitPlanner
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import legged
-from hexabot_sim.params import _show, allowed, read_bounded
+from hexabot_sim.params import _show, allowed, apart, read_bounded
 
 # Rows of a table. Each schedule row's check plans its cycle (~6 ms for a new twist: 200 distinct rows took 1.2 s),
 # so a schedule is kept to what a few seconds check; a waypoint costs nothing to check.
@@ -236,9 +236,12 @@ def schedule_problem(p: Any, check: Callable[[Any], str]) -> str:
         if p.schedule_scale != 1.0:  # the speeds below are the file's times the scale
             where = f"schedule row {i + 1} (t = {row.t:g} s, its twist times schedule_scale {p.schedule_scale:g})"
         if row.t >= p.duration:  # never walked: a slip in the file or in 'duration', not something to drop unsaid
+            # As many digits as tell the two apart: a row at 6.0000000001 s of a 6 s walk is not "t = 6 s ... (6 s)".
+            t, end = apart(row.t, p.duration, "nearest")
+            where = where.replace(f"t = {row.t:g} s", f"t = {t} s", 1)
             return (
-                f"{where}: starts at or after the walk's end ({p.duration:g} s); raise 'duration' above "
-                f"{row.t:g} s or leave the row out"
+                f"{where}: starts at or after the walk's end ({end} s); raise 'duration' above {t} s "
+                "or leave the row out"
             )
         if row.gait not in gaits:
             return f"{where}: unknown gait {row.gait!r}; known: {', '.join(gaits)}"
