@@ -10,7 +10,7 @@ import numpy as np
 
 from hexabot_sim.result import ScenarioResult
 from hexabot_sim.terrain import Ground
-from hexabot_sim.walking import course
+from hexabot_sim.walking import commands, course
 from hexabot_sim.walking.constants import SETTLE_TIME
 from hexabot_sim.walking.ground import walking_direction
 from hexabot_sim.walking.metrics import Contacts
@@ -245,6 +245,17 @@ def _foot_centres(result: ScenarioResult, every: int) -> tuple[np.ndarray, np.nd
     return rows, feet
 
 
+def _straight(p: Any, along: np.ndarray) -> bool:
+    """Whether the walk goes straight on along `along` (its terrain figure's axis is then the distance along it): a
+    schedule's or waypoints' course, not the walk's own vx, vy, yaw_rate they replace (an arc drawn against its
+    start's direction folded back on itself)."""
+    if not (p.schedule or p.waypoints):
+        return math.hypot(p.vx, p.vy) > 0 and p.yaw_rate == 0
+    plan = commands.path(p, SETTLE_TIME)
+    ahead, aside = plan @ along, plan @ np.array([-along[1], along[0]])
+    return bool(ahead[-1] > 0 and (np.diff(ahead) >= -1e-9).all() and np.abs(aside).max() <= 1e-3)
+
+
 def _terrain_figure(result: ScenarioResult, ground: Ground) -> Any:
     """Side view: the ground under the body and the body's height; per leg, the ground along that foot's own track,
     the sole's path over it and the touchdowns (contact points), so every point is drawn over the ground under it."""
@@ -255,8 +266,8 @@ def _terrain_figure(result: ScenarioResult, ground: Ground) -> Any:
     contacts: Contacts = result.extras["contacts"]
     t = c["t"]
     # Horizontal axis: distance along the commanded direction for a straight walk, else time.
-    straight = math.hypot(p.vx, p.vy) > 0 and p.yaw_rate == 0
     along = walking_direction(p)
+    straight = _straight(p, along)
 
     def axis(xy: np.ndarray, times: np.ndarray) -> np.ndarray:
         return xy @ along if straight else times
