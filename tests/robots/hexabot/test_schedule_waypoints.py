@@ -360,6 +360,43 @@ def test_the_slope_kerb_and_stairs_face_the_way_a_schedule_or_course_sets_out_no
     assert kerb.distance + kerb.length > 0.3 * 98
 
 
+def test_a_row_at_or_after_the_end_is_refused_with_the_digits_that_tell_its_time_from_the_duration():
+    """A row at 6.0000000001 s of a 6 s walk was refused as "(t = 6 s): starts at or after the walk's end (6 s);
+    raise 'duration' above 6 s", and a 9.9999999999 s walk's row at 10 s as ending at 10 s."""
+    with pytest.raises(UsageError, match=re.escape("(t = 6.0000000001 s): starts at or after the walk's end (6 s)")):
+        walk_params(schedule=[[0, 0.1, 0, 0], [6.0000000001, 0, 0, 0]], duration=6)
+    with pytest.raises(UsageError, match=re.escape("(t = 10 s): starts at or after the walk's end (9.9999999999 s)")):
+        walk_params(schedule=[[0, 0.1, 0, 0], [10, 0, 0, 0]], duration=9.9999999999)
+    with pytest.raises(UsageError, match=re.escape("(t = 8 s): starts at or after the walk's end (8 s); raise")):
+        walk_params(schedule=[[0, 0.1, 0, 0], [8, 0, 0, 0]], duration=8)
+
+
+def test_a_schedule_s_terrain_speed_error_and_stride_are_not_against_the_replaced_vx_vy():
+    """speed_made_good_error (terrain) and stride were the walk's own vx = 0.1 m/s, which a schedule replaces: a
+    schedule standing still by a kerb read -100 % (a crab at 0.08 m/s making 0.078 m/s, -22 %)."""
+    r = walk(schedule=[[0, 0, 0, 0]], kerb_height=0.02, duration=3)
+    assert "speed_made_good" in r.metrics
+    for key in ("speed_made_good_error", "stride"):
+        assert r.metrics[key].value is None and "null here" in r.metrics[key].doc, key
+
+
+def test_the_terrain_figure_draws_a_turning_schedule_against_time_and_a_straight_course_against_distance():
+    """The terrain figure's axis was the distance along the start's direction whenever the walk's own (replaced) vx,
+    vy went straight: an arcing schedule's body and feet folded back on themselves."""
+    from hexabot_sim.walking.figures import _straight
+    from hexabot_sim.walking.ground import walking_direction
+
+    def straight(**kw):
+        p = walk_params(**({"duration": 12} | kw))
+        return _straight(p, walking_direction(p))
+
+    assert not straight(schedule=[[0, 0.08, 0, 0.2]])
+    assert not straight(schedule=[[0, 0, 0, 0]]) and not straight(schedule=[[0, 0.1, 0, 0], [4, -0.1, 0, 0]])
+    assert straight(schedule=[[0, 0, 0.08, 0]]) and straight(schedule=[[0, -0.05, -0.05, 0]])
+    assert straight(waypoints=[[0, 0.6]], kerb_height=0.02) and not straight(waypoints=[[0.3, 0], [0.3, 0.3]])
+    assert straight(vx=0.1) and not straight(vx=0.1, yaw_rate=0.1)
+
+
 def test_a_duty_with_a_schedule_in_another_gait_is_refused_naming_both_gaits_not_a_change_the_schedule_lacks():
     # Every row walks the wave, the walk's gait is the tripod: the duty would be dropped (the walk starts in the
     # first row's gait at its own duty). The refusal said "a schedule that changes gait" of a schedule keeping one.
