@@ -237,11 +237,11 @@ def schedule_problem(p: Any, check: Callable[[Any], str]) -> str:
             where = f"schedule row {i + 1} (t = {row.t:g} s, its twist times schedule_scale {p.schedule_scale:g})"
         if row.t >= p.duration:  # never walked: a slip in the file or in 'duration', not something to drop unsaid
             # As many digits as tell the two apart: a row at 6.0000000001 s of a 6 s walk is not "t = 6 s ... (6 s)".
+            # (Its twist, and so schedule_scale, has nothing to do with it.)
             t, end = apart(row.t, p.duration, "nearest")
-            where = where.replace(f"t = {row.t:g} s", f"t = {t} s", 1)
             return (
-                f"{where}: starts at or after the walk's end ({end} s); raise 'duration' above {t} s "
-                "or leave the row out"
+                f"schedule row {i + 1} (t = {t} s): starts at or after the walk's end ({end} s); raise 'duration' "
+                f"above {t} s or leave the row out"
             )
         if row.gait not in gaits:
             return f"{where}: unknown gait {row.gait!r}; known: {', '.join(gaits)}"

@@ -369,6 +369,9 @@ def test_a_row_at_or_after_the_end_is_refused_with_the_digits_that_tell_its_time
         walk_params(schedule=[[0, 0.1, 0, 0], [10, 0, 0, 0]], duration=9.9999999999)
     with pytest.raises(UsageError, match=re.escape("(t = 8 s): starts at or after the walk's end (8 s); raise")):
         walk_params(schedule=[[0, 0.1, 0, 0], [8, 0, 0, 0]], duration=8)
+    # Nor does the row's twist (schedule_scale) enter a refusal about its time.
+    with pytest.raises(UsageError, match=re.escape("schedule row 2 (t = 8 s): starts at or after the walk's end")):
+        walk_params(schedule=[[0, 0.1, 0, 0], [8, 0, 0, 0]], duration=8, schedule_scale=0.5)
 
 
 def test_a_schedule_s_terrain_speed_error_and_stride_are_not_against_the_replaced_vx_vy():
