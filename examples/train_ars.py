@@ -9,6 +9,7 @@ alpha / (b sigma_R) sum (r+ - r-) delta_i, sigma_R the standard deviation of tho
 process pool (one environment per worker).
 
     python examples/train_ars.py [--iterations 30] [--workers 2] [--plot c.png] [--save p.npz] [--video a.mp4]
+                                 [--watch]
 
 Before and after training it reports the mean return of the policy over the same evaluation seeds (episodes of
 --horizon steps of 0.1 s, commands drawn per episode by the environment).
@@ -79,26 +80,44 @@ def evaluate(pool, weights, mu, sigma, seeds, horizon) -> np.ndarray:
     return np.array([r[0] for r in pool.map(rollout, [(weights, mu, sigma, s, horizon) for s in seeds])])
 
 
+def play(env, weights, mu, sigma, seed: int, horizon: int, frame=None) -> None:
+    """One episode of the policy in `env`; `frame(env)` after the reset and after every step."""
+    obs, _ = env.reset(seed=seed)
+    if frame:
+        frame(env)
+    for _ in range(horizon):
+        obs, _, terminated, _, _ = env.step(np.clip(weights[:, :-1] @ ((obs - mu) / sigma) + weights[:, -1], -1, 1))
+        if frame:
+            frame(env)
+        if terminated:
+            break
+
+
 def write_video(path: str, weights, mu, sigma, seed: int, horizon: int) -> None:
     """One episode of the policy, a frame per action (the environment's render_fps), encoded by imageio-ffmpeg."""
     import gymnasium
     import imageio.v2 as imageio
 
     env = gymnasium.make(ENV_ID, render_mode="rgb_array").unwrapped
-    obs, _ = env.reset(seed=seed)
     with imageio.get_writer(path, fps=env.metadata["render_fps"], macro_block_size=2) as writer:
-        writer.append_data(env.render())
-        for _ in range(horizon):
-            obs, _, terminated, _, _ = env.step(np.clip(weights[:, :-1] @ ((obs - mu) / sigma) + weights[:, -1], -1, 1))
-            writer.append_data(env.render())
-            if terminated:
-                break
+        play(env, weights, mu, sigma, seed, horizon, lambda e: writer.append_data(e.render()))
     env.close()
+
+
+def watch_window():
+    """The environment with a window on the display (render_mode="human"), or exit in one line if none can open:
+    asked before the training, not after it."""
+    import gymnasium
+
+    try:
+        return gymnasium.make(ENV_ID, render_mode="human").unwrapped
+    except (RuntimeError, gymnasium.error.DependencyNotInstalled) as e:
+        raise SystemExit(f"train_ars.py: --watch: {e}") from None
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--iterations", type=int, default=30)
+    parser.add_argument("--iterations", type=int, default=30, help="at least 1")
     parser.add_argument("--directions", type=int, default=16, help="N: directions per iteration")
     parser.add_argument("--top", type=int, default=8, help="b: best directions used in the update")
     parser.add_argument("--step-size", type=float, default=0.02, help="alpha")
@@ -110,7 +129,11 @@ def main() -> None:
     parser.add_argument("--plot", help="write the learning curve to this PNG")
     parser.add_argument("--save", help="write the policy (weights, mu, sigma) to this .npz")
     parser.add_argument("--video", help="write an MP4 of the learned policy's first evaluation episode")
+    parser.add_argument("--watch", action="store_true", help="then show that episode in a window (needs a display)")
     args = parser.parse_args()
+    if args.iterations < 1:
+        parser.error(f"--iterations must be at least 1; got {args.iterations}")
+    window = watch_window() if args.watch else None
 
     env = _worker_env()
     n_obs, n_act = env.observation_space.shape[0], env.action_space.shape[0]
@@ -165,6 +188,18 @@ def main() -> None:
         ax.grid(alpha=0.3)
         fig.savefig(args.plot, dpi=110)
         print(f"learning curve: {args.plot}")
+    if window is not None:
+        print("watching the first evaluation episode in a window", flush=True)
+        hold = round(1.0 / window.dt)  # the start held for a second: a window's first frame takes ~1 s on software GL
+
+        def held(env) -> None:
+            nonlocal hold
+            while hold > 0:
+                hold -= 1
+                env.render()
+
+        play(window, weights, mu, sigma, int(eval_seeds[0]), args.horizon, held)
+        window.close()
 
 
 if __name__ == "__main__":

@@ -122,8 +122,9 @@ def video_backend(announce: Callable[[str], None] | None = None) -> tuple[str | 
 INSTALL_HINT = 'pip install "hexabot-sim[viewer]"'  # glfw, for a window on a display
 
 
-def display_problem() -> str | None:
-    """None if a viewer window can be opened here, else one line saying why not and what to do."""
+def display_problem(command: str = "hexabot-sim view ...") -> str | None:
+    """None if a viewer window can be opened here, else one line saying why not and what to do (`command`: what to
+    run under a virtual display)."""
     try:
         import glfw
     except ImportError:
@@ -131,7 +132,7 @@ def display_problem() -> str | None:
     if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
         return (
             "no display is available (DISPLAY is not set): run it in a desktop session, over 'ssh -X', "
-            "or under a virtual one: xvfb-run -a hexabot-sim view ..."
+            f"or under a virtual one: xvfb-run -a {command}"
         )
     where = os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
     errors: list[str] = []

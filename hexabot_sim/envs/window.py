@@ -25,7 +25,7 @@ class Window:
     def __init__(self, model: mujoco.MjModel, camera: str, track_body: str, fps: float) -> None:
         if importlib.util.find_spec("glfw") is None:
             raise gymnasium.error.DependencyNotInstalled(f"render_mode='human' needs glfw: {gl.INSTALL_HINT}")
-        why = gl.display_problem()
+        why = gl.display_problem("python your_script.py")
         if why:
             raise RuntimeError(f"render_mode='human' cannot open a window: {why}")
         self.model, self.data = model, mujoco.MjData(model)
