@@ -7,9 +7,12 @@ with the mouse never changes the environment's physics. Closing the window ends 
 
 from __future__ import annotations
 
+import atexit
+import gc
 import importlib.util
 import threading
 import time
+import weakref
 
 import gymnasium
 import mujoco
@@ -17,6 +20,36 @@ import mujoco
 from hexabot_sim import gl, render
 
 JOIN_TIMEOUT: float = 10.0  # [s] waiting for the window's thread to end at close()
+
+# MuJoCo's passive viewer runs GLFW in a thread of its own per window: two at once in one process crash (GLFW is not
+# thread-safe), and one still drawing when the interpreter exits crashes at MuJoCo's atexit glfw.terminate(). So one
+# window at a time, closed (and its thread joined) by close(), when its environment is collected, and at exit.
+_LIVE: list[_Shown] = []
+
+
+class _Shown:
+    """A window's viewer handle and threads, apart from the Window so that a finalizer and atexit can close it."""
+
+    def __init__(self) -> None:
+        self.handle = None
+        self.threads: list[threading.Thread] = []
+
+    def close(self) -> None:
+        if self.handle is not None:
+            self.handle.close()
+            self.handle = None
+        for thread in self.threads:
+            if thread is not threading.current_thread():
+                thread.join(JOIN_TIMEOUT)
+        self.threads = []
+        if self in _LIVE:
+            _LIVE.remove(self)
+
+
+def _close_all() -> None:
+    """At exit, before MuJoCo's glfw.terminate(): every window still open closed and its thread joined."""
+    for shown in list(_LIVE):
+        shown.close()
 
 
 class Window:
@@ -28,10 +61,21 @@ class Window:
         why = gl.display_problem("python your_script.py")
         if why:
             raise RuntimeError(f"render_mode='human' cannot open a window: {why}")
+        for shown in list(_LIVE):  # a window the user closed at the screen is over
+            if shown.handle is not None and not shown.handle.is_running():
+                shown.close()
+        if _LIVE:  # an environment dropped without close() may be in a reference cycle: collected, its window closes
+            gc.collect()
+        if _LIVE:
+            raise RuntimeError(
+                "render_mode='human' shows one window at a time per process (MuJoCo's viewer is not thread-safe): "
+                "close() the environment whose window is open first"
+            )
         self.model, self.data = model, mujoco.MjData(model)
         self.camera, self.track_body, self.period = camera, track_body, 1.0 / fps
-        self._handle = None
-        self._threads: list[threading.Thread] = []
+        self._shown = _Shown()
+        _LIVE.append(self._shown)
+        weakref.finalize(self, self._shown.close)  # an environment collected without close(): its window closes
         self._last = -float("inf")  # [s] monotonic time of the last frame
         self.closed = False  # by close(), or by the user at the window
 
@@ -39,19 +83,19 @@ class Window:
         """Draws the state in `data` (opening the window the first time), at most one frame per period."""
         if self.closed:
             return
-        if self._handle is not None and not self._handle.is_running():  # the user closed it: the env goes on
+        if self._shown.handle is not None and not self._shown.handle.is_running():  # the user closed it: the env goes on
             self.close()
             return
         wait = self._last + self.period - time.monotonic()
         if wait > 0:
             time.sleep(wait)
-        if self._handle is None:
+        if self._shown.handle is None:
             self._copy(data)
             self._open()
         else:
-            with self._handle.lock():
+            with self._shown.handle.lock():
                 self._copy(data)
-        self._handle.sync()
+        self._shown.handle.sync()
         self._last = time.monotonic()
 
     def _copy(self, data: mujoco.MjData) -> None:
@@ -63,17 +107,15 @@ class Window:
         import mujoco.viewer
 
         before = set(threading.enumerate())
-        self._handle = mujoco.viewer.launch_passive(self.model, self.data, show_left_ui=False, show_right_ui=False)
-        self._threads = [t for t in threading.enumerate() if t not in before]
-        with self._handle.lock():
-            render.view_camera(self._handle.cam, self.model, self.data, self.camera, self.track_body)
+        handle = mujoco.viewer.launch_passive(self.model, self.data, show_left_ui=False, show_right_ui=False)
+        self._shown.handle = handle
+        self._shown.threads = [t for t in threading.enumerate() if t not in before]
+        atexit.unregister(_close_all)  # registered after MuJoCo's glfw.terminate(), so run before it (LIFO)
+        atexit.register(_close_all)
+        with handle.lock():
+            render.view_camera(handle.cam, self.model, self.data, self.camera, self.track_body)
 
     def close(self) -> None:
         """Closes the window and waits for its thread (idempotent)."""
         self.closed = True
-        if self._handle is not None:
-            self._handle.close()
-            self._handle = None
-        for thread in self._threads:
-            thread.join(JOIN_TIMEOUT)
-        self._threads = []
+        self._shown.close()

@@ -97,8 +97,45 @@ class _Handle:
 def test_a_window_the_user_closed_ends_the_showing_not_the_environment():
     w = window_mod.Window.__new__(window_mod.Window)  # past the display checks: no window is opened here
     handle = _Handle()
-    w._handle, w._threads, w.closed, w._last, w.period = handle, [], False, 0.0, 0.02
+    w._shown, w.closed, w._last, w.period = window_mod._Shown(), False, 0.0, 0.02
+    w._shown.handle = handle
     w.show(None)  # the closed window is noticed: closed once, no error
     w.show(None)
     w.close()
-    assert w.closed and handle.closes == 1 and w._handle is None
+    assert w.closed and handle.closes == 1 and w._shown.handle is None
+
+
+LEFT_OPEN = textwrap.dedent(
+    """
+    import gc, sys, threading, gymnasium as gym
+    make = lambda: gym.make("hexabot_sim/HexabotJoints-v0", render_mode="human")
+    env = make()
+    env.reset(seed=0)
+    for _ in range(3):
+        env.step(env.action_space.sample())
+    try:
+        make()  # a second window beside the first: GLFW in two viewer threads crashed the process
+    except RuntimeError as e:
+        print("refused:", e)
+    del env  # dropped without close(): its window closes and its thread ends
+    gc.collect()
+    print("threads:", threading.active_count())
+    env = make()  # so another can open
+    env.reset(seed=1)
+    env.step(env.action_space.sample())
+    print("left open", flush=True)  # at exit, MuJoCo's glfw.terminate() crashed a window still drawing
+    """
+)
+
+
+def test_windows_one_at_a_time_closed_when_dropped_and_at_exit_without_a_crash(xdisplay):  # noqa: F811
+    env = dict(os.environ, DISPLAY=xdisplay)
+    env.pop("WAYLAND_DISPLAY", None)
+    proc = subprocess.run(
+        [sys.executable, "-c", LEFT_OPEN], env=env, capture_output=True, text=True, timeout=OPEN_TIMEOUT + 60
+    )
+    assert proc.returncode == 0, (proc.returncode, proc.stderr[-2000:])
+    lines = proc.stdout.splitlines()
+    assert lines[0].startswith("refused: render_mode='human' shows one window at a time per process") and "close()" in lines[0]
+    assert lines[1:] == ["threads: 1", "left open"]
+
