@@ -89,6 +89,7 @@ class Window:
         wait = self._last + self.period - time.monotonic()
         if wait > 0:
             time.sleep(wait)
+        self._last = time.monotonic()  # the frame's start: drawing (waiting for the viewer's lock) is in the period
         if self._shown.handle is None:
             self._copy(data)
             self._open()
@@ -96,7 +97,6 @@ class Window:
             with self._shown.handle.lock():
                 self._copy(data)
         self._shown.handle.sync()
-        self._last = time.monotonic()
 
     def _copy(self, data: mujoco.MjData) -> None:
         d = self.data

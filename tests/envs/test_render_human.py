@@ -139,3 +139,35 @@ def test_windows_one_at_a_time_closed_when_dropped_and_at_exit_without_a_crash(x
     assert lines[0].startswith("refused: render_mode='human' shows one window at a time per process") and "close()" in lines[0]
     assert lines[1:] == ["threads: 1", "left open"]
 
+
+class _SlowHandle(_Handle):
+    """A running viewer whose lock is held for a while by its render thread (software OpenGL drawing a frame)."""
+
+    def is_running(self) -> bool:
+        return True
+
+    def lock(self):
+        import contextlib
+        import time
+
+        time.sleep(0.005)
+        return contextlib.nullcontext()
+
+    def sync(self) -> None:
+        pass
+
+
+def test_the_pace_is_the_control_period_with_the_drawing_in_it(monkeypatch):
+    import time
+
+    w = window_mod.Window.__new__(window_mod.Window)
+    w._shown, w.closed, w._last, w.period = window_mod._Shown(), False, -float("inf"), 0.02
+    w._shown.handle = _SlowHandle()
+    monkeypatch.setattr(w, "_copy", lambda data: None)
+    w.show(None)
+    start = time.monotonic()
+    for _ in range(20):
+        w.show(None)
+    per_frame = (time.monotonic() - start) / 20
+    assert per_frame < 0.0215, per_frame  # 20 ms a frame, not 20 ms plus the 5 ms spent waiting for the lock
+
