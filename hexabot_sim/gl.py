@@ -136,12 +136,22 @@ def display_problem(command: str = "hexabot-sim view ...") -> str | None:
         )
     where = os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
     errors: list[str] = []
+    codes: list[int] = []
     previous = glfw.ERROR_REPORTING
     glfw.ERROR_REPORTING = "ignore"  # our callback below collects the message
-    glfw.set_error_callback(lambda code, text: errors.append(text.decode() if isinstance(text, bytes) else text))
+
+    def collect(code: int, text) -> None:
+        codes.append(code)
+        errors.append(text.decode() if isinstance(text, bytes) else text)
+
+    glfw.set_error_callback(collect)
+    glfw.get_time()  # GLFW_NOT_INITIALIZED unless something in this process already initialised GLFW
+    fresh = glfw.NOT_INITIALIZED in codes
+    initialised = False
     try:
         if not glfw.init():
             return f"cannot open the display {where!r}: {errors[-1] if errors else 'GLFW failed to initialise'}"
+        initialised = True
         glfw.window_hint(glfw.VISIBLE, glfw.FALSE)
         window = glfw.create_window(64, 64, "hexabot-sim probe", None, None)
         if not window:
@@ -150,5 +160,7 @@ def display_problem(command: str = "hexabot-sim view ...") -> str | None:
         glfw.default_window_hints()
         return None
     finally:
+        if fresh and initialised:  # GLFW left as found: no X connection of ours that a fork (Gymnasium's async
+            glfw.terminate()  # vector environment's workers) would share with its parent
         glfw.set_error_callback(None)  # type: ignore[arg-type]
         glfw.ERROR_REPORTING = previous

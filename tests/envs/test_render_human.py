@@ -171,3 +171,16 @@ def test_the_pace_is_the_control_period_with_the_drawing_in_it(monkeypatch):
     per_frame = (time.monotonic() - start) / 20
     assert per_frame < 0.0215, per_frame  # 20 ms a frame, not 20 ms plus the 5 ms spent waiting for the lock
 
+
+def test_the_display_probe_leaves_glfw_uninitialised_for_a_fork(xdisplay):  # noqa: F811
+    # Gymnasium's async vector environment builds one environment in the parent, then forks its workers: an X
+    # connection left open by the probe was shared with them (the workers hung).
+    code = (
+        "import glfw; from hexabot_sim import gl; assert gl.display_problem() is None; codes = [];"
+        "glfw.set_error_callback(lambda c, t: codes.append(c)); glfw.get_time(); print(codes)"
+    )
+    env = dict(os.environ, DISPLAY=xdisplay)
+    env.pop("WAYLAND_DISPLAY", None)
+    proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "[65537]"  # GLFW_NOT_INITIALIZED: terminated as it was found
