@@ -217,9 +217,12 @@ class LeggedEnv(gymnasium.Env):
         super().reset(seed=seed)
         rng = self.np_random
         self.command[:] = rng.uniform(self.command_range[:, 0], self.command_range[:, 1])
-        if self.scene.reset(rng) and self._frames is not None:  # a new heightfield: frames of the new model
-            self._frames.close()
-            self._frames = None
+        if self.scene.reset(rng):  # a new heightfield: frames of the new model, the window's copy uploaded again
+            if self._frames is not None:
+                self._frames.close()
+                self._frames = None
+            if self._window is not None:
+                self._window.update_hfield(self.scene.hfield[0])
         self._warning = self.data.warning[self._bad_qacc]  # a live view of MuJoCo's counter
         self._warnings = int(self._warning.number)
         self._command = tuple(self.command.tolist())

@@ -98,6 +98,11 @@ class Window:
                 self._copy(data)
         self._shown.handle.sync()
 
+    def update_hfield(self, hfield_id: int) -> None:
+        """The heightfield `hfield_id` of the model changed: the open window draws the new one (its GPU copy)."""
+        if self._shown.handle is not None and self._shown.handle.is_running():
+            self._shown.handle.update_hfield(hfield_id)
+
     def _copy(self, data: mujoco.MjData) -> None:
         d = self.data
         d.qpos[:], d.qvel[:], d.act[:], d.ctrl[:], d.time = data.qpos, data.qvel, data.act, data.ctrl, data.time

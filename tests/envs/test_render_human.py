@@ -184,3 +184,29 @@ def test_the_display_probe_leaves_glfw_uninitialised_for_a_fork(xdisplay):  # no
     proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == "[65537]"  # GLFW_NOT_INITIALIZED: terminated as it was found
+
+
+NEW_PATCH = textwrap.dedent(
+    """
+    import gymnasium as gym
+    env = gym.make("hexabot_sim/HexabotJoints-v0", render_mode="human", terrain="rough")
+    env.reset(seed=1)
+    handle = env.unwrapped._window._shown.handle
+    uploads, real = [], handle.update_hfield
+    handle.update_hfield = lambda i: (uploads.append(i), real(i))
+    env.reset(seed=2)
+    print(uploads == [env.unwrapped.model.hfield("terrain").id])
+    env.close()
+    """
+)
+
+
+def test_a_new_rough_patch_at_reset_is_uploaded_to_the_open_window(xdisplay):  # noqa: F811
+    # The window drew the first episode's heightfield for ever (its GPU copy), the robot walking on another.
+    env = dict(os.environ, DISPLAY=xdisplay)
+    env.pop("WAYLAND_DISPLAY", None)
+    proc = subprocess.run(
+        [sys.executable, "-c", NEW_PATCH], env=env, capture_output=True, text=True, timeout=OPEN_TIMEOUT + 60
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.split() == ["True"]
