@@ -83,7 +83,7 @@ class Window:
         """Draws the state in `data` (opening the window the first time), at most one frame per period."""
         if self.closed:
             return
-        if self._shown.handle is not None and not self._shown.handle.is_running():  # the user closed it: the env goes on
+        if self._shown.handle is not None and not self._shown.handle.is_running():  # closed by the user: env goes on
             self.close()
             return
         wait = self._last + self.period - time.monotonic()

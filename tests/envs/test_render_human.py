@@ -136,7 +136,8 @@ def test_windows_one_at_a_time_closed_when_dropped_and_at_exit_without_a_crash(x
     )
     assert proc.returncode == 0, (proc.returncode, proc.stderr[-2000:])
     lines = proc.stdout.splitlines()
-    assert lines[0].startswith("refused: render_mode='human' shows one window at a time per process") and "close()" in lines[0]
+    refused = "refused: render_mode='human' shows one window at a time per process"
+    assert lines[0].startswith(refused) and "close()" in lines[0]
     assert lines[1:] == ["threads: 1", "left open"]
 
 
