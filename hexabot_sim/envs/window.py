@@ -58,19 +58,19 @@ class Window:
     def __init__(self, model: mujoco.MjModel, camera: str, track_body: str, fps: float) -> None:
         if importlib.util.find_spec("glfw") is None:
             raise gymnasium.error.DependencyNotInstalled(f"render_mode='human' needs glfw: {gl.INSTALL_HINT}")
-        why = gl.display_problem("python your_script.py")
-        if why:
-            raise RuntimeError(f"render_mode='human' cannot open a window: {why}")
         for shown in list(_LIVE):  # a window the user closed at the screen is over
             if shown.handle is not None and not shown.handle.is_running():
                 shown.close()
         if _LIVE:  # an environment dropped without close() may be in a reference cycle: collected, its window closes
             gc.collect()
-        if _LIVE:
+        if _LIVE:  # (before the display probe: its GLFW calls beside an open window's thread would be the crash)
             raise RuntimeError(
                 "render_mode='human' shows one window at a time per process (MuJoCo's viewer is not thread-safe): "
                 "close() the environment whose window is open first"
             )
+        why = gl.display_problem("python your_script.py")
+        if why:
+            raise RuntimeError(f"render_mode='human' cannot open a window: {why}")
         self.model, self.data = model, mujoco.MjData(model)
         self.camera, self.track_body, self.period = camera, track_body, 1.0 / fps
         self._shown = _Shown()
