@@ -194,6 +194,8 @@ def watch(display: str, argv: list[str], shot: Path, quit_after: float = 6.0, re
                 if drawn(image) and (ready is None or ready(image)):
                     break
             time.sleep(CAPTURE_EVERY)
+        if proc.poll() is None and shutil.which("xdotool"):  # captured: close the window (Ctrl+Q), not wait for it
+            subprocess.run(["xdotool", "key", "ctrl+q"], env=env, timeout=30)
         out, err = proc.communicate(timeout=OPEN_TIMEOUT)
     finally:
         if proc.poll() is None:

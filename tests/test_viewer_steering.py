@@ -67,6 +67,8 @@ def test_keys_sent_to_the_window_steer_the_live_robot(xdisplay, tmp_path):  # no
         _xdotool(xdisplay, "KP_3", "Up", "Up", "shift+Left", "Prior", "Left")
         time.sleep(1.0)
         dump = subprocess.run(["xwd", "-root", "-silent", "-display", xdisplay], capture_output=True, timeout=30)
+        time.sleep(1.5)  # turning on, then the window closed (Ctrl+Q); --quit-after is the backstop
+        _xdotool(xdisplay, "ctrl+q")
         out, err = proc.communicate(timeout=OPEN_TIMEOUT)
     finally:
         if proc.poll() is None:
