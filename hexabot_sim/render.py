@@ -471,3 +471,25 @@ def view_camera(
         cam.trackbodyid = model.body(track_body).id
     else:
         cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+
+
+def launch_window(
+    model: mujoco.MjModel, data: mujoco.MjData, key_callback: Callable[[int], None] | None = None
+) -> tuple[object, list[threading.Thread]]:
+    """MuJoCo's passive viewer on (model, data), side panels hidden: its handle and the threads it started (which
+    must end before the interpreter exits: close_window)."""
+    import mujoco.viewer
+
+    before = set(threading.enumerate())
+    handle = mujoco.viewer.launch_passive(
+        model, data, key_callback=key_callback, show_left_ui=False, show_right_ui=False
+    )
+    return handle, [t for t in threading.enumerate() if t not in before]
+
+
+def close_window(handle: object, threads: list[threading.Thread], timeout: float) -> None:
+    """Closes a launch_window window and waits up to `timeout` [s] for each of its threads (not the calling one)."""
+    handle.close()  # type: ignore[attr-defined]
+    for thread in threads:
+        if thread is not threading.current_thread():
+            thread.join(timeout)

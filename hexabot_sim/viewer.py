@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
@@ -184,19 +183,13 @@ def _with_shift(code: int) -> int:
 @contextmanager
 def _window(model: Any, data: Any, keys: deque[int], title: str) -> Iterator[Any]:
     """MuJoCo's passive viewer on (model, data), side panels hidden; closed and its thread joined on exit."""
-    import mujoco.viewer
+    from hexabot_sim import render
 
-    before = set(threading.enumerate())
-    handle = mujoco.viewer.launch_passive(
-        model, data, key_callback=lambda code: keys.append(_with_shift(code)), show_left_ui=False, show_right_ui=False
-    )
-    threads = [t for t in threading.enumerate() if t not in before]
+    handle, threads = render.launch_window(model, data, lambda code: keys.append(_with_shift(code)))
     try:
         yield handle
     finally:
-        handle.close()
-        for thread in threads:  # the window's thread must finish before the interpreter exits
-            thread.join(JOIN_TIMEOUT)
+        render.close_window(handle, threads, JOIN_TIMEOUT)  # the thread must end before the interpreter exits
 
 
 def _draw(handle: Any, scene: Scene, help_rows: Sequence[tuple[str, str]]) -> None:

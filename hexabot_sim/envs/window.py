@@ -36,11 +36,8 @@ class _Shown:
 
     def close(self) -> None:
         if self.handle is not None:
-            self.handle.close()
+            render.close_window(self.handle, self.threads, JOIN_TIMEOUT)
             self.handle = None
-        for thread in self.threads:
-            if thread is not threading.current_thread():
-                thread.join(JOIN_TIMEOUT)
         self.threads = []
         if self in _LIVE:
             _LIVE.remove(self)
@@ -109,12 +106,8 @@ class Window:
         mujoco.mj_forward(self.model, d)
 
     def _open(self) -> None:
-        import mujoco.viewer
-
-        before = set(threading.enumerate())
-        handle = mujoco.viewer.launch_passive(self.model, self.data, show_left_ui=False, show_right_ui=False)
+        handle, self._shown.threads = render.launch_window(self.model, self.data)
         self._shown.handle = handle
-        self._shown.threads = [t for t in threading.enumerate() if t not in before]
         atexit.unregister(_close_all)  # registered after MuJoCo's glfw.terminate(), so run before it (LIFO)
         atexit.register(_close_all)
         with handle.lock():
