@@ -47,23 +47,23 @@ def _plan_cycle(p: WalkParams, cmd: Command, samples: int = 240) -> tuple[np.nda
     return hip, dt
 
 
-def walking_direction(p: WalkParams) -> np.ndarray:
+def walking_direction(p: WalkParams, course: np.ndarray | None = None) -> np.ndarray:
     """Horizontal unit vector (2,) of the commanded walk in the world at the start (+x when standing or turning);
-    with a schedule or waypoints, the direction their course sets out in (commands.direction)."""
+    with a schedule or waypoints, the direction their course (commands.path, if already planned) sets out in."""
     if p.schedule or p.waypoints:
-        return commands.direction(commands.path(p, SETTLE_TIME))
+        return commands.direction(commands.path(p, SETTLE_TIME) if course is None else course)
     speed = math.hypot(p.vx, p.vy)
     return np.array([p.vx, p.vy]) / speed if speed > 0 else np.array([1.0, 0.0])
 
 
 def terrain(p: WalkParams) -> Ground:
     """The run's ground: slope direction from the walking direction, heightfield over the walk's area."""
-    along = walking_direction(p)
+    course = commands.path(p, SETTLE_TIME) if p.schedule or p.waypoints else None  # planned once, used thrice
+    along = walking_direction(p, course)
     uphill = {"uphill": along, "downhill": -along, "across": np.array([-along[1], along[0]])}[p.slope_heading]
     speed = math.hypot(p.vx, p.vy)
     distance = speed * p.duration  # the farthest the walk goes from its start
-    if p.schedule or p.waypoints:  # a box holding the course (the schedule's planned path)
-        course = commands.path(p, SETTLE_TIME)
+    if course is not None:  # a box holding the course (the schedule's planned path)
         extent = commands.extent(course, HFIELD_MARGIN)
         distance = float(np.hypot(course[:, 0], course[:, 1]).max())
     elif p.yaw_rate:  # an arc (or turning on the spot): a box about the start holding the circle
