@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from hexabot_sim.budget import step_count
 from hexabot_sim.control.commands import Schedule, Setpoint
 from hexabot_sim.control.follower import PathFollower
 from hexabot_sim.control.gait import Command, GaitPlanner
@@ -242,6 +243,15 @@ def schedule_problem(p: Any, check: Callable[[Any], str]) -> str:
             return (
                 f"schedule row {i + 1} (t = {t} s): starts at or after the walk's end ({end} s); raise 'duration' "
                 f"above {t} s or leave the row out"
+            )
+        last = (step_count(p.duration, p.timestep) - 1) * p.timestep  # the last control step starts here
+        if row.t > last + 1e-9 * max(1.0, last):  # after it: the walk ends before the row takes over
+            (t, start), (t_end, end) = apart(row.t, last, "nearest"), apart(row.t, p.duration, "nearest")
+            t = max(t, t_end, key=len)  # told apart from both
+            return (
+                f"schedule row {i + 1} (t = {t} s): starts after the walk's last step (at {start} s with 'timestep' "
+                f"{p.timestep:g} s) and before its end ({end} s): it would never be walked; raise 'duration' or "
+                "leave the row out"
             )
         if row.gait not in gaits:
             return f"{where}: unknown gait {row.gait!r}; known: {', '.join(gaits)}"

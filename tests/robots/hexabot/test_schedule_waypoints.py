@@ -374,6 +374,21 @@ def test_a_row_at_or_after_the_end_is_refused_with_the_digits_that_tell_its_time
         walk_params(schedule=[[0, 0.1, 0, 0], [8, 0, 0, 0]], duration=8, schedule_scale=0.5)
 
 
+def test_a_row_after_the_last_step_s_start_is_refused_and_one_at_it_is_walked():
+    """A row at 1.9981 s of a 2 s walk at 2 ms steps passed the check and was never walked: the last step starts at
+    1.998 s. A row at the last step's start takes over for that step (its command is in the last CSV row)."""
+    with pytest.raises(UsageError, match=re.escape(
+        "schedule row 2 (t = 1.9981 s): starts after the walk's last step (at 1.998 s with 'timestep' 0.002 s) and "
+        "before its end (2 s): it would never be walked"
+    )):  # fmt: skip
+        walk_params(schedule=[[0, 0.05, 0, 0], [1.9981, 0, 0, 0.2]], duration=2)
+    # The digits tell the row's time from both the last step's start and the end.
+    with pytest.raises(UsageError, match=re.escape("(t = 5.9999 s): starts after the walk's last step (at 5.998 s")):
+        walk_params(schedule=[[0, 0.05, 0, 0], [5.9999, 0, 0, 0.2]], duration=6)
+    r = walk(schedule=[[0, 0.05, 0, 0], [1.998, 0, 0, 0.2]], duration=2)
+    assert r.columns["cmd_yaw_rate"][-1] > 0 and r.columns["cmd_yaw_rate"][-3] == 0.0
+
+
 def test_a_schedule_s_terrain_speed_error_and_stride_are_not_against_the_replaced_vx_vy():
     """speed_made_good_error (terrain) and stride were the walk's own vx = 0.1 m/s, which a schedule replaces: a
     schedule standing still by a kerb read -100 % (a crab at 0.08 m/s making 0.078 m/s, -22 %)."""
