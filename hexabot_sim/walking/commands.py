@@ -384,11 +384,11 @@ def path(p: Any, settle: float) -> np.ndarray:
 HEADING_DISTANCE: float = 0.05  # [m] a course's direction is the one to its first point this far from the start
 
 
-def direction(course: np.ndarray) -> np.ndarray:
-    """Unit vector (2,) from the start to a course's (k, 2) first point HEADING_DISTANCE away (its farthest point if
-    none is; +x if it never leaves the start)."""
+def direction(course: np.ndarray, reach: float = HEADING_DISTANCE) -> np.ndarray:
+    """Unit vector (2,) from the start to a course's (k, 2) first point `reach` [m] away (its farthest point if none
+    is; +x if it never leaves the start)."""
     distance = np.hypot(course[:, 0], course[:, 1])
-    far = np.flatnonzero(distance >= HEADING_DISTANCE)
+    far = np.flatnonzero(distance >= reach)
     k = int(far[0]) if far.size else int(np.argmax(distance))
     return course[k] / distance[k] if distance[k] > 1e-9 else np.array([1.0, 0.0])
 

@@ -78,18 +78,32 @@ def terrain(p: WalkParams) -> Ground:
     if p.slope_deg:  # the patch lies in the ground frame: a world distance d is d / cos(slope) along the slope
         extent = tuple(v / math.cos(math.radians(p.slope_deg)) for v in extent)
     extent = tuple(round(v / HFIELD_CELL) * HFIELD_CELL for v in extent)
-    along_xy = (float(along[0]), float(along[1]))
+
+    def facing(distance: float) -> tuple[float, float]:
+        """An edge `distance` ahead faces the way to where the course first gets that far (so the course meets
+        it there, square on if straight; a short crab before a long walk ahead pointed a kerb 47 deg off it)."""
+        ahead = along if course is None else commands.direction(course, distance)
+        return float(ahead[0]), float(ahead[1])
+
     # The kerb's pavement runs on beyond the walk: 20 m, or as far as this walk could go (a 0.2 m/s walk of 200 s
     # stepped down off its end at 20.5 m, where the terrain's heights still had the kerb).
     reach = distance / math.cos(math.radians(p.slope_deg)) + HFIELD_MARGIN
     kerb_length, kerb_width = max(KERB_LENGTH, reach - p.kerb_distance), max(KERB_WIDTH, 2 * reach)
     obstacles: tuple[Kerb | Stairs, ...] = ()
     if p.kerb_height:
-        obstacles += (Kerb(p.kerb_height, p.kerb_distance, along_xy, kerb_length, kerb_width),)
+        obstacles += (Kerb(p.kerb_height, p.kerb_distance, facing(p.kerb_distance), kerb_length, kerb_width),)
     if p.stairs_rise:
         landing = max(KERB_LENGTH, reach - p.stairs_distance - (p.stairs_count - 1) * p.stairs_run)
         obstacles += (
-            Stairs(p.stairs_rise, p.stairs_run, p.stairs_count, p.stairs_distance, along_xy, landing, kerb_width),
+            Stairs(
+                p.stairs_rise,
+                p.stairs_run,
+                p.stairs_count,
+                p.stairs_distance,
+                facing(p.stairs_distance),
+                landing,
+                kerb_width,
+            ),
         )
     return Ground(
         slope=Slope(p.slope_deg, (float(uphill[0]), float(uphill[1])), p.slope_heading),

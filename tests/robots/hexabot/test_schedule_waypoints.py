@@ -339,7 +339,10 @@ def test_the_twist_a_schedule_or_waypoints_replace_does_not_enter_the_terrain_ch
 def test_the_slope_kerb_and_stairs_face_the_way_a_schedule_or_course_sets_out_not_the_replaced_vx_vy():
     """The terrain's direction came from the walk's own vx, vy (0.1, 0 by default), which a schedule or waypoints
     replace: a schedule crabbing left (+y) met a kerb laid across +x, beside it. Now the kerb, the stairs and the
-    slope face the course's first 5 cm, and the kerb's pavement runs on as far as the course goes."""
+    slope face the course's first 5 cm (the kerb and stairs: the way to where it first reaches their distance), and
+    the kerb's pavement runs on as far as the course goes."""
+    from hexabot_sim.walking import commands
+    from hexabot_sim.walking.constants import SETTLE_TIME
     from hexabot_sim.walking.ground import terrain, walking_direction
 
     crab = walk_params(schedule=[[0, 0, 0.08, 0]], kerb_height=0.02, duration=8)
@@ -351,9 +354,20 @@ def test_the_slope_kerb_and_stairs_face_the_way_a_schedule_or_course_sets_out_no
     # A quarter turn on the spot (with the schedule's ramps), then forward: the course sets out along its new heading.
     turn = walk_params(schedule=[[0, 0, 0, 0.3], [5.736, 0.1, 0, 0]], stairs_rise=0.02, duration=20)
     along = walking_direction(turn)
-    assert abs(math.atan2(along[1], along[0])) > 1.0 and terrain(turn).obstacles[0].along == pytest.approx(along)
+    assert abs(math.atan2(along[1], along[0])) > 1.0 and terrain(turn).obstacles[0].along == pytest.approx(
+        along, abs=0.03
+    )
     # Standing or turning on the spot all along: +x, as a walk without a schedule.
     assert walking_direction(walk_params(schedule=[[0, 0, 0, 0.2]], duration=6)) == pytest.approx([1.0, 0.0])
+    # A short crab left (5 cm) before a long walk ahead: the slope faces the first 5 cm (+y), but a kerb or stairs
+    # 0.5 m ahead face the way to where the course first gets 0.5 m away (they faced +y, beside the walk).
+    for obstacle in ({"kerb_height": 0.02}, {"stairs_rise": 0.02}):
+        crab_first = walk_params(schedule=[[0, 0, 0.05, 0], [2.5, 0.1, 0, 0]], duration=14, **obstacle)
+        course = commands.path(crab_first, SETTLE_TIME)
+        first = course[np.flatnonzero(np.hypot(*course.T) >= 0.5)[0]]
+        assert walking_direction(crab_first) == pytest.approx([0.0, 1.0])
+        assert terrain(crab_first).obstacles[0].along == pytest.approx(first / np.hypot(*first))
+        assert 0.15 < first[1] / first[0] < 0.25  # ~11 deg off +x
     # The pavement runs on past a 0.3 m/s schedule's 29 m (the walk's own 0.01 m/s laid the least, 20 m).
     fast = walk_params(schedule=[[0, 0.3, 0, 0]], vx=0.01, kerb_height=0.02, duration=100)
     kerb = terrain(fast).obstacles[0]
