@@ -25,6 +25,8 @@ Usage: python scripts/bench.py [--repeat N] [--check] [--only LINE ...]
   sweep      a 64-cell pendulum sweep on 2 local workers vs 1 (pool start included) target >= 1.7x
              and the per-cell overhead of the Dask path (LocalCluster) vs the local pool
   list       wall time of `hexabot-sim list` (python -m hexabot_sim list)        target <= 0.5 s
+  compile    a first walk's cold numba compile (fresh process, empty cache): a default walk's kernels vs
+             every group's (load_sharing=force and admittance add theirs)        target <= 75 %
   env        the Gymnasium environments (scripts/bench_env.py): steps/s, and env step / its bare physics
              (frame_skip x mj_step, the same controls replayed), beside Ant-v5's   target <= Ant-v5's
 
@@ -55,6 +57,7 @@ import functools
 import os
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -215,6 +218,36 @@ def bench_list(repeat: int) -> dict[str, float]:
     return {"python_startup_s": min(empty), "list_s": min(listing)}
 
 
+def bench_compile(repeat: int) -> dict[str, float]:
+    """Cold compiles of the walking kernels, each in a fresh process with an empty numba cache: a default walk's
+    ("walk") and every group's (a walk with load_sharing=force, then one with admittance, compile the rest)."""
+
+    def cold(groups: str) -> float:
+        with tempfile.TemporaryDirectory() as cache:
+            code = f"from hexabot_sim.control import kernels; kernels.warm_up({groups})"
+            start = time.perf_counter()
+            subprocess.run([sys.executable, "-c", code], check=True, env={**os.environ, "NUMBA_CACHE_DIR": cache})
+            return time.perf_counter() - start
+
+    walk, every = [], []
+    for _ in range(repeat):
+        walk.append(cold("'walk'"))
+        every.append(cold("*kernels.GROUPS"))
+    return {"walk_s": min(walk), "all_s": min(every), "share": min(walk) / min(every)}
+
+
+def fmt_compile(r: dict) -> tuple[str, bool]:
+    share = r["share"]
+    ok = share <= 0.75
+    return (
+        f"compile   cold numba compile, fresh process: a default walk's kernels {r['walk_s']:.1f} s, every "
+        f"group's (force control, admittance) {r['all_s']:.1f} s: {100 * share:.0f} % "
+        "(target <= 75 %; every group for every walk: 100 %) "
+        f"{'ok' if ok else 'MISSED'}",
+        ok,
+    )
+
+
 # ------------------------------------------------------------------------------------------------ lines
 
 
@@ -314,6 +347,7 @@ LINES: dict[str, tuple] = {
     ),
     "sweep": (lambda repeat: bench_sweep(max(1, repeat // 2)), fmt_sweep, ("speedup",), ("dask_ms_per_cell",)),
     "list": (bench_list, fmt_list, ("list_s",), ()),
+    "compile": (lambda repeat: bench_compile(max(1, repeat // 3)), fmt_compile, ("share",), ("walk_s", "all_s")),
     "env": (lambda repeat: bench_env(max(1, repeat // 2)), fmt_env, (), ()),
 }
 

@@ -33,7 +33,7 @@ def pytest_sessionstart(session: pytest.Session) -> None:
         compliance_kernels.compile_all()
     finally:
         plan.wait()
-    kernels.warm_up()
+    kernels.warm_up(*kernels.GROUPS)
 
 
 @pytest.fixture(scope="session")

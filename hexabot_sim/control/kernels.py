@@ -13,7 +13,7 @@ not shapes, so one compiled (and cached) version serves the hexabot's six legs a
 The resolved-rate step is `resolved_rate.rate_steps` itself, compiled here: the single leg of
 leg-step runs the same source as plain Python (cheaper there than converting its lists to arrays).
 The kernels are cached on disk (numba's cache beside the source, or its user-wide cache when the
-package directory is read-only), so only the first run on a machine compiles them (a few seconds).
+package directory is read-only), so only the first run on a machine compiles them (tens of seconds: warm_up).
 NUMBA_DISABLE_JIT=1 runs them as plain Python, for debugging.
 
 State of the ground-finding legs (GroundController), one row per leg:
@@ -342,30 +342,40 @@ def ground_step(par, geo, k, legs, flags, plane, counts, cmd, rows, stance, r, t
     return n_events
 
 
-_WARM = [False]
+# What a walk compiles: "walk" (every walk: the servo step, the ground-finding legs, the gait plan), "force" (the
+# stance force control, load_sharing=force: force_kernels.py) and "admittance" (load_sharing=admittance:
+# compliance_kernels.py). A default walk compiles only the first: 62 % of the three's cold compile, 27 of 44 s on a
+# loaded 2-core machine (scripts/bench.py --only compile).
+GROUPS: tuple[str, ...] = ("walk", "force", "admittance")
+_WARM: set[str] = set()
 
 
-def warm_up() -> None:
-    """Compiles every kernel (or loads it from the cache) for the argument types the controllers pass.
+def warm_up(*groups: str) -> None:
+    """Compiles the kernels of these groups (GROUPS; none given: "walk"), or loads them from the cache, for the
+    argument types the controllers pass.
 
-    Once per process, before a walk's first step. The compiling (tens of seconds on a loaded machine's first run)
-    is not under the command line's signal hold: a stop request ends it at once. One that struck inside numba's
-    compiler may come out of it as another error, or be swallowed and leave a kernel unusable ("no compiled object
-    yet"): a stop request recorded by then is raised instead of retrying or going on (the run stops either way).
-    A cache numba cannot use (a full disk, a truncated or foreign file) does not stop the walk: the
+    Once per process and group, before a walk's first step. The compiling (tens of seconds on a loaded machine's
+    first run) is not under the command line's signal hold: a stop request ends it at once. One that struck inside
+    numba's compiler may come out of it as another error, or be swallowed and leave a kernel unusable ("no compiled
+    object yet"): a stop request recorded by then is raised instead of retrying or going on (the run stops either
+    way). A cache numba cannot use (a full disk, a truncated or foreign file) does not stop the walk: the
     kernels are compiled in memory instead, with a one-line note naming the cache folder.
     """
-    if _WARM[0]:
+    unknown = set(groups) - set(GROUPS)
+    if unknown:
+        raise ValueError(f"kernel groups {sorted(unknown)}: known are {', '.join(GROUPS)}")
+    wanted = tuple(g for g in (groups or ("walk",)) if g not in _WARM)
+    if not wanted:
         return
     try:
-        _compile_all()
+        _compile_all(wanted)
     except Exception as error:  # retried without the cache; if that fails too, the first error stands
         _stop_if_requested()
         where = getattr(getattr(ground_step, "_cache", None), "cache_path", "?")
         for kernel in _all_kernels():
             kernel._cache = NullCache()  # numba's own "no caching" (the dispatcher attribute cache=True sets)
         try:
-            _compile_all()
+            _compile_all(wanted)
         except Exception:
             _stop_if_requested()
             raise error from None
@@ -376,7 +386,7 @@ def warm_up() -> None:
             file=sys.stderr,
         )
     _stop_if_requested()  # numba swallowed it: its kernels may be unusable, so they are not marked warm
-    _WARM[0] = True
+    _WARM.update(wanted)
 
 
 def _stop_if_requested() -> None:
@@ -410,19 +420,23 @@ def _all_kernels() -> tuple:
     return _KERNELS + compliance_kernels.KERNELS + force_kernels.KERNELS + plan_kernels.KERNELS
 
 
-def _compile_all() -> None:
-    """Calls each kernel the controllers call from Python once, on arrays of the types they pass (for six
-    legs; the types, hence the compiled code, are the same for any leg count); a stop request recorded meanwhile
-    ends it at numba's next compiler pass (_StopBetweenPasses)."""
+def _compile_all(groups: tuple[str, ...]) -> None:
+    """Calls each kernel of the groups that the controllers call from Python once, on arrays of the types they pass
+    (for six legs; the types, hence the compiled code, are the same for any leg count); a stop request recorded
+    meanwhile ends it at numba's next compiler pass (_StopBetweenPasses)."""
     with numba.core.event.install_listener("numba:run_pass", _StopBetweenPasses()):
-        _compile_each()
+        _compile_each(groups)
 
 
-def _compile_each() -> None:
+def _compile_each(groups: tuple[str, ...] = GROUPS) -> None:
     from hexabot_sim.control import compliance_kernels, force_kernels, plan_kernels
 
-    compliance_kernels.compile_all()
-    force_kernels.compile_all()
+    if "admittance" in groups:
+        compliance_kernels.compile_all()
+    if "force" in groups:
+        force_kernels.compile_all()
+    if "walk" not in groups:
+        return
     plan_kernels.compile_all()
     par = np.zeros(NPAR)
     par[UPDATE_EVERY], par[DT], par[SWING_TIME] = 1.0, 0.002, 1.0

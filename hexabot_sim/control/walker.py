@@ -39,12 +39,13 @@ from hexabot_sim.control.resolved_rate import ResolvedRateGains, step_constants
 from hexabot_sim.kinematics import legged
 
 
-def kernels():
-    """control/kernels.py, imported on first use and compiled (importing numba takes ~0.15 s, which
-    `hexabot-sim list` should not pay: it imports this module for the parameter tables)."""
+def kernels(*groups: str):
+    """control/kernels.py, imported on first use and its kernels of these groups compiled (kernels.GROUPS; none
+    given: a walk's own). Importing numba takes ~0.15 s, which `hexabot-sim list` should not pay: it imports this
+    module for the parameter tables."""
     from hexabot_sim.control import kernels
 
-    kernels.warm_up()  # not under the signal hold: a cold compile takes tens of seconds (see kernels.warm_up)
+    kernels.warm_up(*groups)  # not under the signal hold: a cold compile takes tens of seconds (see kernels.warm_up)
     return kernels
 
 
@@ -127,7 +128,12 @@ class WalkingController:
             )
         self.quat_adr = int(model.sensor_adr[model.sensor("imu_quat").id])
         lower, upper = legged.JOINT_LOWER, legged.JOINT_UPPER
-        self.kernels = kernels()
+        # The force control's and the admittance's kernels only for the walks that run them.
+        self.kernels = kernels(
+            "walk",
+            *(["force"] if settings.force is not None else []),
+            *(["admittance"] if settings.admittance is not None else []),
+        )
         from hexabot_sim.control import plan_kernels  # compiled with the kernels (kernels.warm_up)
 
         self.plan_kernels = plan_kernels

@@ -14,6 +14,7 @@ import sys
 
 import numpy as np
 import pytest
+from helpers import walk_params
 
 from hexabot_sim.control import kernels
 from hexabot_sim.control.resolved_rate import ResolvedRateGains, step_constants
@@ -82,7 +83,7 @@ def test_kernels_compile_outside_the_signal_hold(monkeypatch):
     from hexabot_sim.control import walker as control
 
     held = []
-    monkeypatch.setattr(kernels, "warm_up", lambda: held.append(signals.HOLD[0]))
+    monkeypatch.setattr(kernels, "warm_up", lambda *groups: held.append(signals.HOLD[0]))
     monkeypatch.setattr(gait, "_KERNELS", [])
     assert control.kernels() is kernels
     gait._kernels()
@@ -125,16 +126,16 @@ def test_a_stop_request_swallowed_in_the_compile_stops_it_at_numbas_next_pass(mo
     from hexabot_sim.control import compliance_kernels  # the first kernels warm_up compiles
 
     monkeypatch.setattr(compliance_kernels, "compile_all", compile_all)
-    monkeypatch.setattr(kernels, "_WARM", [False])
+    monkeypatch.setattr(kernels, "_WARM", set())
     saved = [(k, k._cache) for k in kernels._all_kernels()]
     try:
         with pytest.raises(signals.Interrupted) as raised:
-            kernels.warm_up()
+            kernels.warm_up(*kernels.GROUPS)
     finally:
         for k, cache in saved:
             k._cache = cache
     assert raised.value.signum == signal.SIGTERM
-    assert compiled == [] and not kernels._WARM[0]
+    assert compiled == [] and not kernels._WARM
 
 
 def test_warm_up_compiles_what_a_walk_uses():
@@ -155,6 +156,27 @@ def test_warm_up_compiles_what_a_walk_uses():
     for kernel in (kernels.servo, kernels.targets, kernels.ground_step, plan.segments, plan.targets, plan.flags,
                    plan.hip_targets):  # fmt: skip
         assert len(kernel.signatures) == 1, (kernel, kernel.signatures)
+
+
+def test_a_walk_compiles_only_the_kernels_it_runs(monkeypatch):
+    """The force control's and the admittance's kernels were compiled for every walk: a first default walk paid for
+    all three groups (37 s cold here; its own: 15-20 s, scripts/bench.py's compile line). Each walk now compiles its
+    own groups, once per process."""
+    from hexabot_sim.result import at_home
+    from hexabot_sim.walking import scene as hexabot_scene
+
+    compiled = []
+    monkeypatch.setattr(kernels, "_compile_each", lambda groups: compiled.append(groups))
+    monkeypatch.setattr(kernels, "_WARM", set())
+    for options, groups in (({}, ("walk",)), ({"load_sharing": "force"}, ("force",)), ({}, None),
+                            ({"load_sharing": "admittance", "touchdown": "sensed"}, ("admittance",))):  # fmt: skip
+        p = walk_params(duration=3.0, **options)
+        model, data = at_home(hexabot_scene.build_xml(p))
+        hexabot_scene.make_controller(p, model, data)
+        assert compiled.pop() == groups if groups else compiled == []
+    assert kernels._WARM == {"walk", "force", "admittance"}
+    with pytest.raises(ValueError, match="kernel groups"):
+        kernels.warm_up("forces")
 
 
 def _warm_up_in_a_new_process(cache, prelude=""):
@@ -183,7 +205,7 @@ def test_an_unusable_numba_cache_does_not_stop_a_walk(tmp_path):
     only = (
         "from hexabot_sim.control import compliance_kernels, kernels\n"
         "kernels._all_kernels = lambda: compliance_kernels.KERNELS\n"
-        "kernels._compile_each = compliance_kernels.compile_all\n"
+        "kernels._compile_each = lambda groups: compliance_kernels.compile_all()\n"
     )
     done = _warm_up_in_a_new_process(cache, prelude=only)
     assert done.returncode == 0 and done.stdout.split() == ["warm"], done.stderr
@@ -200,13 +222,13 @@ def test_a_full_disk_under_the_cache_compiles_in_memory_with_a_note(monkeypatch,
 
     calls = []
 
-    def compile_all():
+    def compile_all(groups):
         calls.append([type(k._cache) for k in kernels._all_kernels()])
         if len(calls) == 1:
             raise OSError(errno.ENOSPC, "No space left on device")
 
     monkeypatch.setattr(kernels, "_compile_all", compile_all)
-    monkeypatch.setattr(kernels, "_WARM", [False])
+    monkeypatch.setattr(kernels, "_WARM", set())
     saved = [(k, k._cache) for k in kernels._all_kernels()]
     try:
         kernels.warm_up()
@@ -216,7 +238,7 @@ def test_a_full_disk_under_the_cache_compiles_in_memory_with_a_note(monkeypatch,
     err = capsys.readouterr().err
     assert len(calls) == 2 and all(t is NullCache for t in calls[1]) and not all(t is NullCache for t in calls[0])
     assert err.startswith("hexabot-sim: note: numba's cache in ") and err.count("\n") == 1
-    assert "could not be used (OSError: [Errno 28] No space left on device)" in err and kernels._WARM[0]
+    assert "could not be used (OSError: [Errno 28] No space left on device)" in err and kernels._WARM == {"walk"}
 
 
 def test_admittance_reference_is_the_least_norm_force_distribution():
