@@ -251,6 +251,27 @@ class LeggedEnv(gymnasium.Env):
         self._torque_abs, self._speed_abs = np.zeros(self.n_joints), np.zeros(self.n_joints)
         self._gravity_view, self._touch_obs = obs[:3], obs[sl["foot_touch"]]
 
+    # Views into MjData and the observation buffer (_views) and MuJoCo's warning counter (_start): a copy of them is
+    # not a view of the copied MjData (a deepcopy read the original's state: its observations were stale), and the
+    # counter does not pickle. Left out of a copy or pickle and made again from the copied data.
+    _DERIVED: tuple[str, ...] = (
+        "_copies", "_touch_view", "_quat_view", "_xmat_view", "_twist_view", "_torque_view", "_speed_view",
+        "_torque_abs", "_speed_abs", "_gravity_view", "_touch_obs", "_warning",
+    )  # fmt: skip
+
+    def __getstate__(self) -> dict[str, Any]:
+        if self._window is not None:
+            raise TypeError("an environment with render_mode='human' cannot be copied or pickled (its window)")
+        state = {k: v for k, v in self.__dict__.items() if k not in self._DERIVED}
+        state["_frames"] = None  # the copy renders with its own context, made at its first render()
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._views()
+        if "_warnings" in state:  # reset: the live view of the copied data's counter
+            self._warning = self.data.warning[self._bad_qacc]
+
     def _observe(self) -> np.ndarray:
         """The observation (a new array; the buffer behind it is reused)."""
         w, x, y, z = self._quat_view.tolist()

@@ -205,6 +205,14 @@ class LeggedCommandEnv(LeggedEnv):
         self._settle_steps = math.ceil(round(SETTLE_TIME / self.p_controller.timestep) / self.frame_skip) * frame_skip
         self.controller: WalkingController | None = None
 
+    def __getstate__(self) -> dict:
+        if self.controller is not None:  # its arrays are views of this MjData: a copy would drive the original's
+            raise TypeError(
+                f"{type(self).__name__} cannot be copied or pickled after reset() (its gait controller runs on the "
+                "live physics); copy it before the first reset(), or make a new one"
+            )
+        return super().__getstate__()
+
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
         self._start(seed)
         m, d = self.model, self.data

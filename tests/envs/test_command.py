@@ -178,3 +178,14 @@ def test_a_stair_rise_is_checked_at_the_step_heights_the_environment_walks_with(
         message = str(e.value)
         assert words in message and "step_height_range" in message and "'stand_height'" not in message
         assert "'step_height'" not in message and "\n" not in message
+
+
+def test_a_copy_after_reset_is_refused_in_one_line():
+    # Its controller's arrays are views of the live MjData; a deepcopy failed deep in copy ("cannot pickle 'module'").
+    import copy
+
+    env = LeggedCommandEnv()
+    twin = copy.deepcopy(env)  # before reset: nothing live yet
+    assert np.array_equal(env.reset(seed=2)[0], twin.reset(seed=2)[0])
+    with pytest.raises(TypeError, match=r"cannot be copied or pickled after reset\(\)"):
+        copy.deepcopy(env)
