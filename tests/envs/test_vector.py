@@ -81,3 +81,17 @@ def test_bad_threads_say_what_is_allowed(threads):
 def test_a_numpy_integer_is_a_number_of_environments():
     """num_envs=np.int64(2) was refused as 'not an integer' (max_episode_steps takes numpy integers)."""
     assert LeggedJointsVectorEnv(num_envs=np.int64(2)).num_envs == 2
+
+
+def test_a_long_episode_is_not_taken_for_a_divergence():
+    # The expected time was frame_skip x timestep added at once: it drifted from MuJoCo's (one timestep a step) by
+    # 1e-9 s after 355 s, and a standing robot's episode ended at step 17752 as "diverged". Here from 10^6 s on.
+    vec = LeggedJointsVectorEnv(num_envs=2, threads=1, max_episode_steps=100)
+    vec.reset(seed=0)
+    first = vec.envs[0]
+    home = first.model.key_ctrl[first.scene.key, first.scene.pos_act]
+    stand = np.tile((home - first._low) / first._half - 1.0, (2, 1))
+    vec._state[:, 0] = vec._time[:] = 1e6  # the time a long episode reaches, without the hours of stepping
+    for _ in range(10):
+        _, _, terminated, _, info = vec.step(stand)
+        assert not info["diverged"].any() and not terminated.any()
