@@ -46,6 +46,14 @@ def real_array(value, what: str) -> np.ndarray:
         raise ValueError(f"{what}; got {' '.join(repr(value).split())[:80]}") from None  # one line
 
 
+def check_options(options) -> None:
+    """reset()'s options: None or an empty dict (Gymnasium's checker passes {}); anything else was ignored without a
+    word (options={"terrain": "rough"} reset on the flat), now a ValueError."""
+    if options is not None and not (isinstance(options, dict) and not options):
+        got = " ".join(repr(options).split())[:80]  # one line
+        raise ValueError(f"reset() takes no options (terrain, ranges and the rest are make()'s keywords); got {got}")
+
+
 @dataclasses.dataclass(frozen=True)
 class Reward:
     """The reward's weights and scales (all per control step).
@@ -212,8 +220,9 @@ class LeggedEnv(gymnasium.Env):
 
     # ------------------------------------------------------------------------------------------- episode
 
-    def _start(self, seed: int | None) -> None:
+    def _start(self, seed: int | None, options: dict | None = None) -> None:
         """Seeds the RNG (Gymnasium's reset), draws the command, the ground and the randomisation, places the robot."""
+        check_options(options)
         super().reset(seed=seed)
         rng = self.np_random
         self.command[:] = rng.uniform(self.command_range[:, 0], self.command_range[:, 1])

@@ -214,7 +214,7 @@ class LeggedCommandEnv(LeggedEnv):
         return super().__getstate__()
 
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
-        self._start(seed)
+        self._start(seed, options)
         m, d = self.model, self.data
         mujoco.mj_forward(m, d)
         p = self.p_controller

@@ -97,7 +97,7 @@ class LeggedJointsEnv(LeggedEnv):
         self._started = False  # step() before the first reset() is an error, as in the command environment
 
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
-        self._start(seed)
+        self._start(seed, options)
         d = self.data
         d.qpos[7:] += self.np_random.uniform(-self.reset_noise_scale, self.reset_noise_scale, self.n_joints)
         mujoco.mj_forward(self.model, d)

@@ -11,7 +11,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from mujoco import rollout
 
-from hexabot_sim.envs.base import TOUCH_THRESHOLD, real_array
+from hexabot_sim.envs.base import TOUCH_THRESHOLD, check_options, real_array
 from hexabot_sim.envs.joints import LeggedJointsEnv
 
 STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS  # what mujoco.rollout takes and returns per step
@@ -96,6 +96,7 @@ class LeggedJointsVectorEnv(VectorEnv):
         return obs
 
     def reset(self, *, seed: int | list[int] | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+        check_options(options)
         seeds: list[int | None]
         if isinstance(seed, list | tuple):
             seeds = list(seed)

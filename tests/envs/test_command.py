@@ -189,3 +189,8 @@ def test_a_copy_after_reset_is_refused_in_one_line():
     assert np.array_equal(env.reset(seed=2)[0], twin.reset(seed=2)[0])
     with pytest.raises(TypeError, match=r"cannot be copied or pickled after reset\(\)"):
         copy.deepcopy(env)
+
+
+def test_reset_options_are_refused_not_ignored():
+    with pytest.raises(ValueError, match=r"reset\(\) takes no options"):
+        LeggedCommandEnv().reset(seed=0, options={"terrain": "stairs"})

@@ -222,3 +222,15 @@ def test_a_copy_steps_its_own_physics_as_the_original_does(how):
         assert np.array_equal(obs, obs_twin) and reward == reward_twin
     assert np.array_equal(obs_twin[twin.obs_slices["joint_angles"]], twin.data.qpos[7:])
     assert np.array_equal(env.reset(seed=4)[0], twin.reset(seed=4)[0])
+
+
+@pytest.mark.parametrize("options", [{"terrain": "rough"}, "x", [1]])
+def test_reset_options_are_refused_not_ignored(options):
+    # They were ignored without a word: options={"terrain": "rough"} reset on the flat.
+    env = LeggedJointsEnv()
+    assert np.array_equal(env.reset(seed=0, options={})[0], env.reset(seed=0, options=None)[0])  # check_env's {}
+    with pytest.raises(ValueError, match=r"reset\(\) takes no options \(terrain, ranges and the rest are make\(\)'s"):
+        env.reset(seed=0, options=options)
+    vec = gymnasium.make_vec("hexabot_sim/HexabotJoints-v0", num_envs=1)
+    with pytest.raises(ValueError, match=r"reset\(\) takes no options"):
+        vec.reset(seed=0, options=options)
