@@ -52,7 +52,7 @@ def robot_params(robot: str, **overrides) -> WalkParams:
         ValueError: for a robot without a walk, naming those there are.
     """
     robots = walking_robots()
-    if robot not in robots:
+    if not isinstance(robot, str) or robot not in robots:  # a list or dict: unhashable, a TypeError
         raise ValueError(f"unknown robot {robot!r}; known: {', '.join(robots)}")
     cls, defaults = robots[robot]
     return params.resolve(cls, defaults, overrides)

@@ -146,6 +146,7 @@ def test_target_mapping_reaches_the_servo_ranges():
         ({"frame_skip": 2**70}, "frame_skip must be an integer >= 1 and <= 10000 (a control period of at most 20 s)"),
         ({"randomize_friction": "12"}, "randomize_friction must be a pair (low, high) or None; got '12'"),
         ({"reset_noise_scale": False}, "reset_noise_scale must be a number from 0 to 0.5 rad; got False"),
+        ({"robot": ["hexabot"]}, "unknown robot ['hexabot']; known: hexabot, quadbot"),  # was: unhashable type
     ],
 )
 def test_bad_arguments_say_what_is_allowed(kwargs, words):
