@@ -165,7 +165,10 @@ class LeggedEnv(gymnasium.Env):
         reach = float(np.abs(self.command_range[:2]).max()) * math.sqrt(2) * EPISODE_SECONDS
         self.scene = EnvScene(p, terrain, slope_deg, roughness, reach, randomization, stairs)
         self.model, self.data = self.scene.model, self.scene.data
-        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.dt)}
+        # The control rate: round(1 / dt) was 0 for a control period over 2 s (Gymnasium's render check asserts > 0)
+        # and paced the window off the period (17 fps at 60 ms); a whole number stays an int (50, 10).
+        fps = 1.0 / self.dt
+        self.metadata = {**self.metadata, "render_fps": round(fps) if math.isclose(fps, round(fps)) else fps}
         cameras = [self.model.camera(i).name for i in range(self.model.ncam)]
         if not isinstance(camera, str) or camera not in cameras:  # checked here, not at the first render()
             raise ValueError(f"unknown camera {camera!r}; known: {', '.join(cameras)}")

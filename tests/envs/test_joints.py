@@ -235,3 +235,14 @@ def test_reset_options_are_refused_not_ignored(options):
     vec = gymnasium.make_vec("hexabot_sim/HexabotJoints-v0", num_envs=1)
     with pytest.raises(ValueError, match=r"reset\(\) takes no options"):
         vec.reset(seed=0, options=options)
+
+
+@pytest.mark.parametrize(("frame_skip", "fps"), [(10, 50), (30, 1 / 0.06), (2000, 0.25), (10000, 0.05)])
+def test_render_fps_is_the_control_rate(frame_skip, fps, gl_backend):
+    # round(1 / dt) was 0 from a 2 s control period on: Gymnasium's render check (run by make) then asserted.
+    name = "hexabot_sim/HexabotJoints-v0"
+    env = gymnasium.make(name, frame_skip=frame_skip, render_mode="rgb_array", width=8, height=6)
+    assert env.metadata["render_fps"] == pytest.approx(fps, rel=1e-12)
+    assert type(env.metadata["render_fps"]) is (int if frame_skip == 10 else float)
+    env.reset(seed=0)
+    assert env.render().shape == (6, 8, 3)
