@@ -12,7 +12,7 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
-from hexabot_sim.envs.scene import EPISODE_SECONDS, PLATE_SITE, EnvScene, Randomization, check_range
+from hexabot_sim.envs.scene import EPISODE_SECONDS, PLATE_SITE, EnvScene, Randomization, check_range, walk_reach
 from hexabot_sim.kinematics import legged
 from hexabot_sim.walking.constants import FALL_TILT_DEG
 from hexabot_sim.walking.parameters import WalkParams
@@ -162,7 +162,7 @@ class LeggedEnv(gymnasium.Env):
         randomization = Randomization(randomize_friction, randomize_mass, randomize_servo_gain)
         self.frame_skip = int(frame_skip)
         self.dt = self.frame_skip * p.timestep  # [s] the control period
-        reach = float(np.abs(self.command_range[:2]).max()) * math.sqrt(2) * EPISODE_SECONDS
+        reach = walk_reach(float(np.abs(self.command_range[:2]).max()))
         self.scene = EnvScene(p, terrain, slope_deg, roughness, reach, randomization, stairs)
         self.model, self.data = self.scene.model, self.scene.data
         # The control rate: round(1 / dt) was 0 for a control period over 2 s (Gymnasium's render check asserts > 0)

@@ -11,7 +11,8 @@ import numpy as np
 from hexabot_sim import params, registry
 from hexabot_sim.kinematics import legged
 from hexabot_sim.terrain import Ground, RoughPatch, Slope
-from hexabot_sim.terrain.heightfield import CELL, MARGIN
+from hexabot_sim.terrain.heightfield import CELL, MARGIN, MAX_POINTS
+from hexabot_sim.terrain.limits import apart
 from hexabot_sim.terrain.stairs import Stairs
 from hexabot_sim.walking.ground import start_pose
 from hexabot_sim.walking.parameters import WalkParams
@@ -21,6 +22,13 @@ TERRAINS: tuple[str, ...] = ("flat", "slope", "rough", "stairs")
 STAIRS: tuple[float, float, int] = (0.04, 0.25, 3)  # rise [m], run [m], count: issue 19's staircase
 STAIRS_DISTANCE: float = 0.5  # [m] the first step's edge ahead of the start (+x), as hexabot-stairs
 EPISODE_SECONDS: float = 20.0  # [s] the registered episodes' length (max_episode_steps x control period)
+
+
+def walk_reach(speed: float) -> float:
+    """How far [m] from the start an episode at commanded speeds up to `speed` [m/s] in x and y may walk."""
+    return speed * math.sqrt(2) * EPISODE_SECONDS
+
+
 PLATE_SITE_MARGIN: float = 0.002  # [m] the plate's touch site is the plate grown by this on every side
 PLATE_SITE: str = "env_plate"  # the site and touch sensor added to the torso (the fall detector)
 MAX_ROUGHNESS: float = 0.03  # [m] rougher patches may rise above the plate's underside at the start
@@ -147,6 +155,15 @@ class EnvScene:
         # A square patch about the start that holds any episode's walk (reach [m]), the level floor beyond it.
         half = round((reach + MARGIN) / CELL) * CELL
         self.extent = (-half, half, -half, half)
+        points = RoughPatch(roughness, 0, self.extent).points()
+        if self.roughness and points > MAX_POINTS:  # 1 m/s: 8.4e6 points, 25 s and ~1 GB to build
+            fits = (math.sqrt(MAX_POINTS) - 1) * CELL / 2 - MARGIN - CELL  # the largest half-side's reach, rounded down
+            speed, most = apart(reach / walk_reach(1.0), fits / walk_reach(1.0), "down")
+            raise ValueError(
+                f"terrain='rough' for commanded speeds up to {speed} m/s lays a {2 * half:.3g} m square heightfield "
+                f"of {points:.3g} points (at most {MAX_POINTS:.3g}): keep command_range's vx and vy within "
+                f"+-{most} m/s"
+            )
         self.slope = Slope(slope_deg if terrain == "slope" else 0.0, (1.0, 0.0), "uphill")
         self.ground = self._ground(0)
         spec = mujoco.MjSpec.from_string(build_xml(p, self.ground))

@@ -104,3 +104,17 @@ def test_bad_stairs_are_refused_naming_what_is_allowed(stairs, words):
 def test_a_terrain_keyword_is_checked_where_its_terrain_is_not_chosen(kwargs, words):
     with pytest.raises(ValueError, match=words):
         LeggedJointsEnv(**kwargs)
+
+
+def test_rough_ground_for_fast_commands_is_refused_at_make_with_the_speed_that_fits():
+    """terrain='rough' lays a square patch holding any episode's walk: at 1 m/s 8.4e6 points (25 s and ~1 GB to build,
+    several GB at the 3 m/s command_range allows, times num_envs in a vector environment). Above the heightfield limit
+    the environment is refused at make, naming the largest speed; that speed builds."""
+
+    with pytest.raises(ValueError, match=r"terrain='rough' for commanded speeds up to 1 m/s lays a 57.8 m square") as e:
+        LeggedJointsEnv(terrain="rough", command_range=((0, 1.0), (0, 0), (0, 0)))
+    assert "\n" not in str(e.value)
+    most = float(re.search(r"within \+-([0-9.]+) m/s", str(e.value)).group(1))
+    assert 0.4 < most < 0.5
+    env = LeggedJointsEnv(terrain="rough", command_range=((-most, most), (0, 0), (0, 0)))
+    assert env.scene.ground.rough.points() <= 2_000_000
