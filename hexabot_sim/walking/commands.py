@@ -385,12 +385,18 @@ HEADING_DISTANCE: float = 0.05  # [m] a course's direction is the one to its fir
 
 
 def direction(course: np.ndarray, reach: float = HEADING_DISTANCE) -> np.ndarray:
-    """Unit vector (2,) from the start to a course's (k, 2) first point `reach` [m] away (its farthest point if none
-    is; +x if it never leaves the start)."""
+    """Unit vector (2,) from the start to where a course (k, 2), a polyline from the start, first gets `reach` [m]
+    away (its farthest point if it never does; +x if it never leaves the start)."""
     distance = np.hypot(course[:, 0], course[:, 1])
     far = np.flatnonzero(distance >= reach)
     k = int(far[0]) if far.size else int(np.argmax(distance))
-    return course[k] / distance[k] if distance[k] > 1e-9 else np.array([1.0, 0.0])
+    point = course[k]
+    if far.size and k > 0:  # on the segment into it, the point at exactly `reach` (|p0 + s (p1 - p0)| = reach)
+        p0, step = course[k - 1], course[k] - course[k - 1]
+        a, b, c = step @ step, 2.0 * (p0 @ step), p0 @ p0 - reach**2
+        point = p0 + (-b + math.sqrt(max(b * b - 4.0 * a * c, 0.0))) / (2.0 * a) * step
+    length = math.hypot(point[0], point[1])
+    return point / length if length > 1e-9 else np.array([1.0, 0.0])
 
 
 def extent(course: np.ndarray, margin: float) -> tuple[float, float, float, float]:

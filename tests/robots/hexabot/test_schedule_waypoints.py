@@ -366,8 +366,11 @@ def test_the_slope_kerb_and_stairs_face_the_way_a_schedule_or_course_sets_out_no
         course = commands.path(crab_first, SETTLE_TIME)
         first = course[np.flatnonzero(np.hypot(*course.T) >= 0.5)[0]]
         assert walking_direction(crab_first) == pytest.approx([0.0, 1.0])
-        assert terrain(crab_first).obstacles[0].along == pytest.approx(first / np.hypot(*first))
+        assert terrain(crab_first).obstacles[0].along == pytest.approx(first / np.hypot(*first), abs=1e-3)
         assert 0.15 < first[1] / first[0] < 0.25  # ~11 deg off +x
+    # Waypoints: where the polyline crosses 0.5 m, (0.4, 0.3) on its second leg, not its next corner (2, 0.3).
+    corner = walk_params(waypoints=[[0.3, 0.3], [2, 0.3]], kerb_height=0.02, duration=40)
+    assert terrain(corner).obstacles[0].along == pytest.approx((0.8, 0.6))
     # The pavement runs on past a 0.3 m/s schedule's 29 m (the walk's own 0.01 m/s laid the least, 20 m).
     fast = walk_params(schedule=[[0, 0.3, 0, 0]], vx=0.01, kerb_height=0.02, duration=100)
     kerb = terrain(fast).obstacles[0]
