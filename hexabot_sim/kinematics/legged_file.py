@@ -10,7 +10,6 @@ hold the robot up (statics at the neutral stance).
 from __future__ import annotations
 
 import dataclasses
-import math
 import os
 from typing import Any
 
@@ -19,7 +18,16 @@ import numpy as np
 from hexabot_sim.errors import UsageError, printable
 from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.kinematics import legged, legged_mjcf
-from hexabot_sim.kinematics.robot_file import LENGTH_MAX, MASS_MAX, NAME, brief, load_toml, one_line, read_text
+from hexabot_sim.kinematics.robot_file import (
+    LENGTH_MAX,
+    MASS_MAX,
+    NAME,
+    brief,
+    finite,
+    load_toml,
+    one_line,
+    read_text,
+)
 
 GRAVITY: float = 9.81  # [m/s^2] as MuJoCo's default
 TOP_KEYS = ("name", "summary", "leg", "body", "stance", "legs")
@@ -118,7 +126,7 @@ class _Reader:
         return table
 
     def number(self, value: Any, where: str, key: str, unit: str, lo: float, hi: float, zero: bool = False) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not finite(value):
             raise self.fail(where, f"'{key}' must be a finite number [{unit}]; got {brief(value)}")
         if not ((zero and value == 0) or lo <= value <= hi):
             allowed = f"{'0 or ' if zero else ''}{lo:g} to {hi:g} {unit}"

@@ -7,6 +7,7 @@ import math
 import os
 import re
 import stat
+import sys
 import tomllib
 import unicodedata
 from collections.abc import Callable, Mapping
@@ -173,6 +174,9 @@ def load_toml(text: str, source: str) -> dict[str, Any]:
         raise UsageError(f"robot file {source}: not valid TOML: {e}") from None
     except RecursionError:  # tomllib parses nested arrays and inline tables recursively: `x = [[[[...]]]]`
         raise UsageError(f"robot file {source}: not valid TOML: arrays or tables nested too deeply") from None
+    except ValueError as e:  # an integer longer than Python converts ("Exceeds the limit (4300 digits) ..."):
+        reason = f"an integer of more than {sys.get_int_max_str_digits()} digits" if "digits" in str(e) else e
+        raise UsageError(f"robot file {source}: not valid TOML: {reason}") from None
 
 
 def parse(text: str, source: str = "<robot file>", *, builtin: bool = False) -> RobotSpec:
@@ -220,8 +224,8 @@ class _Reader:
     def number(self, value: Any, where: str, key: str, unit: str, limit: float) -> float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise self.fail(where, f"'{key}' must be a number [{unit}]; got {brief(value)}")
-        if not math.isfinite(value):
-            raise self.fail(where, f"'{key}' must be a finite number [{unit}]; got {value}")
+        if not finite(value):
+            raise self.fail(where, f"'{key}' must be a finite number [{unit}]; got {brief(value)}")
         if abs(value) > limit:
             hint = ""
             if unit == "rad":
@@ -389,6 +393,15 @@ class _Reader:
         angles = [self.number(v, where, f"rpy[{i}]", self.unit, self.angle_max) for i, v in enumerate(rpy)]
         cs = [_cos_sin(v, self.unit) for v in angles]
         return position, _rz(*cs[2]) @ _ry(*cs[1]) @ _rx(*cs[0]) + 0.0
+
+
+def finite(value: int | float) -> bool:
+    """Whether a TOML number is finite as a float: not nan or inf, nor an integer beyond a float's range (TOML
+    integers have any number of digits: math.isfinite(10**400) raises OverflowError)."""
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
 
 
 def one_line(text: Any) -> bool:

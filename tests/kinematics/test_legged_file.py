@@ -148,6 +148,13 @@ def test_a_pipe_a_nested_document_and_a_byte_order_mark_as_robot_files_do(tmp_pa
     bom = tmp_path / "bom.toml"
     bom.write_bytes(b"\xef\xbb\xbf" + EXAMPLE.read_bytes())
     assert legged_file.read(bom).layout == legged_file.read(EXAMPLE).layout
+    # TOML integers have any number of digits: an OverflowError in math.isfinite, a ValueError from tomllib.
+    for digits, message in ((400, r"\[leg\]: 'l1' must be a finite number \[m\]"), (5000, "more than 4300 digits")):
+        big = tmp_path / "big_int.toml"
+        big.write_text(re.sub(r"(?m)^l1 = \S+", "l1 = 1" + "0" * digits, EXAMPLE.read_text()))
+        with pytest.raises(UsageError, match=message) as e:
+            legged_file.read(big)
+        assert "\n" not in str(e.value)
 
 
 def test_a_leg_with_a_one_millimetre_coxa_compiles(tmp_path: Path) -> None:

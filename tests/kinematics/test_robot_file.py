@@ -271,3 +271,17 @@ def test_lengths_set_to_zero_are_checked_like_the_files_own(tmp_path, capsys):
         code, out, err = cli(capsys, *argv)
         assert code == 2 and out == "" and err.count("\n") == 1 and "the tool point never moves" in err, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["arm.toml"]
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [("1" + "0" * 400, "'a' must be a finite number [m]; got 1000"),
+     ("1" + "0" * 5000, "not valid TOML: an integer of more than 4300 digits")],
+)  # fmt: skip
+def test_an_integer_beyond_a_float_is_one_line_not_an_internal_error(tmp_path, capsys, value, message):
+    """TOML integers have any number of digits: a = 1e400 written out was an OverflowError in math.isfinite, and
+    one of 5,000 digits a ValueError from tomllib (exit 1, "internal error")."""
+    path = write(tmp_path, ARM.replace("a = 0.3", f"a = {value}", 1))
+    code, out, err = cli(capsys, "kin", str(path))
+    assert code == 2 and out == "" and err.count("\n") == 1 and message in err, err
+    assert "internal error" not in err
