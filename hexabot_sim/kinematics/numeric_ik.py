@@ -26,6 +26,10 @@ LAMBDA_START: float = 1e-3  # damping, relative to the size² of the chain (J is
 LAMBDA_MAX: float = 1e6  # a seed whose damping grows beyond this has stalled (about 10 refused steps in a row)
 STALL: float = 1e-4  # a seed whose accepted step lowers its squared error by less than this fraction has stalled
 DEDUP_TOL: float = 1e-6  # [rad or m] solutions agreeing this closely (angles mod 2π) are one
+# Two solutions this close [rad or m] are also one when the points between them reach the target too: at a singular
+# solution (an arm stretched straight) the error grows only quadratically away from it, so seeds stop anywhere within
+# about sqrt(RESIDUAL_TOL / size) of it and 16 "distinct solutions" were one.
+JOIN_TOL: float = 1e-3
 MAX_SOLUTIONS: int = 16  # reported at most (a redundant chain has a continuum of them)
 NEAR_SINGULAR: float = 1e-6  # a solution with σmin / σmax of its task Jacobian below this is flagged
 SEED: int = 20  # the random seeds are the same on every call: the same target gives the same answer
@@ -187,7 +191,9 @@ def solve(chain: SerialChain, target: ArrayLike, where: str | None = None) -> li
             best = (float(pos_err[k]), float(rot_err[k]))
         revolute = ~np.array([j.prismatic for j in chain.joints])
         for candidate in q[ok][np.argsort((pos_err + size * rot_err)[ok], kind="stable")]:
-            if len(found) < MAX_SOLUTIONS and not any(_same(candidate, s, revolute) for s in found):
+            if len(found) < MAX_SOLUTIONS and not any(
+                _same(candidate, s, revolute) or _joined(batch, candidate, s, revolute, goal, pose) for s in found
+            ):
                 found.append(candidate)
         if found:
             break
@@ -254,6 +260,21 @@ def _same(q: np.ndarray, other: np.ndarray, revolute: np.ndarray) -> bool:
     diff = q - other
     diff[revolute] = (diff[revolute] + math.pi) % (2 * math.pi) - math.pi
     return bool(np.max(np.abs(diff)) <= DEDUP_TOL)
+
+
+def _joined(
+    batch: _Batch, q: np.ndarray, other: np.ndarray, revolute: np.ndarray, goal: np.ndarray, pose: bool
+) -> bool:
+    """Whether q and `other` (both solutions) lie within JOIN_TOL and the points a quarter, half and three quarters of
+    the way between them reach the target too: one solution (or one piece of a continuum), not two."""
+    diff = q - other
+    diff[revolute] = (diff[revolute] + math.pi) % (2 * math.pi) - math.pi
+    if np.max(np.abs(diff)) > JOIN_TOL:
+        return False
+    tip = batch.frames(other + np.array([0.25, 0.5, 0.75])[:, None] * diff)[:, -1]  # (3, 4, 4)
+    pos = np.linalg.norm((goal[:3, 3] if pose else goal) - tip[:, :3, 3], axis=1)
+    rot = np.linalg.norm(_rotation_error(tip[:, :3, :3], goal[:3, :3]), axis=1) if pose else np.zeros(3)
+    return bool(np.all(pos <= RESIDUAL_TOL) and np.all(rot <= RESIDUAL_TOL))
 
 
 def _report(batch: _Batch, q: np.ndarray, goal: np.ndarray, pose: bool) -> list[Solution]:

@@ -193,3 +193,17 @@ def test_kin_file_text_and_json(tmp_path, capsys):
     assert report["solutions"] and all(s["orientation_residual"] <= 1e-10 for s in report["solutions"])
     code, out, err = cli(capsys, "kin", str(path), "--target=0.1,0.2,0.3")
     assert code == 2 and "needs --target x,y,z,roll,pitch,yaw" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("q3", [0.0, math.pi])
+def test_a_stretched_or_folded_arm_is_one_solution_per_branch_not_a_cluster(q3):
+    """The elbow arm as a file, stretched (q3 = 0) or folded (q3 = pi): its two shoulder branches each meet their
+    elbow-up and elbow-down twins there. The seeds stopped anywhere within ~1e-5 rad of the singular solution (the
+    error grows quadratically away from it) and kin listed 16 "distinct solutions" instead of 2."""
+    chain = robot_file.read(robot_file.builtin_files()["elbow"]).chain()
+    target = chain.fk(np.array([0.3, 0.2, q3]))[:3, 3]
+    solutions = numeric_ik.solve(chain, target)
+    assert len(solutions) == 2
+    for s in solutions:
+        assert s.position_residual <= numeric_ik.RESIDUAL_TOL and s.sigma_min < 1e-5
+        assert abs(math.remainder(s.q[2] - q3, 2 * math.pi)) < 1e-4
