@@ -63,6 +63,8 @@ def export(
         shown = printable(os.fsdecode(raw))
         if not raw:  # Path("") is '.': it was refused as "MJCF file '.' is a folder"
             raise UsageError(f"{what} needs a file name; got an empty one")
+        if b"\0" in os.fsencode(raw):  # pathlib's ValueError "embedded null byte", not one line
+            raise UsageError(f"{what} '{shown}' holds a NUL byte, which no file name can")
         if raw.endswith((os.sep, os.altsep or os.sep) if isinstance(raw, str) else os.fsencode(os.sep)):
             raise UsageError(f"{what} {shown!r} ends with '{os.sep}': that names a folder; give a file name")
         path = Path(os.fsdecode(raw))

@@ -95,6 +95,8 @@ class RobotSpec:
     def values(self, overrides: Mapping[str, float] | None = None) -> dict[str, float]:
         """Every length by name in [m]: the defaults replaced by `overrides` (validated)."""
         values = {name: spec.default for name, spec in self.lengths.items()}
+        if not (overrides is None or isinstance(overrides, Mapping)):  # lengths="a2=0.3": an AttributeError
+            raise UsageError(f"the lengths of {self.name} are a mapping name -> [m]; got {type(overrides).__name__}")
         for name, value in (overrides or {}).items():
             if name not in self.lengths:
                 known = ", ".join(self.lengths) or "none (the file has no [lengths])"

@@ -45,7 +45,12 @@ def resolve(robot: str | os.PathLike[str] | RobotSpec) -> RobotSpec:
     """
     if isinstance(robot, RobotSpec):
         return robot
-    text = os.fspath(robot)
+    text = os.fspath(robot) if isinstance(robot, (str, os.PathLike)) else None
+    if not isinstance(text, str):  # an int, None, bytes: pathlib's TypeError, not one line
+        raise UsageError(
+            f"a robot is one of {', '.join(ROBOTS)}, the path of a robot file (str or os.PathLike) or a RobotSpec; "
+            f"got {type(robot).__name__}"
+        )
     if text in ROBOTS:
         return ROBOTS[text]
     path = Path(text)

@@ -119,6 +119,25 @@ def test_the_api_exports_a_spec_and_refuses_a_folder(tmp_path):
         api.export("leg", mjcf=tmp_path)
 
 
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [({"robot": 5}, "a robot is one of rrp, elbow, stanford, scara, leg, the path of a robot file (str or os"),
+     ({"robot": None}, "or a RobotSpec; got NoneType"),
+     ({"robot": b"leg.toml"}, "or a RobotSpec; got bytes"),
+     ({"mjcf": "leg\0.xml"}, "MJCF file 'leg\\x00.xml' holds a NUL byte, which no file name can"),
+     ({"lengths": "l3=0.2"}, "the lengths of leg are a mapping name -> [m]; got str"),
+     ({"lengths": [0.2]}, "the lengths of leg are a mapping name -> [m]; got list")],
+)  # fmt: skip
+def test_the_api_refuses_a_wrong_type_in_one_line(tmp_path, monkeypatch, kwargs, message):
+    """robot=5, None or bytes was pathlib's TypeError, a NUL in a path its ValueError, lengths="l3=0.2" an
+    AttributeError: every wrong argument is one UsageError, as mjcf=3 already was."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(UsageError) as info:
+        hs.export(**({"robot": "leg", "mjcf": "leg.xml"} | kwargs))
+    assert message in str(info.value) and "\n" not in str(info.value)
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_the_robot_file_itself_is_never_written_over_not_even_with_force(tmp_path, capsys):
     robot = tmp_path / "slide.toml"
     robot.write_text(SLIDE)
