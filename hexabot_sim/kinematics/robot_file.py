@@ -31,6 +31,9 @@ MAX_LENGTHS: int = 64  # named lengths: a 7-joint table with tool and base names
 DISTANCE_MAX: float = 100.0  # |a|, |d|, |prismatic limit|, |tool and base xyz| typed as numbers, in [m]
 ANGLE_MAX_DEG: float = 360.0  # |theta|, |alpha|, |revolute limit|, |rpy| in [deg] (2π rad): beyond it, a unit slip
 MASS_MAX: float = 1000.0  # [kg] a link's optional mass
+# [kg] and at least this (as a legged-robot file's masses): 1e-12 kg scaled the link's inertia below what MuJoCo
+# accepts ("inertia must have positive eigenvalues"): export wrote a model that does not load, arm-track crashed.
+MASS_MIN: float = 1e-4
 NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_.-]{0,63}")  # robot and joint names: XML-, URDF- and file-safe
 LENGTH_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,63}")  # length names: symbols of --symbolic too
 
@@ -361,8 +364,8 @@ class _Reader:
                 raise self.fail(where, f"'lower' ({shown_lo:g} {unit}) must be less than 'upper' ({shown_hi:g} {unit})")
         if "mass" in row:
             mass = self.number(row["mass"], where, "mass", "kg", MASS_MAX)
-            if not mass > 0:
-                raise self.fail(where, f"'mass' must be > 0 kg; got {mass:g}")
+            if not mass >= MASS_MIN:
+                raise self.fail(where, f"'mass' must be {MASS_MIN:g} to {MASS_MAX:g} kg; got {mass:g}")
             out["mass"] = mass
         return out
 

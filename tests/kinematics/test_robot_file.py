@@ -128,7 +128,7 @@ rpy = [0.0, 0.0, 1.5707963267948966]
 )  # fmt: skip
 def test_bad_fields_are_one_line_naming_file_joint_and_field(tmp_path, old, new, message):
     if old == "mass":
-        old, new, message = "upper = 170.0", "upper = 170.0\nmass = -1.0", "joint 1 ('q1'): 'mass' must be > 0 kg"
+        old, new, message = "upper = 170.0", "upper = 170.0\nmass = -1.0", "joint 1 ('q1'): 'mass' must be 0.0001 to"
     assert old in ARM
     path = write(tmp_path, ARM.replace(old, new, 1))
     with pytest.raises(UsageError) as info:
@@ -285,3 +285,19 @@ def test_an_integer_beyond_a_float_is_one_line_not_an_internal_error(tmp_path, c
     code, out, err = cli(capsys, "kin", str(path))
     assert code == 2 and out == "" and err.count("\n") == 1 and message in err, err
     assert "internal error" not in err
+
+
+def test_the_smallest_mass_allowed_makes_a_model_mujoco_loads(tmp_path, capsys):
+    """mass = 1e-12 kg scaled a link's inertia below MuJoCo's minimum: export wrote an MJCF that MuJoCo refused to
+    load ("inertia must have positive eigenvalues") and arm-track ended in an internal error."""
+    import mujoco
+
+    text = ARM.replace("theta = 0.0\n", "theta = 0.0\nmass = 0.0001\n")
+    assert text.count("mass = ") == 3
+    code, _, err = cli(capsys, "export", str(write(tmp_path, text)), "--mjcf", str(tmp_path / "light.xml"))
+    assert code == 0, err
+    mujoco.MjModel.from_xml_path(str(tmp_path / "light.xml"))
+    code, out, err = cli(capsys, "export", str(write(tmp_path, text.replace("0.0001", "1e-12"))), "--mjcf",
+                         str(tmp_path / "lighter.xml"))  # fmt: skip
+    assert code == 2 and out == "" and err.count("\n") == 1 and "'mass' must be 0.0001 to 1000 kg; got 1e-12" in err
+    assert not (tmp_path / "lighter.xml").exists()
