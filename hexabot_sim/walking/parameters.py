@@ -151,6 +151,14 @@ class WalkParams:
                 f"parameter 'stand_height' must be 0 (the robot's own) or {STAND_HEIGHT_MIN:g} to 0.19 m; got "
                 f"{self.stand_height:g}"
             )
+        layout = self.ROBOT.layout  # a robot file's thick plate: the legged file checks its own [stance] height only
+        if self.stand_height + layout.foot_radius <= layout.plate[2]:
+            raise ValueError(
+                f"parameter 'stand_height' = {self.stand_height:g} m puts the plate of {self.ROBOT.name} on the "
+                f"ground: its underside is {layout.plate[2]:g} m below the hips, the ground "
+                f"{self.stand_height + layout.foot_radius:g} m (stand_height + foot radius); stand_height must be more "
+                f"than {layout.plate[2] - layout.foot_radius:g} m"
+            )
         if self.duty and not self.gait_duty_range()[0] <= self.duty < 1.0:
             lo = self.gait_duty_range()[0]
             raise ValueError(

@@ -85,3 +85,24 @@ def test_a_missing_file_or_unknown_name_is_refused(capsys: pytest.CaptureFixture
     code, _, err = cli(capsys, "run", "hexabot-walk", "--set", "robot=quadbot", "--out", str(tmp_path / "o"))
     assert code == 2 and err.count("\n") == 1
     assert "parameter 'robot' must be one of hexabot, or the path of a legged-robot file (.toml) with six legs" in err
+
+
+def test_a_stand_height_that_puts_a_thick_plate_on_the_ground_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The file's own [stance] height is checked against its plate, but stand_height (or a schedule row's) was not:
+    a 10 cm plate at stand_height 0.02 m started 22 mm inside the floor and the walk was written out as fallen."""
+    path = _variant(tmp_path, "size = [0.36, 0.20, 0.03]", "size = [0.36, 0.20, 0.1]")
+    assert walk_params(robot=str(path), stand_height=0.0421).stand_height == 0.0421  # 0.1 mm above the ground
+    out = tmp_path / "out"
+    code, stdout, err = cli(capsys, "run", "hexabot-walk", "--set", f"robot={path}", "--set", "stand_height=0.02",
+                            "--out", str(out))  # fmt: skip
+    assert code == 2 and stdout == "" and err.count("\n") == 1 and not out.exists()
+    assert "'stand_height' = 0.02 m puts the plate of my_hexapod on the ground: its underside is 0.05 m" in err
+    assert "stand_height must be more than 0.042 m" in err
+    schedule = tmp_path / "schedule.csv"
+    schedule.write_text("t,vx,vy,yaw_rate,stand_height\n0,0.05,0,0,0.1\n2,0.05,0,0,0.03\n")
+    code, stdout, err = cli(capsys, "run", "hexabot-walk", "--set", f"robot={path}", "--set", f"schedule={schedule}",
+                            "--set", "duration=4", "--out", str(out))  # fmt: skip
+    assert code == 2 and err.count("\n") == 1 and not out.exists()
+    assert "schedule row 2 (t = 2 s): parameter 'stand_height' = 0.03 m puts the plate of my_hexapod on the" in err
