@@ -36,6 +36,9 @@ MASS_MAX: float = 1000.0  # [kg] a link's optional mass
 MASS_MIN: float = 1e-4
 NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_.-]{0,63}")  # robot and joint names: XML-, URDF- and file-safe
 LENGTH_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,63}")  # length names: symbols of --symbolic too
+# Symbol names --symbolic prints as something else: c1, s23 are its cos/sin of joint angles, pi, E, I, oo, zoo, nan
+# sympy's constants (a length "c1" printed "c1*c1" for c1·cos q1, one named "pi" as π in the LaTeX).
+MISREAD_SYMBOL = re.compile(r"[cs][0-9]+|pi|E|I|oo|zoo|nan")
 
 TOP_KEYS = ("name", "summary", "convention", "angles", "lengths", "joints", "tool", "base")
 JOINT_KEYS = ("name", "type", "a", "alpha", "d", "theta", "lower", "upper", "mass")
@@ -315,6 +318,12 @@ class _Reader:
                     "[lengths]",
                     f"a length name must be 1 to 64 letters, digits, _ (starting with a letter or _; it is a symbol in "
                     f"--symbolic, where - and . would read as a minus and a decimal point); got {brief(key)}",
+                )
+            if MISREAD_SYMBOL.fullmatch(key):
+                raise self.fail(
+                    "[lengths]",
+                    f"the length name {brief(key)} would be misread in --symbolic, where c1, s23 are cos and sin of "
+                    "joint angles and pi, E, I, oo, zoo, nan are constants; choose another name",
                 )
             where = f"[lengths] {key}"
             if isinstance(entry, dict):

@@ -14,6 +14,7 @@ import numpy as np
 from hexabot_sim.errors import HexabotError, UsageError
 from hexabot_sim.kinematics import robots
 from hexabot_sim.kinematics.chain import SerialChain
+from hexabot_sim.kinematics.robot_file import MISREAD_SYMBOL
 
 try:
     import sympy as sp  # type: ignore[import-untyped]
@@ -398,7 +399,8 @@ def _joint_symbol_name(index: int, joint_name: str, prismatic: bool, taken: set[
     """q<i> for a revolute joint; for a prismatic one its own name (d3), else d<i>, else q<i>. Adds it to `taken`."""
     candidates = [f"q{index}"]
     if prismatic:
-        own = [joint_name] if joint_name.isidentifier() and not _JOINT_SYMBOL.fullmatch(joint_name) else []
+        misread = _JOINT_SYMBOL.fullmatch(joint_name) or MISREAD_SYMBOL.fullmatch(joint_name)  # c1 read as cos q1
+        own = [joint_name] if joint_name.isidentifier() and not misread else []
         candidates = [*own, f"d{index}", f"q{index}"]
     for candidate in candidates:
         if candidate not in taken:

@@ -130,6 +130,27 @@ def test_symbolic_works_for_a_file_with_its_lengths_as_symbols(tmp_path, capsys)
     assert "c1*l1 + c12*l2" in t0n and "l1*s1 + l2*s12" in t0n and "z" in t0n
 
 
+@pytest.mark.parametrize("name", ["c1", "s12", "pi", "I"])
+def test_a_length_named_as_an_abbreviation_or_a_constant_is_refused(tmp_path, capsys, name):
+    """A length "c1" printed "c1*c1 + c12*l2" in --symbolic (c1 times cos q1, read as cos² q1), one named "pi" as π
+    in the LaTeX: refused in one line, as "l-1" is."""
+    code, out, err = cli(capsys, "kin", str(write(tmp_path, PLANAR.replace("l1", name))))
+    assert code == 2 and out == "" and err.count("\n") == 1, err
+    assert f"[lengths]: the length name '{name}' would be misread in --symbolic, where c1, s23 are cos and sin" in err
+
+
+@pytest.mark.skipif(importlib.util.find_spec("sympy") is None, reason="needs sympy (the 'symbolic' extra)")
+@pytest.mark.parametrize("name", ["c1", "pi"])
+def test_a_slide_named_as_an_abbreviation_or_a_constant_gets_its_index_symbol(tmp_path, capsys, name):
+    """A prismatic joint's own name is its symbol: "c1" printed T0n[3, 4] = c1 (read as cos q1), "pi" as π."""
+    code, out, err = cli(capsys, "kin", str(write(tmp_path, PLANAR.replace('name = "z"', f'name = "{name}"'))),
+                         "--json", "--symbolic")  # fmt: skip
+    assert code == 0, err
+    symbolic = json.loads(out)["symbolic"]
+    assert symbolic["T0n"].splitlines()[4].split()[-2:] == ["d3", "]"]
+    assert "\\pi" not in symbolic["T0n_latex"] and "d_{3}" in symbolic["T0n_latex"]
+
+
 @pytest.mark.skipif(importlib.util.find_spec("sympy") is None, reason="needs sympy (the 'symbolic' extra)")
 def test_symbolic_stops_in_bounded_time_when_the_closed_form_explodes(tmp_path, capsys, monkeypatch):
     """General twists multiply the terms at every joint: 7 joints at 37 deg ran for minutes; now a one-line refusal
