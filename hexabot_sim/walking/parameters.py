@@ -275,6 +275,50 @@ def unchecked(p: WalkParams, **changes: object) -> WalkParams:
     return q
 
 
+def support_problem(p: WalkParams) -> str:
+    """'' if every set of feet the gait stands on (three or more: not a trot's two) surrounds the body's centre at
+    the neutral stance, else why not. The gaits take the legs in the layout's order (the left row front to rear,
+    then the right row): a robot file whose 'names' list them otherwise (lf, rf, lm, ...) stood a tripod on its
+    three left feet and shuffled at -0.013 m/s for 0.1; legs turned all one way stood nowhere and fell."""
+    gait = p.the_gait()
+    layout = p.ROBOT.layout
+    feet = layout.neutral_feet_body()[:, :2]  # (n, 2)
+    offsets = np.asarray(gait.offsets, dtype=float)
+    events = np.mod(np.concatenate([-offsets, gait.duty - offsets]), 1.0) + 1e-9  # just after each lift or touchdown
+    for down in dict.fromkeys(tuple(np.flatnonzero(row)) for row in np.mod(events[:, None] + offsets, 1.0) < gait.duty):
+        margin = _hull_margin(feet[list(down)]) if len(down) >= 3 else math.inf
+        if margin < -1e-9:
+            legs = ", ".join(layout.legs[i] for i in down)
+            return (
+                f"the {gait.name} gait stands on {legs} at once, and their feet do not surround the body's centre "
+                f"(it is at least {-margin * 1000:.0f} mm outside them at the neutral stance): the gaits take the "
+                "legs in the robot file's order, the left row front to rear, then the right row; reorder 'names', or "
+                "move the hips or turn the yaws"
+            )
+    return ""
+
+
+def _hull_margin(points: np.ndarray) -> float:
+    """Distance [m] of the origin inside the convex hull of `points` (k, 2), k >= 3, from its nearest edge; < 0
+    outside (minus the distance to the farthest edge line it is beyond), -inf for points on one line."""
+
+    def cross(o: tuple, a: tuple, b: tuple) -> float:
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    pts = sorted(map(tuple, points.tolist()))
+    lower: list[tuple] = []
+    upper: list[tuple] = []
+    for chain, order in ((lower, pts), (upper, pts[::-1])):  # Andrew's monotone chain, counter-clockwise
+        for point in order:
+            while len(chain) >= 2 and cross(chain[-2], chain[-1], point) <= 0:
+                chain.pop()
+            chain.append(point)
+    hull = lower[:-1] + upper[:-1]
+    if len(hull) < 3:
+        return -math.inf
+    return min(cross(a, b, (0.0, 0.0)) / math.dist(a, b) for a, b in zip(hull, hull[1:] + hull[:1], strict=True))
+
+
 def feasibility(p: WalkParams) -> str:
     """'' if the legs can deliver the command (vx, vy, yaw_rate; only stepping in place with a schedule or waypoints,
     which replace them), else a one-line reason with the largest feasible command."""
@@ -285,6 +329,9 @@ def feasibility(p: WalkParams) -> str:
         if first not in p.gaits():
             return ""  # refused, with its row, by the schedule's check
         p = unchecked(p, gait=first, duty=0.0)  # `p` in that gait at its own duty
+    support = support_problem(p)
+    if support:
+        return support
     standing = _cycle_problem(p, Command())
     if standing:
         faster = " (or raise 'max_joint_speed')" if standing.startswith("joints would turn") else ""

@@ -106,3 +106,31 @@ def test_a_stand_height_that_puts_a_thick_plate_on_the_ground_is_refused(
                             "--set", "duration=4", "--out", str(out))  # fmt: skip
     assert code == 2 and err.count("\n") == 1 and not out.exists()
     assert "schedule row 2 (t = 2 s): parameter 'stand_height' = 0.03 m puts the plate of my_hexapod on the" in err
+
+
+def _named(order: list[str]) -> str:
+    """The example's legs listed by 'names' in this order, each with its own hip and yaw."""
+    hips = {"lf": (0.16, 0.09), "lm": (0.0, 0.10), "lr": (-0.16, 0.09)}
+    yaws = {"lf": 45.0, "lm": 90.0, "lr": 135.0}
+    for leg in list(hips):
+        hips["r" + leg[1]], yaws["r" + leg[1]] = (hips[leg][0], -hips[leg][1]), -yaws[leg]
+    text = EXAMPLE.read_text()
+    return text[: text.index("[legs]")] + (
+        f"[legs]\nnames = {order}\nhips = {[list(hips[n]) for n in order]}\nyaws = {[yaws[n] for n in order]}\n"
+    ).replace("'", '"')
+
+
+def test_legs_listed_out_of_the_gaits_order_are_refused_not_walked_on_one_side(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The gaits take the legs in the file's order: names = [lf, rf, lm, rm, lr, rr] stood the tripod on the three
+    left feet (189 mm beside the body's centre) and the walk was written out at -0.013 m/s for 0.1."""
+    path = tmp_path / "named.toml"
+    path.write_text(_named(["lf", "lm", "lr", "rf", "rm", "rr"]))
+    assert walk_params(robot=str(path)).ROBOT.layout.legs == ("lf", "lm", "lr", "rf", "rm", "rr")
+    path.write_text(_named(["lf", "rf", "lm", "rm", "lr", "rr"]))
+    out = tmp_path / "out"
+    code, stdout, err = cli(capsys, "run", "hexabot-walk", "--set", f"robot={path}", "--out", str(out))
+    assert code == 2 and stdout == "" and err.count("\n") == 1 and not out.exists()
+    assert "the tripod gait stands on lf, lm, lr at once, and their feet do not surround the body's centre" in err
+    assert "(it is at least 189 mm outside them at the neutral stance)" in err and "reorder 'names'" in err
