@@ -159,6 +159,8 @@ class WalkParams:
                 f"{self.stand_height + layout.foot_radius:g} m (stand_height + foot radius); stand_height must be more "
                 f"than {layout.plate[2] - layout.foot_radius:g} m"
             )
+        if self.stand_height != layout.stand_height:  # the robot's own stance is checked with its file
+            self._check_servos(dataclasses.replace(layout, stand_height=self.stand_height))
         if self.duty and not self.gait_duty_range()[0] <= self.duty < 1.0:
             lo = self.gait_duty_range()[0]
             raise ValueError(
@@ -215,6 +217,24 @@ class WalkParams:
                     "against 42, roll 2.1 deg against 1.0, speed -3.3 % against -1.3 %); use load_sharing=off or "
                     "admittance"
                 )
+
+    def _check_servos(self, layout: legged.Layout) -> None:
+        """Refuses a stand_height at which the servos cannot hold the robot up (a robot file's torque check is at its
+        own [stance] height: 0.59 N m servos that hold my_hexapod at 0.1 m gave way at stand_height 0.03 m)."""
+        from hexabot_sim.kinematics import legged_file
+        from hexabot_sim.kinematics.leg import IKError
+
+        feet = max(1, layout.n_legs // 2)
+        try:
+            need = legged_file.standing_torque(layout, feet)
+        except IKError:
+            return  # out of reach: the gait's feasibility check says so, with what to change
+        if need > self.ROBOT.torque_limit:
+            raise ValueError(
+                f"parameter 'stand_height' = {self.stand_height:g} m: the servos of {self.ROBOT.name} are too weak to "
+                f"stand there: holding {layout.total_mass:.3g} kg on {feet} feet needs {need:.3g} N m, above its "
+                f"torque_limit = {self.ROBOT.torque_limit:g} N m; give another stand_height (0: the robot's own)"
+            )
 
     def gait_duty_range(self) -> tuple[float, float]:
         """Smallest duty that keeps the robot statically supported with this gait's phase pattern."""

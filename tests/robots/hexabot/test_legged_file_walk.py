@@ -134,3 +134,16 @@ def test_legs_listed_out_of_the_gaits_order_are_refused_not_walked_on_one_side(
     assert code == 2 and stdout == "" and err.count("\n") == 1 and not out.exists()
     assert "the tripod gait stands on lf, lm, lr at once, and their feet do not surround the body's centre" in err
     assert "(it is at least 189 mm outside them at the neutral stance)" in err and "reorder 'names'" in err
+
+
+def test_a_stand_height_the_servos_cannot_hold_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The servo check was at the file's own [stance] height only: 0.59 N m servos hold the example at 0.1 m (it
+    needs 0.585) but need 0.605 at stand_height 0.03 m, where the walk fell and was written out."""
+    path = _variant(tmp_path, "torque_limit = 1.5", "torque_limit = 0.59")
+    assert walk_params(robot=str(path), vx=0.05).stand_height == 0.1
+    out = tmp_path / "out"
+    code, stdout, err = cli(capsys, "run", "hexabot-walk", "--set", f"robot={path}", "--set", "stand_height=0.03",
+                            "--set", "vx=0.05", "--out", str(out))  # fmt: skip
+    assert code == 2 and stdout == "" and err.count("\n") == 1 and not out.exists()
+    assert "'stand_height' = 0.03 m: the servos of my_hexapod are too weak to stand there: holding 1.98 kg on 3" in err
+    assert "needs 0.605 N m, above its torque_limit = 0.59 N m" in err
