@@ -218,6 +218,14 @@ def plan(
     """
     if chain.n < 3:
         raise UsageError(f"{where}: arm-track moves the tool in 3-D and needs 3 or more joints; it has {chain.n}")
+    names = {j.name for j in chain.joints}
+    for joint in chain.joints:  # scene.build names joint q's servos q, q_velocity and q_bias: MuJoCo's "repeated name"
+        for suffix, what in (("_velocity", "velocity servo"), ("_bias", "feedforward motor")):
+            if joint.name + suffix in names:
+                raise UsageError(
+                    f"{where}: joint '{joint.name}{suffix}' has the name arm-track gives the {what} of joint "
+                    f"'{joint.name}' in its model; rename one of them"
+                )
     lower, upper = ranges(chain, where)
     q_refs, rows = reference_poses(chain, lower, upper, where)
     evaluate = pose_and_jacobian(chain)

@@ -222,6 +222,17 @@ def test_files_arm_track_cannot_move(capsys, tmp_path, rows, fragment):
         assert fragment in refused(capsys, tmp_path, f"robot={path}")
 
 
+@pytest.mark.parametrize("suffix", ["_velocity", "_bias"])
+def test_a_joint_named_as_another_joints_servo_is_refused(capsys, tmp_path, suffix):
+    """Joints q1 and q1_velocity: the scene's actuators q1, q1_velocity, q1_bias and q1_velocity (joint q1_velocity's
+    position servo) clashed, and MuJoCo's "repeated name 'q1_velocity' in actuator" was an internal error."""
+    path = robot_file(tmp_path)
+    path.write_text(path.read_text().replace('name = "q2"', f'name = "q1{suffix}"'))
+    err = refused(capsys, tmp_path, f"robot={path}")
+    assert f"arm-track on arm7 ({path}): joint 'q1{suffix}' has the name arm-track gives the " in err
+    assert "of joint 'q1' in its model; rename one of them" in err
+
+
 def test_a_path_out_of_reach_is_refused_before_the_run(capsys, tmp_path):
     err = refused(capsys, tmp_path, "robot=elbow", "offset_z=2")
     assert "arm-track on elbow: the path's first point, (-0.08336, -0.2892, 2.524) m: no solution" in err
