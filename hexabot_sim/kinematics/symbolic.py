@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from fractions import Fraction
 from typing import Any
 
@@ -13,7 +14,7 @@ import numpy as np
 
 from hexabot_sim.errors import HexabotError, UsageError
 from hexabot_sim.kinematics import robots
-from hexabot_sim.kinematics.chain import SerialChain
+from hexabot_sim.kinematics.chain import Joint, SerialChain
 from hexabot_sim.kinematics.robot_file import MISREAD_SYMBOL
 
 try:
@@ -102,14 +103,20 @@ def symbolic_chain(robot: str | robots.RobotSpec) -> SymbolicChain:
         HexabotError: The robot's table uses a length in a way this module cannot recognise.
     """
     spec = robot if isinstance(robot, robots.RobotSpec) else robots.get(robot)
-    # Markers: distinct, irrational-looking, > 0, and unlike 0, 1 or any multiple of π.
+    # Markers: distinct, irrational-looking, > 0, and unlike 0, 1 or any multiple of π; each a hair from its length's
+    # default, so a joint range between lengths, or between a length and a number, keeps its order (markers far from
+    # the defaults made a file's valid range lower = "lo", upper = "hi" "lower limit 0.247 exceeds upper limit 0.202").
     primes = _primes(len(spec.lengths))
-    markers = {name: math.sqrt(prime) / 7 for name, prime in zip(spec.lengths, primes, strict=True)}
+    markers = {
+        name: length.default + math.sqrt(prime) * (1e-6 if length.default else 1e-4)
+        for (name, length), prime in zip(spec.lengths.items(), primes, strict=True)
+    }
     assumptions = {
         name: ({"nonnegative": True} if length.allow_zero else {"positive": True})
         for name, length in spec.lengths.items()
     }
-    sc = _from_chain(spec.chain(markers), markers, assumptions, strict=spec.source is None)
+    fixed = spec.fixed(markers) if spec.fixed is not None else ()
+    sc = _from_chain(spec.build(markers), markers, assumptions, strict=spec.source is None, fixed=fixed)
     return dataclasses.replace(sc, defaults={name: length.default for name, length in spec.lengths.items()})
 
 
@@ -353,9 +360,16 @@ def _reduce_pythagorean(expr: sp.Expr) -> sp.Expr:
 
 
 def _from_chain(
-    chain: SerialChain, values: Mapping[str, float], assumptions: Mapping[str, dict[str, bool]], strict: bool
+    chain: SerialChain,
+    values: Mapping[str, float],
+    assumptions: Mapping[str, dict[str, bool]],
+    strict: bool,
+    fixed: Sequence[Joint] = (),
 ) -> SymbolicChain:
-    """Builds the symbolic chain: names in `values` become symbols wherever ± their value appears."""
+    """Builds the symbolic chain: names in `values` become symbols wherever ± their value appears. `fixed`: a robot
+    file's fixed rows, folded into chain.tool; they are taken out of it and multiplied in as symbolic rows (the
+    tool's translation was the sum of their lengths and [tool]'s, matched by no single length: a marker's value was
+    printed for l3 + lt)."""
     symbols = {name: sp.Symbol(name, **assumptions[name]) for name in values}
     taken = set(values)
     joint_symbols = []
@@ -391,8 +405,21 @@ def _from_chain(
         defaults=dict(values),
         links=tuple(links),
         base=_fixed_transform(chain.base, length, "base"),
-        tool=_fixed_transform(chain.tool, length, "tool"),
+        tool=_tool(chain, fixed, length),
     )
+
+
+def _tool(chain: SerialChain, fixed: Sequence[Joint], length: Any) -> sp.ImmutableMatrix:
+    """The symbolic tool transform: the fixed rows' links (their a and d ± one length or a number each), then the
+    file's [tool] (chain.tool with the rows taken out)."""
+    rows = np.eye(4)
+    links = []
+    for k, joint in enumerate(fixed, start=1):
+        rows = rows @ joint.transform(0.0, chain.convention)
+        d, a = length(joint.d, f"d of fixed row {k}"), length(joint.a, f"a of fixed row {k}")
+        links.append(_link(_angle(joint.theta), d, a, _angle(joint.alpha), chain.convention))
+    tool = _fixed_transform(np.linalg.solve(rows, chain.tool) if fixed else chain.tool, length, "tool")
+    return sp.ImmutableMatrix(functools.reduce(lambda t, link: t * link, links, sp.eye(4)) * tool)
 
 
 def _joint_symbol_name(index: int, joint_name: str, prismatic: bool, taken: set[str]) -> str:

@@ -152,6 +152,21 @@ def test_a_slide_named_as_an_abbreviation_or_a_constant_gets_its_index_symbol(tm
 
 
 @pytest.mark.skipif(importlib.util.find_spec("sympy") is None, reason="needs sympy (the 'symbolic' extra)")
+def test_symbolic_adds_up_fixed_rows_and_the_tool_and_keeps_a_range_between_lengths(tmp_path, capsys):
+    """A fixed row a = "l3" and [tool] xyz = ["lt", 0, 0] printed c1*(l1 + 0.566874112152667): the marker values of
+    l3 + lt, not their sum; a slide's range lower = "lo", upper = "hi" with hi declared first was refused as "lower
+    limit 0.247 exceeds upper limit 0.202" (the markers' values, in another order than the lengths')."""
+    text = PLANAR.replace("l2 = { value", "hi = 0.15\nlo = 0.05\nl3 = 0.12\nlt = 0.05\nl2 = { value")
+    text = text.replace("lower = -0.1\nupper = 0.1", 'lower = "lo"\nupper = "hi"')
+    text += '[[joints]]\nname = "foot"\ntype = "fixed"\na = "l3"\nalpha = 0.0\nd = 0.0\ntheta = 0.0\n'
+    text += '[tool]\nxyz = ["lt", 0.0, 0.0]\n'
+    code, out, err = cli(capsys, "kin", str(write(tmp_path, text)), "--json", "--symbolic")
+    assert code == 0, err
+    t0n = json.loads(out)["symbolic"]["T0n"]
+    assert "c1*l1 + c12*l2 + c12*l3 + c12*lt" in t0n and "l1*s1 + l2*s12 + l3*s12 + lt*s12" in t0n, t0n
+
+
+@pytest.mark.skipif(importlib.util.find_spec("sympy") is None, reason="needs sympy (the 'symbolic' extra)")
 def test_symbolic_stops_in_bounded_time_when_the_closed_form_explodes(tmp_path, capsys, monkeypatch):
     """General twists multiply the terms at every joint: 7 joints at 37 deg ran for minutes; now a one-line refusal
     once a T0i passes symbolic.MAX_OPS operations (made small here so the test is fast)."""
