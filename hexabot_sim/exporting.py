@@ -43,6 +43,7 @@ def export(
     from hexabot_sim.kinematics import robots
     from hexabot_sim.kinematics import urdf as urdf_mod
     from hexabot_sim.kinematics.mjcf import to_mjcf
+    from hexabot_sim.kinematics.xml_text import comment_line
 
     if not isinstance(force, bool):
         raise UsageError(f"'force' must be True or False; got {force!r}")
@@ -54,7 +55,7 @@ def export(
     spec = robots.resolve(robot)
     chain = spec.chain(lengths)
     where = f"{spec.name} ({spec.source})" if spec.source else spec.name
-    comment = f"{where}: {spec.summary}".replace("--", "- -")
+    comment = comment_line(f"{where}: {spec.summary}")  # "a---b" in a path or summary: no "--" left
     texts: dict[Path, tuple[str, str]] = {}
     for value, what in ((mjcf, "MJCF file"), (urdf, "URDF file")):
         if value is None:

@@ -28,6 +28,7 @@ from hexabot_sim.kinematics.robot_file import (
     one_line,
     read_text,
 )
+from hexabot_sim.kinematics.xml_text import comment_line
 
 GRAVITY: float = 9.81  # [m/s^2] as MuJoCo's default
 TOP_KEYS = ("name", "summary", "leg", "body", "stance", "legs")
@@ -241,7 +242,7 @@ def _comment(robot: LeggedRobot) -> str:
         f"    {leg}: hip ({x:+.3f}, {y:+.3f}, 0) m, yaw {yaw:+.0f} deg"
         for leg, (x, y), yaw in zip(layout.legs, layout.hips, layout.yaws_deg, strict=True)
     )
-    name = robot.source.replace("--", "- -")  # no "--" inside an XML comment
+    name = comment_line(robot.source)  # no "--" inside an XML comment (a path "a---b": one replace left one)
     return f"""<!--
   {robot.name}: generated at run time from the legged-robot file {name} (kinematics/legged_file.py).
   Body frame: x forward, y left, z up, origin at the centre of the plate; free joint "root".

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -184,6 +185,25 @@ def test_the_exported_files_are_well_formed_xml_whatever_the_summary_says(tmp_pa
     assert code == 0, err
     minidom.parse(str(urdf))
     mujoco.MjModel.from_xml_path(str(urdf))
+
+
+def test_three_dashes_in_the_summary_or_the_path_are_exported_and_tracked(tmp_path, capsys):
+    """A "--" was replaced once: "a---b" left "a- --b" in the header comment, and export (and arm-track, whose comment
+    was not escaped at all) refused a valid file with "comment must not contain '--'"; a legged file's path made a
+    walk's MJCF "not well-formed", an internal error."""
+    folder = tmp_path / "v1---v2"
+    folder.mkdir()
+    robot = folder / "arm---3.toml"
+    robot.write_text(Path(robots.get("elbow").source).read_text().replace('summary = "', 'summary = "v1 --- v2: '))
+    code, _, err = cli(capsys, "export", str(robot), "--mjcf", str(tmp_path / "out.xml"))
+    assert code == 0, err
+    mujoco.MjModel.from_xml_path(str(tmp_path / "out.xml"))
+    assert hs.run("arm-track", robot=str(robot), duration=0.01).metrics["joints"].value == 3
+    walker = folder / "hex---apod.toml"
+    walker.write_text((Path(__file__).resolve().parents[2] / "examples" / "my_hexapod.toml").read_text())
+    from hexabot_sim.kinematics import legged_file
+
+    mujoco.MjModel.from_xml_string(legged_file.read(walker).robot_xml())
 
 
 @pytest.mark.parametrize("stop_at", [1, 2])

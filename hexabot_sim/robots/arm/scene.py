@@ -11,6 +11,7 @@ import numpy as np
 from hexabot_sim import models, render
 from hexabot_sim.kinematics.chain import SerialChain
 from hexabot_sim.kinematics.mjcf import to_mjcf
+from hexabot_sim.kinematics.xml_text import comment_line
 
 CAMERA_DIRECTION = np.array([1.1, -1.1, 0.7])  # from the arm toward the three-quarter camera (as models/*_scene.xml)
 FOVY: float = 45.0  # [deg] the camera's vertical field of view
@@ -53,7 +54,7 @@ def build(
     """The scene's MJCF and model: the robot as `hexabot-sim export` writes it, with gravity (no gravcomp), per joint
     a position servo (name = joint), a velocity servo (JOINT_velocity) and a feedforward motor (JOINT_bias); a floor
     under `frame_points` (k, 3), a light and the camera "three_quarter" framing them; keyframe home = q_start."""
-    root = ET.fromstring(to_mjcf(chain, comment=comment.replace("--", "- -"), masses=masses))
+    root = ET.fromstring(to_mjcf(chain, comment=comment_line(comment), masses=masses))
     models.find(root, "option").attrib.update(timestep=models.fmt(timestep), integrator="implicitfast")
     for body in root.iter("body"):
         body.attrib.pop("gravcomp", None)  # the servos carry the arm's weight (with the bias feedforward)
