@@ -71,7 +71,10 @@ footer { margin-top: 2.5rem; font-size: .85em; color: var(--muted); }
 
 
 def _e(text: Any) -> str:
-    return html.escape(str(text), quote=True)
+    # A file name that is not UTF-8 (robot=b\xff.toml) comes as lone surrogates: written as \xff, not a crash at the
+    # end of the run (UnicodeEncodeError writing report.html).
+    shown = str(text).encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+    return html.escape(shown, quote=True)
 
 
 def format_value(value: Any) -> str:

@@ -94,6 +94,17 @@ def test_all_text_is_escaped(tmp_path):
     assert 'src="a&quot;b.png"' in page and "1, 2.5" in page
 
 
+def test_a_robot_file_name_that_is_not_utf8_is_shown_not_a_crash(tmp_path):
+    """robot=b'\\xff.toml' (a Linux file name that is not UTF-8) reaches the parameters as a lone surrogate: the run
+    simulated, then writing report.html raised UnicodeEncodeError (an internal error, no run folder)."""
+    robot = os.fsdecode(bytes(tmp_path) + b"/\xff.toml")
+    shutil.copy(Path(hs.__file__).parent / "kinematics" / "arms" / "elbow.toml", robot)
+    result = hs.run("arm-track", robot=robot, duration=0.01)
+    folder = tmp_path / "run"
+    result.save(folder, plots=False)
+    assert "\\xff.toml" in (folder / "report.html").read_text(encoding="utf-8")
+
+
 # --- in a real browser ---------------------------------------------------------------------------
 
 # Injected by the TEST into a copy of the page (the report itself has no script): after the load
