@@ -194,7 +194,7 @@ def _show(v: Any) -> str:
             return "; ".join(" ".join(_show(x) for x in row) if isinstance(row, (tuple, list)) else _show(row)
                              for row in v)  # fmt: skip
         return ",".join(_show(x) for x in v)
-    return str(v)
+    return printable(str(v))  # a file name that is not UTF-8 (robot=\xff.toml): lone surrogates crashed the CSV
 
 
 def _difference(d: tuple[float, float | None] | None, same: bool) -> str:

@@ -70,6 +70,19 @@ def test_folder_names_that_are_not_utf8_are_compared(runs, tmp_path):
     assert [r["label"] for r in record["runs"]] == ["r\\xff", "q\\xfe"]
 
 
+def test_a_parameter_that_is_a_file_name_not_utf8_is_compared(runs, tmp_path, capsys):
+    """A run with robot=$'\\xff.toml' records the name in run.json as the lone surrogate "\\udcff": compare's table
+    and compare.csv raised UnicodeEncodeError on it (an internal error)."""
+    odd = tmp_path / "odd"
+    shutil.copytree(runs / "a", odd)
+    record = json.loads((odd / "run.json").read_text())
+    record["params"]["integrator"] = os.fsdecode(b"\xff.toml")
+    (odd / "run.json").write_text(json.dumps(record))
+    code, out, err = cli(capsys, "compare", str(runs / "a"), str(odd), "--out", str(tmp_path / "c"), "--no-plots")
+    assert code == 0 and "internal error" not in err, err
+    assert "\\xff.toml" in out and "\\xff.toml" in (tmp_path / "c" / "compare.csv").read_text()
+
+
 @pytest.mark.parametrize("kind", ["metrics", "params"])
 def test_an_integer_no_float_can_hold_in_run_json_is_not_a_bug(runs, tmp_path, capsys, kind):
     odd = tmp_path / "odd"
