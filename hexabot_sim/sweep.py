@@ -369,7 +369,8 @@ def cell_text(value: Any) -> str:
     if isinstance(value, float):
         text = repr(value)  # the shortest text that reads back as exactly this float
         return text[:-2] if text.endswith(".0") else text
-    return str(value)
+    # A file name that is not UTF-8 (robot=\xff.toml) holds lone surrogates: written as \xff (UnicodeEncodeError).
+    return str(value).encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
 
 
 @dataclasses.dataclass(frozen=True)

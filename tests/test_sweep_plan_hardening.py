@@ -2,7 +2,10 @@
 
 import contextlib
 import math
+import os
+import shutil
 import warnings
+from pathlib import Path
 
 import pytest
 
@@ -152,3 +155,15 @@ def test_one_dask_worker_thread_is_singular(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(dask_cluster, "dask_executor", lambda address: contextlib.nullcontext((None, 1)))
     line = refused(tmp_path, capsys, "pendulum", "--grid", "damping=0,1", "--scheduler", "tcp://x:1", *FIXED)
     assert "(1 worker thread))" in line, line  # it said "1 worker threads"
+
+
+def test_a_robot_file_name_that_is_not_utf8_is_written_to_sweep_csv(tmp_path, capsys):
+    """--grid robot=$'\\xff.toml',... ran every cell, then writing sweep.csv raised UnicodeEncodeError on the name's
+    lone surrogate (an internal error, no sweep folder)."""
+    robot = os.fsdecode(bytes(tmp_path) + b"/\xff.toml")
+    shutil.copy(Path(sweep.__file__).parent / "kinematics" / "arms" / "elbow.toml", robot)
+    assert sweep.cell_text(robot).endswith("/\\xff.toml")
+    out = tmp_path / "sweep"
+    argv = ["sweep", "arm-track", "--grid", f"robot={robot},elbow", "--set", "duration=0.01", "--out", str(out)]
+    assert main(argv) == 0, capsys.readouterr().err
+    assert "\\xff.toml" in (out / "sweep.csv").read_text(encoding="utf-8")
