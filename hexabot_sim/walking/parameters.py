@@ -144,8 +144,15 @@ class WalkParams:
         return min((rows - 1) * self.timestep, _bound(type(self), "duration"))
 
     def __post_init__(self) -> None:
+        own = not self.stand_height or self.stand_height == self.ROBOT.layout.stand_height
         if not self.stand_height:  # the robot's own (resolved here: everything downstream reads the number)
             object.__setattr__(self, "stand_height", self.ROBOT.layout.stand_height)
+        if own and self.stand_height < STAND_HEIGHT_MIN:  # a robot file's [stance] height: not a value the user set
+            raise ValueError(
+                f"{self.ROBOT.name} stands {self.stand_height:g} m below its hips (its file's [stance] height), lower "
+                f"than the walk's lowest stance, {STAND_HEIGHT_MIN:g} m: set stand_height ({STAND_HEIGHT_MIN:g} to "
+                "0.19 m) or give the file a taller stance"
+            )
         if self.stand_height < STAND_HEIGHT_MIN:
             raise ValueError(
                 f"parameter 'stand_height' must be 0 (the robot's own) or {STAND_HEIGHT_MIN:g} to 0.19 m; got "

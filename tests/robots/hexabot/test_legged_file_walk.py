@@ -147,3 +147,17 @@ def test_a_stand_height_the_servos_cannot_hold_is_refused(tmp_path: Path, capsys
     assert code == 2 and stdout == "" and err.count("\n") == 1 and not out.exists()
     assert "'stand_height' = 0.03 m: the servos of my_hexapod are too weak to stand there: holding 1.98 kg on 3" in err
     assert "needs 0.605 N m, above its torque_limit = 0.59 N m" in err
+
+
+def test_a_file_stance_below_the_walks_lowest_names_the_file_not_a_parameter(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A file's [stance] height of 0.01 m (allowed in the file) was refused as "parameter 'stand_height' must be 0
+    (the robot's own) or 0.02 to 0.19 m; got 0.01": a parameter the user had not set."""
+    path = _variant(tmp_path, "height = 0.10", "height = 0.01")
+    path.write_text(path.read_text().replace("size = [0.36, 0.20, 0.03]", "size = [0.36, 0.20, 0.01]"))
+    out = tmp_path / "out"
+    code, stdout, err = cli(capsys, "run", "hexabot-walk", "--set", f"robot={path}", "--out", str(out))
+    assert code == 2 and stdout == "" and err.count("\n") == 1 and not out.exists()
+    assert "my_hexapod stands 0.01 m below its hips (its file's [stance] height), lower than the walk's lowest" in err
+    assert "parameter 'stand_height'" not in err
