@@ -18,6 +18,7 @@ import numpy as np
 
 from hexabot_sim.errors import UsageError, printable
 from hexabot_sim.kinematics.chain import Joint, SerialChain
+from hexabot_sim.params import MAX_KEY_PARTS, deep_key_line
 
 # Every link length and offset named in [lengths] lies in [LENGTH_MIN, LENGTH_MAX] in [m] (those with zero = true
 # may also be 0): from a millimetre (below it an arm is a point and relative tolerances lose meaning) to ten metres
@@ -174,20 +175,10 @@ def read_text(path: str | os.PathLike[str], what: str) -> tuple[str, os.stat_res
         raise UsageError(f"robot file {shown}: not UTF-8 text (byte {e.start})") from None
 
 
-# A dotted key (or table header) of this many parts: tomllib's time and memory grow with the square of a key's depth
-# (a 600 KB key "a.a.a..." of 300,000 parts ran 7 minutes and took 24 GB before it was killed); a robot file's keys
-# have 3 parts at most. Found without backtracking: a part starts after no key character, dot or quote.
-MAX_KEY_PARTS: int = 32
-_DEEP_KEY = re.compile(
-    r"""(?<![A-Za-z0-9_"'.-])(?:(?:[A-Za-z0-9_-]++|"[^"\\\n]*+"|'[^'\n]*+')[ \t]*+\.[ \t]*+)""" + f"{{{MAX_KEY_PARTS}}}"
-)
-
-
 def load_toml(text: str, source: str) -> dict[str, Any]:
     """The TOML document of a robot file's text; not TOML (or nested too deeply for tomllib) is one UsageError."""
-    deep = _DEEP_KEY.search(text)
-    if deep:
-        line = text.count("\n", 0, deep.start()) + 1
+    line = deep_key_line(text)  # tomllib's time and memory grow with the square of a key's depth
+    if line is not None:
         raise UsageError(
             f"robot file {source}: line {line}: a dotted key of more than {MAX_KEY_PARTS} parts; a robot file's keys "
             "have at most 3 (lengths.l2.value)"

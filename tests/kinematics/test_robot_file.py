@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from helpers import cli
 
+from hexabot_sim import params
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import robot_file, robots
 from hexabot_sim.kinematics.chain import SerialChain
@@ -311,4 +312,4 @@ def test_a_dotted_key_of_many_parts_is_refused_before_tomllib_reads_it(tmp_path,
     code, out, err = cli(capsys, "kin", str(path))
     assert code == 2 and out == "" and err.count("\n") == 1, err
     assert f"robot file {path}: line 32: a dotted key of more than 32 parts; a robot file's keys have at most 3" in err
-    assert not robot_file._DEEP_KEY.search(ARM + 'x.y.z = "a.b.c.d" # 1.2.3\nhips = [[0.1, 0.2], [1.5, 2.5]]\n')
+    assert not params.deep_key_line(ARM + 'x.y.z = "a.b.c.d" # 1.2.3\nhips = [[0.1, 0.2], [1.5, 2.5]]\n')
