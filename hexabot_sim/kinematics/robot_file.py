@@ -496,6 +496,13 @@ def _build(
     source: str,
 ) -> SerialChain:
     """The chain: the joints' rows; fixed rows after the last joint are multiplied into the tool."""
+    for row in rows:  # a slide's range between named lengths, with the lengths --set gives (the file's are checked)
+        if "lower" in row and not _value(row["lower"], values) < _value(row["upper"], values):
+            lo, hi = _value(row["lower"], values), _value(row["upper"], values)
+            raise UsageError(
+                f"robot file {source}: {row['where']}: with these lengths its range is empty: 'lower' ({lo:g} m) "
+                f"must be less than 'upper' ({hi:g} m)"
+            )
     joints = tuple(_joint(row, values) for row in rows if row["type"] != "fixed")
     tool_t = _transform(tool, values)
     fixed = [_joint(row, values).transform(0.0, convention) for row in rows if row["type"] == "fixed"]

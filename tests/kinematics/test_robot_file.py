@@ -313,3 +313,15 @@ def test_a_dotted_key_of_many_parts_is_refused_before_tomllib_reads_it(tmp_path,
     assert code == 2 and out == "" and err.count("\n") == 1, err
     assert f"robot file {path}: line 32: a dotted key of more than 32 parts; a robot file's keys have at most 3" in err
     assert not params.deep_key_line(ARM + 'x.y.z = "a.b.c.d" # 1.2.3\nhips = [[0.1, 0.2], [1.5, 2.5]]\n')
+
+
+def test_lengths_set_that_empty_a_slides_range_are_refused_naming_the_file(tmp_path, capsys):
+    """lower = "off", upper = "L": --set off=0.3 (= L) made a zero-width range the file itself refuses, and --set
+    off=0.5 was "joint 'q3': lower limit 0.5 exceeds upper limit 0.3", naming neither the file nor the rule."""
+    text = ARM.replace("[[joints]]", "[lengths]\nL = 0.3\noff = { value = 0.05, zero = true }\n[[joints]]", 1)
+    path = write(tmp_path, text.replace("lower = 0.0\nupper = 0.2", 'lower = "off"\nupper = "L"'))
+    assert robot_file.read(path).chain({"off": 0.29}).joints[2].upper == 0.3
+    for value in ("0.3", "0.5"):
+        code, out, err = cli(capsys, "kin", str(path), "--set", f"off={value}")
+        assert code == 2 and out == "" and err.count("\n") == 1
+        assert f"robot file {path}: joint 3 ('q3'): with these lengths its range is empty: 'lower' ({value} m)" in err
