@@ -300,8 +300,7 @@ def parse_assignments(items: list[str]) -> dict[str, str]:
 # killed). Found without backtracking: a part starts after no key character, dot or quote.
 MAX_KEY_PARTS: int = 32
 _DEEP_KEY = re.compile(
-    r"""(?<![A-Za-z0-9_"'.-])(?:(?:[A-Za-z0-9_-]++|"[^"\\\n]*+"|'[^'\n]*+')[ \t]*+\.[ \t]*+)"""
-    + f"{{{MAX_KEY_PARTS}}}"
+    r"""(?<![A-Za-z0-9_"'.-])(?:(?:[A-Za-z0-9_-]++|"[^"\\\n]*+"|'[^'\n]*+')[ \t]*+\.[ \t]*+)""" + f"{{{MAX_KEY_PARTS}}}"
 )
 
 

@@ -128,12 +128,8 @@ class WalkingController:
             )
         self.quat_adr = int(model.sensor_adr[model.sensor("imu_quat").id])
         lower, upper = legged.JOINT_LOWER, legged.JOINT_UPPER
-        # The force control's and the admittance's kernels only for the walks that run them.
-        self.kernels = kernels(
-            "walk",
-            *(["force"] if settings.force is not None else []),
-            *(["admittance"] if settings.admittance is not None else []),
-        )
+        groups = [g for g, on in (("force", settings.force), ("admittance", settings.admittance)) if on is not None]
+        self.kernels = kernels("walk", *groups)  # the force control's, the admittance's: for the walks that run them
         from hexabot_sim.control import plan_kernels  # compiled with the kernels (kernels.warm_up)
 
         self.plan_kernels = plan_kernels

@@ -18,6 +18,14 @@ import numpy as np
 
 from hexabot_sim.errors import UsageError, printable
 from hexabot_sim.kinematics.chain import Joint, SerialChain
+from hexabot_sim.kinematics.robot_chain import build as _build
+from hexabot_sim.kinematics.robot_chain import check_not_degenerate
+from hexabot_sim.kinematics.robot_chain import cos_sin as _cos_sin
+from hexabot_sim.kinematics.robot_chain import joint as _joint
+from hexabot_sim.kinematics.robot_chain import rx as _rx
+from hexabot_sim.kinematics.robot_chain import ry as _ry
+from hexabot_sim.kinematics.robot_chain import rz as _rz
+from hexabot_sim.kinematics.robot_chain import value as _value
 from hexabot_sim.params import MAX_KEY_PARTS, deep_key_line
 
 # Every link length and offset named in [lengths] lies in [LENGTH_MIN, LENGTH_MAX] in [m] (those with zero = true
@@ -292,7 +300,9 @@ class _Reader:
         rows_t = tuple(joints)
 
         def build(values: Mapping[str, float]) -> SerialChain:  # checked for every set of lengths (--set too)
-            return _check_not_degenerate(_build(name, convention, rows_t, tool, base, values, self.source), self.source)
+            return check_not_degenerate(
+                _build(name, convention, rows_t, tool, base, values, self.source), self.source, LENGTH_MIN
+            )
 
         def fixed(values: Mapping[str, float]) -> tuple[Joint, ...]:
             return tuple(_joint(row, values) for row in rows_t if row["type"] == "fixed")
@@ -437,97 +447,6 @@ def brief(value: Any) -> str:
     """A TOML value for a message, short and on one line."""
     text = printable(repr(value))
     return text if len(text) <= 40 else text[:37] + "..."
-
-
-def _cos_sin(angle: float, unit: str) -> tuple[float, float]:
-    """cos and sin, exact at quarter turns (a tool turned by 90 deg has exact 0 and 1 entries)."""
-    quarter = angle / (90.0 if unit == "deg" else math.pi / 2)
-    if quarter == round(quarter):
-        return ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0))[round(quarter) % 4]
-    rad = math.radians(angle) if unit == "deg" else angle
-    return math.cos(rad), math.sin(rad)
-
-
-def _rx(c: float, s: float) -> np.ndarray:
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-
-
-def _ry(c: float, s: float) -> np.ndarray:
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-
-
-def _rz(c: float, s: float) -> np.ndarray:
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def _value(field: float | tuple[float, str], values: Mapping[str, Any]) -> float:
-    """A distance field's value in [m]: a number, or ± a named length (a Length's default, or a value by name)."""
-    if isinstance(field, tuple):
-        sign, ref = field
-        value = values[ref]
-        return sign * (value.default if isinstance(value, Length) else value)
-    return field
-
-
-def _joint(row: Mapping[str, Any], values: Mapping[str, float]) -> Joint:
-    kind = "revolute" if row["type"] == "fixed" else row["type"]
-    lower = upper = None
-    if "lower" in row:
-        lower, upper = _value(row["lower"], values), _value(row["upper"], values)
-    return Joint(row["name"], kind, row["theta"], _value(row["d"], values), _value(row["a"], values), row["alpha"],
-                 lower, upper)  # fmt: skip
-
-
-def _transform(frame: tuple[tuple[Any, ...], np.ndarray], values: Mapping[str, float]) -> np.ndarray:
-    xyz, rot = frame
-    t = np.eye(4)  # (4, 4)
-    t[:3, :3] = rot
-    t[:3, 3] = [_value(v, values) for v in xyz]
-    return t + 0.0  # no -0.0 entries (they would print as -0.0 in JSON)
-
-
-def _build(
-    name: str,
-    convention: str,
-    rows: tuple[dict[str, Any], ...],
-    tool: tuple[tuple[Any, ...], np.ndarray],
-    base: tuple[tuple[Any, ...], np.ndarray],
-    values: Mapping[str, float],
-    source: str,
-) -> SerialChain:
-    """The chain: the joints' rows; fixed rows after the last joint are multiplied into the tool."""
-    for row in rows:  # a slide's range between named lengths, with the lengths --set gives (the file's are checked)
-        if "lower" in row and not _value(row["lower"], values) < _value(row["upper"], values):
-            lo, hi = _value(row["lower"], values), _value(row["upper"], values)
-            raise UsageError(
-                f"robot file {source}: {row['where']}: with these lengths its range is empty: 'lower' ({lo:g} m) "
-                f"must be less than 'upper' ({hi:g} m)"
-            )
-    joints = tuple(_joint(row, values) for row in rows if row["type"] != "fixed")
-    tool_t = _transform(tool, values)
-    fixed = [_joint(row, values).transform(0.0, convention) for row in rows if row["type"] == "fixed"]
-    if fixed:
-        tool_t = np.linalg.multi_dot([*fixed, tool_t]) if len(fixed) > 1 else fixed[0] @ tool_t
-        tool_t = tool_t + 0.0
-    return SerialChain(name, joints, convention, base=_transform(base, values), tool=tool_t)
-
-
-def _check_not_degenerate(chain: SerialChain, source: str) -> SerialChain:
-    """`chain`, unless its links, offsets, strokes and tool offset are all zero (or add up to less than LENGTH_MIN):
-    then it cannot move its tool, and it is refused (with the file's lengths, or with those set by --set)."""
-    size = sum(abs(j.a) + abs(j.d) for j in chain.joints) + float(np.linalg.norm(chain.tool[:3, 3]))
-    size += sum(abs(j.upper or 0.0) + abs(j.lower or 0.0) for j in chain.joints if j.prismatic)
-    if size == 0 and not any(j.prismatic for j in chain.joints):
-        raise UsageError(
-            f"robot file {source}: every link length, offset and tool offset is 0, so the tool point never moves; "
-            "give at least one 'a', 'd' or tool 'xyz' a length"
-        )
-    if 0 < size < LENGTH_MIN and not any(j.prismatic for j in chain.joints):  # e.g. a = 1e-300: a point, no arm
-        raise UsageError(
-            f"robot file {source}: the link lengths, offsets and tool offset add up to {size:.3g} m, less than "
-            f"{LENGTH_MIN * 1000:g} mm: the tool point barely moves and no tolerance means anything at that scale"
-        )
-    return chain
 
 
 # --------------------------------------------------------------------------------------------- the package's
