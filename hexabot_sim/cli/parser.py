@@ -10,11 +10,30 @@ from hexabot_sim.cli.common import PROG
 from hexabot_sim.errors import UsageError
 
 
+class _Once(argparse.Action):
+    """A value option's action: given twice it is an error, as a repeated --set NAME is (argparse keeps the last
+    without a word: `run --out a --out b` wrote to b, `kin --q 0,0,0 --q 1,1,1` showed the second)."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any,
+                 option_string: str | None = None) -> None:  # fmt: skip
+        given = namespace.__dict__.setdefault("_given_once", set())
+        if self.dest in given:
+            parser.error(f"argument {option_string}: given more than once; give it once")
+        given.add(self.dest)
+        setattr(namespace, self.dest, values)
+
+
 class _Parser(argparse.ArgumentParser):
-    """argparse that reports bad usage as one line and exit code 2, like every other input error."""
+    """argparse that reports bad usage as one line and exit code 2, like every other input error; a value option
+    (one without an action of its own) may be given once."""
 
     def error(self, message: str) -> NoReturn:
         raise UsageError(message)
+
+    def add_argument(self, *args: Any, **kwargs: Any) -> argparse.Action:
+        if args and str(args[0]).startswith("-") and "action" not in kwargs:
+            kwargs["action"] = _Once
+        return super().add_argument(*args, **kwargs)
 
 
 def _size(text: str) -> tuple[int, int]:

@@ -150,6 +150,10 @@ def _bad_inputs(tmp_path):
         (["run", "pendulum", "--fps", "0"], "frames per second from 1 to 240"),
         (["run"], "the following arguments are required: scenario"),
         (["fly"], "invalid choice: 'fly'"),
+        # A value option given twice: argparse kept the last without a word (the first --out was dropped).
+        (["run", "pendulum", "--out", "a", "--out", "b"], "argument --out: given more than once; give it once"),
+        (["kin", "elbow", "--q", "0,0,0", "--q", "1,1,1"], "argument --q: given more than once; give it once"),
+        (["sweep", "pendulum", "--grid", "mass=1,2", "--workers", "1", "--workers", "2"], "argument --workers: given"),
     ]
 
 
