@@ -185,8 +185,9 @@ def _generic_sets(chain: SerialChain) -> list[str]:
     rows = numeric_ik.task_rows(chain)
     what = "the 6 x n J" if len(rows) == 6 else "the position rows Jv (3 x n) of J"
     return [
-        f"sigma_min of {what} = 0 (rank_deficient): found numerically at a configuration (--q, and each IK "
-        f"solution), flagged when sigma_min <= {numeric_ik.NEAR_SINGULAR:g} sigma_max; no closed form for a file"
+        f"sigma_min of {what} = 0 (rank_deficient): found numerically at a configuration (--q), flagged when "
+        f"sigma_min <= {numeric_ik.NEAR_SINGULAR:g} sigma_max, and at each IK solution, flagged when sigma_min <= "
+        f"{numeric_ik.NEAR_SINGULAR_SOLUTION:g} sigma_max (the solver's resolution there); no closed form for a file"
     ]
 
 

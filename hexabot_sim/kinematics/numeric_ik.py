@@ -31,7 +31,10 @@ DEDUP_TOL: float = 1e-6  # [rad or m] solutions agreeing this closely (angles mo
 # about sqrt(RESIDUAL_TOL / size) of it and 16 "distinct solutions" were one.
 JOIN_TOL: float = 1e-3
 MAX_SOLUTIONS: int = 16  # reported at most (a redundant chain has a continuum of them)
-NEAR_SINGULAR: float = 1e-6  # a solution with σmin / σmax of its task Jacobian below this is flagged
+NEAR_SINGULAR: float = 1e-6  # a configuration (kin --q) with σmin / σmax of its task Jacobian below this is flagged
+# A solution is flagged below this: the solver stops within ~1e-5 rad of a singular solution (JOIN_TOL's comment), where
+# σmin / σmax is ~2e-6 (the elbow file stretched: 1.09e-6 m/rad against σmax ~0.5) and was not flagged at 1e-6.
+NEAR_SINGULAR_SOLUTION: float = 1e-4
 SEED: int = 20  # the random seeds are the same on every call: the same target gives the same answer
 
 
@@ -44,7 +47,8 @@ class Solution:
         position_residual: |p(q) − p_target| in [m].
         orientation_residual: Angle of R(q) R_targetᵀ in [rad], or None for a position target.
         sigma_min: Smallest singular value of the task Jacobian (the rows the target constrains) at q.
-        near_singular: σmin / σmax below NEAR_SINGULAR.
+        near_singular: σmin / σmax below NEAR_SINGULAR_SOLUTION (at a singular solution, within the solver's
+            resolution).
     """
 
     q: np.ndarray
@@ -290,7 +294,7 @@ def _report(batch: _Batch, q: np.ndarray, goal: np.ndarray, pose: bool) -> list[
         else:
             pos, rot, task = float(np.linalg.norm(goal - tip[k, :3, 3])), None, jac[k, :3]
         sv = np.linalg.svd(task, compute_uv=False)  # (min(m, n),)
-        near = bool(sv[-1] <= NEAR_SINGULAR * sv[0]) if sv[0] > 0 else True
+        near = bool(sv[-1] <= NEAR_SINGULAR_SOLUTION * sv[0]) if sv[0] > 0 else True
         out.append(Solution(q[k].copy(), pos, rot, float(sv[-1]), near))
     out.sort(key=lambda s: tuple(np.round(s.q, 9)))  # a stable order: by q1, then q2, ...
     return out

@@ -206,4 +206,14 @@ def test_a_stretched_or_folded_arm_is_one_solution_per_branch_not_a_cluster(q3):
     assert len(solutions) == 2
     for s in solutions:
         assert s.position_residual <= numeric_ik.RESIDUAL_TOL and s.sigma_min < 1e-5
+        assert s.near_singular  # sigma_min / sigma_max ~2e-6 there: 1e-6 missed it
         assert abs(math.remainder(s.q[2] - q3, 2 * math.pi)) < 1e-4
+
+
+def test_solutions_away_from_a_singularity_are_not_flagged():
+    """The solution flag's threshold is the solver's resolution (~1e-5 rad) at a singular solution, not a band around
+    it: the elbow bent by 0.06 deg (q3 = 1e-3) is not flagged, nor at 0.5 rad."""
+    chain = robot_file.read(robot_file.builtin_files()["elbow"]).chain()
+    for q3 in (1e-3, 0.5):
+        solutions = numeric_ik.solve(chain, chain.fk(np.array([0.3, 0.2, q3]))[:3, 3])
+        assert len(solutions) == 4 and not any(s.near_singular for s in solutions)
