@@ -5,12 +5,18 @@ from __future__ import annotations
 _CONTROLS = {code: f"\\x{code:02x}" for code in (*range(0x20), *range(0x7F, 0xA0))}  # C0, DEL, C1
 
 
+def encodable(text: str) -> str:
+    """`text` with the bytes of a name that is not UTF-8 (Python's lone surrogates) shown as \\xNN, so that it can be
+    written as UTF-8 (a report page, a CSV cell: they raised UnicodeEncodeError)."""
+    return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+
+
 def printable(text: str) -> str:
     """`text` (a path, possibly with bytes that are not UTF-8: shown as \\xNN) as text printable anywhere.
 
     Control characters are shown as \\xNN too: a folder named with ESC or CR would recolour or overwrite the terminal.
     """
-    return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace").translate(_CONTROLS)
+    return encodable(text).translate(_CONTROLS)
 
 
 class HexabotError(Exception):

@@ -9,6 +9,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from hexabot_sim.errors import encodable
+
 # What each data file holds, for the links section.
 FILE_DOCS: dict[str, str] = {
     "timeseries.csv": "time series, one row per recorded step; first column t [s], SI units",
@@ -73,8 +75,7 @@ footer { margin-top: 2.5rem; font-size: .85em; color: var(--muted); }
 def _e(text: Any) -> str:
     # A file name that is not UTF-8 (robot=b\xff.toml) comes as lone surrogates: written as \xff, not a crash at the
     # end of the run (UnicodeEncodeError writing report.html).
-    shown = str(text).encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
-    return html.escape(shown, quote=True)
+    return html.escape(encodable(str(text)), quote=True)
 
 
 def format_value(value: Any) -> str:

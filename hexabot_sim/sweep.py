@@ -17,7 +17,7 @@ import numpy as np
 
 from hexabot_sim import budget, pool, registry
 from hexabot_sim import params as params_mod
-from hexabot_sim.errors import UsageError
+from hexabot_sim.errors import UsageError, encodable
 from hexabot_sim.pool import WALL_CLOCK_METRICS, CellJob, CellResult
 
 if TYPE_CHECKING:
@@ -370,7 +370,7 @@ def cell_text(value: Any) -> str:
         text = repr(value)  # the shortest text that reads back as exactly this float
         return text[:-2] if text.endswith(".0") else text
     # A file name that is not UTF-8 (robot=\xff.toml) holds lone surrogates: written as \xff (UnicodeEncodeError).
-    return str(value).encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+    return encodable(str(value))
 
 
 @dataclasses.dataclass(frozen=True)
