@@ -45,14 +45,18 @@ class Gait:
     duty: float
     doc: str
 
-    def least_down(self, duty: float = 0.0) -> int:
-        """The fewest feet down at any time of a cycle, at `duty` (0: the gait's own)."""
+    def stance_sets(self, duty: float = 0.0) -> list[tuple[int, ...]]:
+        """The distinct sets of feet (the layout's leg indices) down at once in a cycle, at `duty` (0: its own)."""
         duty = duty or self.duty
         offsets = np.asarray(self.offsets, dtype=float)
-        # The count changes only where a leg's phase crosses 0 or duty: look just after each of those instants.
+        # The set changes only where a leg's phase crosses 0 or duty: look just after each of those instants.
         events = np.mod(np.concatenate([-offsets, duty - offsets]), 1.0) + 1e-9
         phases = np.mod(events[:, None] + offsets[None, :], 1.0)
-        return int((phases < duty).sum(axis=1).min())
+        return list(dict.fromkeys(tuple(int(i) for i in np.flatnonzero(row)) for row in phases < duty))
+
+    def least_down(self, duty: float = 0.0) -> int:
+        """The fewest feet down at any time of a cycle, at `duty` (0: the gait's own)."""
+        return min(len(down) for down in self.stance_sets(duty))
 
 
 # The gaits of each leg count. Offsets follow the legs' order in the layout: the left row front to rear,

@@ -123,9 +123,11 @@ class Ground:
             if tan > limits.friction:
                 friction, least = apart(limits.friction, tan, "up")
                 slope, steepest = apart(self.slope.slope_deg, math.degrees(math.atan(limits.friction)), "down")
+                why = f" ({limits.friction_why})" if limits.friction_why else ""
                 return (
                     f"a {slope} deg slope needs a friction coefficient of at least tan(slope) = "
-                    f"{least} to hold the feet; friction is {friction} (the steepest slope it holds is {steepest} deg)"
+                    f"{least} to hold the feet; friction is {friction}{why} (the steepest slope it holds is "
+                    f"{steepest} deg)"
                 )
         if self.rough is not None:
             problem = self.rough.problem(limits)

@@ -14,7 +14,9 @@ class Limits:
     """The robot's side of a terrain check, filled in by the robot (its legs, body and gait).
 
     Attributes:
-        friction: Friction coefficient of the feet on the ground.
+        friction: Friction coefficient of the feet on the ground (with feet that differ: the least mean over the
+            feet that stand at once).
+        friction_why: How `friction` follows from the feet when they differ ("" when they do not).
         climbable: Highest step up [m] the walk can climb (swing clearance and leg reach).
         climbable_why: How `climbable` follows from the robot, e.g. "the foot lifts ..., the legs reach ...".
         climbable_hint: What to change to climb higher, e.g. "raise 'step_height'".
@@ -34,6 +36,7 @@ class Limits:
     underside_hint: str
     clearance: float
     max_points: int
+    friction_why: str = ""
 
     def rise_problem(self, height: float, what: str, each: str, largest: str) -> str:
         """'' if a step up of `height` [m] clears the body and can be climbed, else why not (one line), e.g. what

@@ -23,6 +23,7 @@ from hexabot_sim.terrain.heightfield import MAX_POINTS as HFIELD_MAX_POINTS
 from hexabot_sim.terrain.kerb import KERB_LENGTH, KERB_WIDTH
 from hexabot_sim.walking import commands
 from hexabot_sim.walking.constants import KERB_PLATE_CLEARANCE, REFLEX_LIFT, SETTLE_TIME
+from hexabot_sim.walking.perturb import perturbations
 
 if TYPE_CHECKING:
     from hexabot_sim.walking.parameters import WalkParams
@@ -162,14 +163,32 @@ def _climb_hint(p: WalkParams) -> str:
     return "raise 'step_height'" if swing <= p.stand_height - depth_range(p)[0] else "raise 'stand_height'"
 
 
+def _least_friction(p: WalkParams) -> tuple[float, str]:
+    """The friction a slope's check takes, and how it follows (""): with friction_spread, the least mean of the seeded
+    frictions (walking/perturb.py) over the feet the gait stands on at once; each carrying an equal share, they hold
+    while tan(slope) is below that mean (the check took friction alone: 0.2 +- 50 % on a 10 deg slope passed)."""
+    if not p.friction_spread:
+        return p.friction, ""
+    frictions = p.friction * perturbations(p)[2]
+    down = min(p.the_gait().stance_sets(), key=lambda feet: float(frictions[list(feet)].mean()))
+    least = float(frictions[list(down)].mean())
+    legs = ", ".join(p.ROBOT.layout.legs[i] for i in down)
+    return least, (
+        f"the mean over {legs}, which the {p.gait} gait stands on at once: friction {p.friction:g} +- friction_spread "
+        f"{p.friction_spread:g}, seed {p.seed}"
+    )
+
+
 def terrain_problem(p: WalkParams) -> str:
     """'' if the ground can be walked as asked, else a one-line reason (the terrain types' own refusals, with
     what this robot can take, and a level body's reach on a slope)."""
     ground = terrain(p)
     layout = p.ROBOT.layout
     underside = p.stand_height + layout.foot_radius - layout.plate[2]  # the plate's underside above the ground
+    friction, friction_why = _least_friction(p)
     limits = Limits(
-        friction=p.friction,
+        friction=friction,
+        friction_why=friction_why,
         climbable=largest_climbable_kerb(p) if ground.obstacles else math.inf,
         climbable_why=(
             f"the foot lifts step_height = {p.step_height:g} m"

@@ -310,9 +310,7 @@ def support_problem(p: WalkParams) -> str:
     gait = p.the_gait()
     layout = p.ROBOT.layout
     feet = layout.neutral_feet_body()[:, :2]  # (n, 2)
-    offsets = np.asarray(gait.offsets, dtype=float)
-    events = np.mod(np.concatenate([-offsets, gait.duty - offsets]), 1.0) + 1e-9  # just after each lift or touchdown
-    for down in dict.fromkeys(tuple(np.flatnonzero(row)) for row in np.mod(events[:, None] + offsets, 1.0) < gait.duty):
+    for down in gait.stance_sets():
         margin = _hull_margin(feet[list(down)]) if len(down) >= 3 else math.inf
         if margin < -1e-9:
             legs = ", ".join(layout.legs[i] for i in down)

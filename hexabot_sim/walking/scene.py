@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import math
-
 import mujoco
 import numpy as np
 
@@ -30,17 +28,7 @@ from hexabot_sim.walking.constants import (
 )
 from hexabot_sim.walking.ground import _plan_cycle, depth_range, neutral, start_pose, terrain
 from hexabot_sim.walking.parameters import WalkParams, unchecked
-
-
-def _perturbations(p: WalkParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Seeded servo trims (3 n_legs,) [rad], body CoM offset (3,) [m] and per-foot friction factors (n_legs,)."""
-    n = p.ROBOT.layout.n_legs
-    rng = np.random.default_rng(p.seed)
-    trims = rng.uniform(-1.0, 1.0, 3 * n) * math.radians(p.trim_error_deg)
-    angle = rng.uniform(0.0, 2 * math.pi)
-    com = np.array([math.cos(angle), math.sin(angle), 0.0]) * p.com_offset
-    friction = 1.0 + rng.uniform(-1.0, 1.0, n) * p.friction_spread
-    return trims, com, friction
+from hexabot_sim.walking.perturb import perturbations
 
 
 def build_xml(p: WalkParams, ground: Ground | None = None) -> str:
@@ -53,7 +41,7 @@ def build_xml(p: WalkParams, ground: Ground | None = None) -> str:
     if p.ROBOT.replace:  # a robot file's model, generated at run time, in the scene of the committed robot
         root.set("model", f"{p.ROBOT.name} scene")
     models.find(root, "option").attrib.update(timestep=models.fmt(p.timestep), integrator=p.integrator)
-    _, com, friction = _perturbations(p)
+    _, com, friction = perturbations(p)
     torso = models.find(root, "body", "torso")
     torso.find("inertial").set("pos", models.fmt(com))
     feet = neutral(p)
@@ -155,7 +143,7 @@ def make_controller(
 ) -> WalkingController:
     """The walking controller of a run (the ground-finding one for sensed touchdown or a levelled body); its
     command from `source` (the viewer's steering), else the walk's schedule or waypoints, else vx, vy, yaw_rate."""
-    trims, _, _ = _perturbations(p)
+    trims, _, _ = perturbations(p)
     gait = p.the_gait()
     if p.schedule and commands.setpoints(p)[0].gait != p.gait:  # the walk starts in the first row's gait
         gait = p.gaits()[commands.setpoints(p)[0].gait]

@@ -18,7 +18,7 @@ from hexabot_sim.robots.hexabot.walk import HexabotParams
 from hexabot_sim.walking import constants as walking_constants
 from hexabot_sim.walking import ground as walking_ground
 from hexabot_sim.walking import parameters as hexabot_parameters
-from hexabot_sim.walking import scene as hexabot_scene
+from hexabot_sim.walking.perturb import perturbations
 
 LEGS = hx.LEGS
 
@@ -326,9 +326,9 @@ def test_a_yaw_rate_that_underflows_walks_straight():
 
 
 def test_perturbations_are_seeded():
-    a = hexabot_scene._perturbations(params.resolve(HexabotParams, {}, {"trim_error_deg": 1, "seed": 3}))
-    b = hexabot_scene._perturbations(params.resolve(HexabotParams, {}, {"trim_error_deg": 1, "seed": 3}))
-    c = hexabot_scene._perturbations(params.resolve(HexabotParams, {}, {"trim_error_deg": 1, "seed": 4}))
+    a = perturbations(params.resolve(HexabotParams, {}, {"trim_error_deg": 1, "seed": 3}))
+    b = perturbations(params.resolve(HexabotParams, {}, {"trim_error_deg": 1, "seed": 3}))
+    c = perturbations(params.resolve(HexabotParams, {}, {"trim_error_deg": 1, "seed": 4}))
     assert all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
     assert not np.array_equal(a[0], c[0])
     assert np.abs(a[0]).max() <= math.radians(1.0)

@@ -283,3 +283,18 @@ def test_the_start_pose_is_above_the_ground_for_the_scenarios_and_their_smoke_ru
         for layer in ({}, entry.smoke):
             p = resolve(**{**entry.defaults, **layer})
             assert walking_ground.start_problem(p, walking_ground.terrain(p)) == ""
+
+
+def test_a_slope_s_friction_check_takes_the_feet_that_stand_at_once_with_friction_spread():
+    """friction_spread was not in the slope check: friction 0.18 +- 50 % on a 10 deg slope (tan 0.176) passed. The check
+    now takes the least mean of the seeded frictions over the feet the gait stands on at once (the tripods here)."""
+    from hexabot_sim.walking.perturb import perturbations
+
+    p = walk_params(slope_deg=10, friction=0.2, friction_spread=0.5, duration=4)  # holds: checked below
+    frictions = 0.18 * perturbations(p)[2]  # the same seed's draws at friction 0.18
+    tripods = [(0, 2, 4), (1, 3, 5)]  # lf, lr, rm and lm, rf, rr (control/gait.py's tripod offsets)
+    least = min(float(frictions[list(t)].mean()) for t in tripods)
+    assert least < math.tan(math.radians(10)) < 0.18
+    with pytest.raises(UsageError, match=rf"friction is {least:.3g} \(the mean over .*, which the tripod gait stands "):
+        walk_params(slope_deg=10, friction=0.18, friction_spread=0.5, duration=4)
+    assert walk_params(slope_deg=10, friction=0.18, duration=4).friction == 0.18  # no spread: friction alone
