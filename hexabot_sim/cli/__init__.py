@@ -3,6 +3,8 @@ become exit codes (a shell over the Python API)."""
 
 from __future__ import annotations
 
+import atexit
+import contextlib
 import errno
 import os
 import signal
@@ -215,4 +217,14 @@ def console() -> NoReturn:
     if PUBLISHED[0] and PENDING_SIGNALS:
         name = signal.Signals(PENDING_SIGNALS[-1]).name
         eprint(f"{PROG}: {name} came after the results were published; they are complete")
+    if RECEIVED_SIGNALS and not PUBLISHED[0]:
+        # Stopped: exactly 128 + N. A KeyboardInterrupt that passed through one of the interpreter's own code runners
+        # on its way to us leaves a flag that turns the exit into a death by SIGINT (-2, after the one line: about 1
+        # run in 40 stopped while loading under load, `python -m` and the console script alike). The exit handlers
+        # run as at a normal exit (workers, windows); only the interpreter's own teardown, which reads the flag, not.
+        atexit._run_exitfuncs()
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(Exception):
+                stream.flush()
+        os._exit(code if isinstance(code, int) else 1)
     sys.exit(code)
