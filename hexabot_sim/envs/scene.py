@@ -155,8 +155,8 @@ class EnvScene:
         # A square patch about the start that holds any episode's walk (reach [m]), the level floor beyond it.
         half = round((reach + MARGIN) / CELL) * CELL
         self.extent = (-half, half, -half, half)
-        points = RoughPatch(roughness, 0, self.extent).points()
-        if self.roughness and points > MAX_POINTS:  # 1 m/s: 8.4e6 points, 25 s and ~1 GB to build
+        points = RoughPatch(self.roughness, 0, self.extent).points() if self.roughness else 0.0
+        if points > MAX_POINTS:  # 1 m/s: 8.4e6 points, 25 s and ~1 GB to build
             fits = (math.sqrt(MAX_POINTS) - 1) * CELL / 2 - MARGIN - CELL  # the largest half-side's reach, rounded down
             speed, most = apart(reach / walk_reach(1.0), fits / walk_reach(1.0), "down")
             raise ValueError(

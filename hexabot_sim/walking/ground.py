@@ -185,7 +185,7 @@ def terrain_problem(p: WalkParams) -> str:
     ground = terrain(p)
     layout = p.ROBOT.layout
     underside = p.stand_height + layout.foot_radius - layout.plate[2]  # the plate's underside above the ground
-    friction, friction_why = _least_friction(p)
+    friction, friction_why = _least_friction(p) if ground.slope.tilted else (p.friction, "")  # only a slope's check
     limits = Limits(
         friction=friction,
         friction_why=friction_why,
