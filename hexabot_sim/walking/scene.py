@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import mujoco
 import numpy as np
 
@@ -116,22 +118,43 @@ def _row_walks(p: WalkParams) -> list[tuple[WalkParams, Command]]:
     return list(walks.values())
 
 
+def _follower_walks(p: WalkParams) -> list[tuple[WalkParams, Command]]:
+    """The path follower's fastest twists as walks of their own (path_speed in eight directions, turning either way
+    at path_yaw_rate: what commands.waypoints_problem checked); none without waypoints."""
+    walks = []
+    for angle in range(0, 360, 45) if p.waypoints else ():
+        for w in (-p.path_yaw_rate, p.path_yaw_rate):
+            c = Command(p.path_speed * math.cos(math.radians(angle)), p.path_speed * math.sin(math.radians(angle)), w)
+            walks.append((unchecked(p, vx=c.vx, vy=c.vy, yaw_rate=c.yaw_rate, waypoints=()), c))
+    return walks
+
+
+def _commanded_walks(p: WalkParams) -> list[tuple[WalkParams, Command]]:
+    """The walks a run commands, each with its twist: the walk's own vx, vy, yaw_rate; with a schedule or waypoints,
+    which replace them, stepping in place (before the first row, or at the course's end) and the rows' or the
+    follower's twists."""
+    if not (p.schedule or p.waypoints):
+        return [(p, p.command())]
+    return [(p, Command()), *_row_walks(p), *_follower_walks(p)]
+
+
 def _walk_depth_range(p: WalkParams) -> tuple[float, float]:
-    """The ground-finding controller's depth range: depth_range, with a schedule the narrowest of it (stepping in
-    place, before the first row) and its rows' (each planned as a walk of its own), not the walk's own vx, vy and
-    yaw_rate the schedule replaces (an ignored vx = 1 m/s left (0.09, 0.09) m: no room to find the ground)."""
-    lo, hi = depth_range(p)
-    for q, _ in _row_walks(p):
+    """The ground-finding controller's depth range: the narrowest over the walks the run commands (each planned as a
+    walk of its own; ground.depth_range steps in place for the walk with a schedule or waypoints), not the walk's
+    own vx, vy and yaw_rate a schedule replaces (an ignored vx = 1 m/s left (0.09, 0.09) m: no room to find the
+    ground)."""
+    lo, hi = math.inf, -math.inf
+    for q, _ in _commanded_walks(p):
         row_lo, row_hi = depth_range(q)
-        lo, hi = max(lo, row_lo), min(hi, row_hi)
+        lo, hi = (row_lo, row_hi) if lo == math.inf else (max(lo, row_lo), min(hi, row_hi))
     return lo, hi
 
 
 def acceleration_limit(p: WalkParams) -> float:
     """Commanded joint-acceleration limit [rad/s^2]: ACCELERATION_LIMIT, or more where the steady cycle needs it
-    (the most any of a schedule's rows needs)."""
+    (the most any walk the run commands needs: not a twist a schedule or waypoints replace)."""
     peak = 0.0
-    for q_params, cmd in [(p, p.command()), *_row_walks(p)]:
+    for q_params, cmd in _commanded_walks(p):
         hip, dt = _plan_cycle(q_params, cmd)
         q, _ = legged.ik_hip_batch(p.ROBOT.layout, hip)  # (n, n_legs, 3)
         peak = max(peak, float(np.abs(np.diff(q, 2, axis=0)).max()) / dt**2)
