@@ -40,6 +40,7 @@ MAX_LEGS: int = 12
 TORQUE_MAX: float = 1000.0  # [N m] a servo's torque limit
 FOOT_RADIUS_MAX: float = 0.1  # [m]
 HIP_MAX: float = 10.0  # [m] |x|, |y| of a hip
+HIP_TOLERANCE: float = 1e-3  # [m] a hip may stand this far beyond the plate's edge (its outline, rounded)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -211,6 +212,14 @@ class _Reader:
         """Refuses a robot whose feet cannot reach the neutral stance, whose plate would touch the ground, or
         whose servos cannot hold it up there."""
         layout = robot.layout
+        px, py, _ = layout.plate
+        for leg, (x, y) in zip(layout.legs, layout.hips, strict=True):
+            if abs(x) > px + HIP_TOLERANCE or abs(y) > py + HIP_TOLERANCE:  # a leg on nothing: no bracket is drawn
+                raise self.fail(
+                    "[legs]", f"leg {leg}'s hip ({x:g}, {y:g}) m is off the {2 * px:g} x {2 * py:g} m plate "
+                    f"(|x| <= {px:g}, |y| <= {py:g} m): a leg is mounted on the body; move it in 'hips' or enlarge "
+                    "[body] 'size'"
+                )  # fmt: skip
         try:
             legged.ik_body(layout, layout.neutral_feet_body())
         except leg_kin.IKError as e:
