@@ -163,6 +163,19 @@ def ik_body(layout: Layout, feet: ArrayLike) -> np.ndarray:
     return q
 
 
+def tallest_stance(layout: Layout) -> float:
+    """The largest stand height [m] (foot centre below the hip) up to which every foot reaches its neutral point
+    (`neutral_reach` out from its hip) on the walking branch from the robot's own stance height (bisection, rounded
+    down to 0.1 mm); the own height itself if even that is out of reach."""
+    lo, hi = layout.stand_height, layout.geometry.l1 + layout.geometry.l2 + layout.geometry.l3
+    if not ik_hip_batch(layout, [layout.neutral_reach, 0.0, -lo])[1] or hi <= lo:
+        return lo
+    while hi - lo > 1e-5:
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if ik_hip_batch(layout, [layout.neutral_reach, 0.0, -mid])[1] else (lo, mid)
+    return math.floor(lo * 1e4) / 1e4
+
+
 def ik_hip_batch(layout: Layout, points: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Vectorised IK in the hip frame, the walking branch (coxa toward the foot, knee up: q3 >= 0).
 

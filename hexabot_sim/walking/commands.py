@@ -26,6 +26,7 @@ from hexabot_sim.control.gait import Command, GaitPlanner
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import legged
 from hexabot_sim.params import _show, allowed, apart, read_bounded
+from hexabot_sim.walking.constants import STAND_HEIGHT_MAX, STAND_HEIGHT_MIN
 
 # Rows of a table. Each schedule row's check plans its cycle (~6 ms for a new twist: 200 distinct rows took 1.2 s),
 # so a schedule is kept to what a few seconds check; a waypoint costs nothing to check.
@@ -180,7 +181,10 @@ def read_schedule(name: str, raw: Any) -> tuple:
         row.append(_number(where, "yaw_rate", w, -3.0, 3.0, "rad/s"))
         row.append(None if gait is None else str(gait).strip().lower())
         row.append(None if step is None else _number(where, "step_height", step, 0.002, 0.1, "m"))
-        row.append(None if stand is None else _number(where, "stand_height", stand, 0.02, 0.19, "m"))
+        stand = (
+            None if stand is None else _number(where, "stand_height", stand, STAND_HEIGHT_MIN, STAND_HEIGHT_MAX, "m")
+        )
+        row.append(stand)
         out.append(tuple(row))
     return tuple(out)
 

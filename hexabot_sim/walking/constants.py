@@ -7,6 +7,9 @@ INTEGRATORS = ("implicitfast", "RK4", "Euler", "implicit")
 
 
 STAND_HEIGHT_MIN: float = 0.02  # [m] the lowest stand_height a walk takes
+# [m] the highest stand_height a walk's parameter takes: two links of a robot file's longest (10 m). A robot's own
+# reach refuses the rest (kinematics.legged.tallest_stance): the hexabot's 0.1833 m, a tall robot file's more.
+STAND_HEIGHT_MAX: float = 20.0
 
 SETTLE_TIME: float = 0.5  # [s] standing on the neutral stance before the gait clock starts
 

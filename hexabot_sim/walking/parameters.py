@@ -21,6 +21,7 @@ from hexabot_sim.walking.constants import (
     RUN_COST,
     SETTLE_TIME,
     SPEED_MARGIN,
+    STAND_HEIGHT_MAX,
     STAND_HEIGHT_MIN,
     TERRAIN_STEP_SECONDS,
 )
@@ -62,7 +63,7 @@ class WalkParams:
     step_height: float = param(0.03, "m", "foot lift at mid-swing", ge=0.002, le=0.1, typo=("mm", 1e-3))
     stand_height: float = param(
         0.0, "m", "foot depth below the hips while standing (body height - foot radius); 0 = the robot's own "
-        "(the hexabot's 0.09, a robot file's [stance] height)", ge=0.0, le=0.19, typo=("mm", 1e-3),
+        "(the hexabot's 0.09, a robot file's [stance] height)", ge=0.0, le=STAND_HEIGHT_MAX, typo=("mm", 1e-3),
     )  # fmt: skip
     friction: float = param(1.0, "1", "foot-floor friction coefficient", ge=0.05, le=3.0)
     heading_hold: str = param("off", "", "correct the yaw rate from the IMU's heading", choices=("off", "on"))
@@ -150,12 +151,13 @@ class WalkParams:
         if own and self.stand_height < STAND_HEIGHT_MIN:  # a robot file's [stance] height: not a value the user set
             raise ValueError(
                 f"{self.ROBOT.name} stands {self.stand_height:g} m below its hips (its file's [stance] height), lower "
-                f"than the walk's lowest stance, {STAND_HEIGHT_MIN:g} m: set stand_height ({STAND_HEIGHT_MIN:g} to "
-                "0.19 m) or give the file a taller stance"
+                f"than the walk's lowest stance, {STAND_HEIGHT_MIN:g} m: set stand_height ({STAND_HEIGHT_MIN:g} m or "
+                "more, within the legs' reach) or give the file a taller stance"
             )
         if self.stand_height < STAND_HEIGHT_MIN:
             raise ValueError(
-                f"parameter 'stand_height' must be 0 (the robot's own) or {STAND_HEIGHT_MIN:g} to 0.19 m; got "
+                f"parameter 'stand_height' must be 0 (the robot's own) or {STAND_HEIGHT_MIN:g} to "
+                f"{STAND_HEIGHT_MAX:g} m (within the legs' reach); got "
                 f"{self.stand_height:g}"
             )
         layout = self.ROBOT.layout  # a robot file's thick plate: the legged file checks its own [stance] height only
@@ -225,6 +227,11 @@ class WalkParams:
                     "admittance"
                 )
 
+    def _own_height(self) -> str:
+        """' (0: the robot's own)' where stand_height takes 0 (not the quadbot's, whose range starts at 0.02 m)."""
+        low = next(f.metadata["param"].ge for f in dataclasses.fields(self) if f.name == "stand_height")
+        return " (0: the robot's own)" if low == 0 else ""
+
     def _check_servos(self, layout: legged.Layout) -> None:
         """Refuses a stand_height at which the servos cannot hold the robot up (a robot file's torque check is at its
         own [stance] height: 0.59 N m servos that hold my_hexapod at 0.1 m gave way at stand_height 0.03 m)."""
@@ -235,12 +242,20 @@ class WalkParams:
         try:
             need = legged_file.standing_torque(layout, feet)
         except IKError:
-            return  # out of reach: the gait's feasibility check says so, with what to change
+            tallest = legged.tallest_stance(self.ROBOT.layout)
+            if self.stand_height <= tallest:
+                return  # out of reach lower down: the gait's feasibility check says so, with what to change
+            # Beyond the legs' reach: stepping in place's "lengthen 'period' or lower 'step_height'" did not help.
+            raise ValueError(
+                f"parameter 'stand_height' = {self.stand_height:g} m is out of the legs' reach: {self.ROBOT.name}'s "
+                f"feet reach their neutral points ({layout.neutral_reach:g} m out from the hips) at most "
+                f"{tallest:g} m below the hips; give a lower stand_height{self._own_height()}"
+            ) from None
         if need > self.ROBOT.torque_limit:
             raise ValueError(
                 f"parameter 'stand_height' = {self.stand_height:g} m: the servos of {self.ROBOT.name} are too weak to "
                 f"stand there: holding {layout.total_mass:.3g} kg on {feet} feet needs {need:.3g} N m, above its "
-                f"torque_limit = {self.ROBOT.torque_limit:g} N m; give another stand_height (0: the robot's own)"
+                f"torque_limit = {self.ROBOT.torque_limit:g} N m; give another stand_height{self._own_height()}"
             )
 
     def gait_duty_range(self) -> tuple[float, float]:

@@ -107,8 +107,13 @@ BAD = [
     ('rows = ["f", "m", "r"]', 'rows = ["f", "m", "r"]\nnames = ["a"]', r"\[legs\]: give 'rows' .* or 'names'"),
     ("[0.0, 0.10]", "[0.0, -0.10]", r"\[legs\]: with 'rows', 'hips' are the left row's: each y must be > 0"),
     # A hip 10 m from the plate was accepted: a leg standing on nothing (no bracket is drawn).
-    ("[0.16, 0.09]", "[10.0, 0.09]", r"\[legs\]: leg lf's hip \(10, 0.09\) m is off the 0.36 x 0.2 m plate "
-     r"\(\|x\| <= 0.18, \|y\| <= 0.1 m\): a leg is mounted on the body; move it in 'hips' or enlarge \[body\] 'size'$"),
+    (
+        "[0.16, 0.09]",
+        "[10.0, 0.09]",
+        r"\[legs\]: leg lf's hip \(10, 0.09\) m is off the 0.36 x 0.2 m plate "
+        r"\(\|x\| <= 0.18, \|y\| <= 0.1 m\): a leg is mounted on the body; move it in 'hips' or enlarge "
+        r"\[body\] 'size'$",
+    ),
     ("[0.0, 0.10]", "[0.0, 0.1015]", r"\[legs\]: leg lm's hip \(0, 0.1015\) m is off"),
     ("height = 0.10", "height = 0.25", r"\[stance\]: the legs cannot reach the ground at height 0.25 m"),
     ("size = [0.36, 0.20, 0.03]", "size = [0.36, 0.20, 0.3]", r"\[stance\]: the plate would touch the ground"),

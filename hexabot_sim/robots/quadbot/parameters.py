@@ -9,6 +9,7 @@ from typing import ClassVar
 from hexabot_sim.control.gait import gaits_for
 from hexabot_sim.params import param
 from hexabot_sim.robots.quadbot.model import LAYOUT, MODEL, ROBOT
+from hexabot_sim.walking.constants import STAND_HEIGHT_MAX, STAND_HEIGHT_MIN
 from hexabot_sim.walking.parameters import WalkingRobot, WalkParams
 
 QUADBOT = WalkingRobot(
@@ -32,6 +33,6 @@ class QuadbotParams(WalkParams):
                         lt=1.0)  # fmt: skip
     step_height: float = param(0.025, "m", "foot lift at mid-swing", ge=0.002, le=0.1, typo=("mm", 1e-3))
     stand_height: float = param(
-        0.07, "m", "foot depth below the hips while standing (body height - foot radius)", ge=0.02, le=0.19,
-        typo=("mm", 1e-3),
+        0.07, "m", "foot depth below the hips while standing (body height - foot radius)", ge=STAND_HEIGHT_MIN,
+        le=STAND_HEIGHT_MAX, typo=("mm", 1e-3),
     )  # fmt: skip

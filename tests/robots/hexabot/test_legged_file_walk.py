@@ -21,7 +21,10 @@ def test_the_default_robot_is_the_hexabot_at_its_own_stand_height() -> None:
     p = walk_params()
     assert p.robot == "hexabot" and p.ROBOT is HEXABOT and p.stand_height == 0.09
     assert walk_params(stand_height=0.1).stand_height == 0.1
-    with pytest.raises(UsageError, match=r"'stand_height' must be 0 \(the robot's own\) or 0.02 to 0.19 m; got 0.01"):
+    with pytest.raises(
+        UsageError,
+        match=r"'stand_height' must be 0 \(the robot's own\) or 0.02 to 20 m \(within the legs' reach\); got 0.01",
+    ):
         walk_params(stand_height=0.01)
 
 
@@ -161,3 +164,27 @@ def test_a_file_stance_below_the_walks_lowest_names_the_file_not_a_parameter(
     assert code == 2 and stdout == "" and err.count("\n") == 1 and not out.exists()
     assert "my_hexapod stands 0.01 m below its hips (its file's [stance] height), lower than the walk's lowest" in err
     assert "parameter 'stand_height'" not in err
+
+
+def test_stand_height_is_bounded_by_the_legs_reach_not_by_the_hexabots(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """stand_height stopped at 0.19 m for every robot: a file with 0.15 / 0.20 m legs standing at 0.25 m could not be
+    set to 0.28 m. The bound is the legs' reach at the neutral stance: a foot `reach` out from its hip, the femur
+    axis l1 further in, reaches at most sqrt((l2 + l3)^2 - (reach - l1)^2) below it (the hexabot's 0.1833 m, where
+    0.19 m was refused as "even stepping in place is infeasible ...; lengthen 'period' or lower 'step_height'",
+    which did not help)."""
+    tall = _variant(tmp_path, "l2 = 0.08", "l2 = 0.15")
+    tall.write_text(tall.read_text().replace("l3 = 0.12", "l3 = 0.20").replace("height = 0.10", "height = 0.25"))
+    reach = np.sqrt(0.35**2 - (0.14 - 0.04) ** 2)  # 0.3354 m
+    assert walk_params(robot=str(tall), vx=0.02).stand_height == 0.25
+    assert walk_params(robot=str(tall), vx=0.02, stand_height=0.28).stand_height == 0.28
+    hexabot = np.sqrt(0.2**2 - (0.13 - 0.05) ** 2)
+    assert walk_params(vx=0.0, stand_height=np.floor(hexabot * 1e4) / 1e4).stand_height == 0.1833
+    for robot, name, top in ((str(tall), "my_hexapod", reach), ("hexabot", "hexabot", hexabot)):
+        out = tmp_path / "out"
+        code, stdout, err = cli(capsys, "run", "hexabot-walk", "--set", f"robot={robot}", "--set",
+                                f"stand_height={top + 2e-4:.4f}", "--out", str(out))  # fmt: skip
+        assert code == 2 and stdout == "" and err.count("\n") == 1 and not out.exists()
+        assert f"is out of the legs' reach: {name}'s feet" in err
+        assert f"at most {np.floor(top * 1e4) / 1e4:g} m below the hips; give a lower stand_height (0: the" in err
