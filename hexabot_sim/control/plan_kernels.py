@@ -34,6 +34,7 @@ from hexabot_sim.kinematics import legged
 # Scalars of `clock`.
 START, PERIOD, DUTY, SWITCHED, STEP_HEIGHT, STANCE_TIME, SWING_TIME = range(7)
 NCLOCK = 7
+LANDED: float = 1e-9  # [cycles] a phase this close below 1 is at its touchdown (rounding in phase(); 1 ns at 1 s)
 # Columns of `seg`.
 FIRST, END, STANCE, T_STATE, T_END, T_TOUCHDOWN, SWING_LENGTH, QUERY = 0, 1, 2, 3, 4, 5, 6, 7  # QUERY: two
 NSEG = 9
@@ -59,7 +60,10 @@ def in_stance(t, clock, timing, leg):
 def _stance(t, frac, clock, timing, leg):
     """in_stance at t, the leg's phase there being frac."""
     lift_time = t - (frac - clock[DUTY]) * clock[PERIOD]
-    swing = frac >= clock[DUTY] and lift_time >= clock[START] - 1e-9
+    # A phase within LANDED of 1 is a touchdown, as next_touchdown's: at a hand-over the lifting legs' phase (offset
+    # added) can round up to the duty while the landing legs' rounds down below 1, and no foot was down (a tripod at
+    # period 7.9135634 s, 1 fs before its first hand-over).
+    swing = clock[DUTY] <= frac < 1.0 - LANDED and lift_time >= clock[START] - 1e-9
     if clock[SWITCHED] != 0.0:  # the previous gait's swings finish; the new gait's that would lift before are skipped
         swing = swing and lift_time >= timing[leg, NO_LIFT] - 1e-9
         swing = swing or timing[leg, FINISH_LIFT] <= t < timing[leg, FINISH]
@@ -84,7 +88,7 @@ def next_touchdown(t, clock, timing, leg):
         return timing[leg, FINISH]
     start, period, offset = clock[START], clock[PERIOD], timing[leg, OFFSET]
     cycles = (t - start) / period + offset
-    return start + (math.floor(cycles + 1e-12) + 1 - offset) * period
+    return start + (math.floor(cycles + LANDED) + 1 - offset) * period
 
 
 @jit

@@ -172,3 +172,21 @@ def test_the_plan_source_runs_as_plain_python_with_the_same_targets(tmp_path):
         out[jit] = np.load(path)
     np.testing.assert_allclose(out["1"], out["0"], rtol=0, atol=1e-15)
     assert np.ptp(out["0"][:, :, 0]) > 0.02  # it walked
+
+
+@pytest.mark.parametrize("n_legs", sorted(GAITS_BY_LEGS))
+def test_a_hand_over_never_has_fewer_feet_down_than_the_gait_stands_on(n_legs):
+    """At a hand-over the lifting legs' phase (their offset added to the clock's) could round up to the duty while
+    the landing legs' rounded down below 1: the tripod at period 7.9135634 s had no foot down 1 fs before its first
+    hand-over, the trot the same at 29 of 60 random periods. Every gait, at its lift-off and touchdown times and a
+    few ulps either side, at random periods: at least the feet the gait stands on between its events."""
+    rng = np.random.default_rng(7)
+    for name, gait in GAITS_BY_LEGS[n_legs].items():
+        events = sorted({o % 1.0 for o in gait.offsets} | {(o + gait.duty) % 1.0 for o in gait.offsets})
+        least = n_legs - max(sum(((p - o) % 1.0) >= gait.duty for o in gait.offsets) for p in np.linspace(0, 1, 997))
+        for period in rng.uniform(0.2, 10.0, 40):
+            planner = GaitPlanner(gait, period, 0.03, np.zeros((n_legs, 3)), 0.002, start_time=0.5)
+            t = (0.5 + np.add.outer(np.arange(1, 200), events) * period).ravel()
+            t = np.concatenate([t * (1.0 + e) for e in (-1e-13, -1e-15, -2.2e-16, 0.0, 2.2e-16, 1e-15, 1e-13)])
+            down = planner.in_stance(t).sum(axis=1)
+            assert down.min() >= least, (name, period, t[down.argmin()])
