@@ -4,13 +4,13 @@ without MuJoCo (the scenario module is quadbot/walk.py)."""
 from __future__ import annotations
 
 import dataclasses
-from typing import ClassVar
 
 from hexabot_sim.control.gait import gaits_for
 from hexabot_sim.params import param
 from hexabot_sim.robots.quadbot.model import LAYOUT, MODEL, ROBOT
-from hexabot_sim.walking.constants import STAND_HEIGHT_MAX, STAND_HEIGHT_MIN
+from hexabot_sim.walking.constants import STAND_HEIGHT_MAX
 from hexabot_sim.walking.parameters import WalkingRobot, WalkParams
+from hexabot_sim.walking.robot_choice import RobotChoice
 
 QUADBOT = WalkingRobot(
     name=MODEL,
@@ -18,13 +18,13 @@ QUADBOT = WalkingRobot(
     scene=f"{MODEL}_scene",
     torque_limit=ROBOT.torque_limit,  # [N m] the joints' actuatorfrcrange (quadbot.toml, models/quadbot.xml)
 )
+# The quadbot, or a legged-robot file with four legs (its gaits are for four).
+ROBOTS = RobotChoice(QUADBOT, MODEL, "quadbot-walk")
 
 
 @dataclasses.dataclass(frozen=True)
 class QuadbotParams(WalkParams):
     """Parameters of the walking-quadbot scenarios (body frame: x forward, y left, z up)."""
-
-    ROBOT: ClassVar[WalkingRobot] = QUADBOT
 
     gait: str = param("crawl", "", "which legs swing when", choices=tuple(gaits_for(LAYOUT.n_legs)))
     vx: float = param(0.05, "m/s", "commanded forward speed", ge=-1.0, le=1.0, typo=("mm/s", 1e-3))
@@ -33,6 +33,16 @@ class QuadbotParams(WalkParams):
                         lt=1.0)  # fmt: skip
     step_height: float = param(0.025, "m", "foot lift at mid-swing", ge=0.002, le=0.1, typo=("mm", 1e-3))
     stand_height: float = param(
-        0.07, "m", "foot depth below the hips while standing (body height - foot radius)", ge=STAND_HEIGHT_MIN,
-        le=STAND_HEIGHT_MAX, typo=("mm", 1e-3),
+        0.0, "m", "foot depth below the hips while standing (body height - foot radius); 0 = the robot's own "
+        "(the quadbot's 0.07, a robot file's [stance] height)", ge=0.0, le=STAND_HEIGHT_MAX, typo=("mm", 1e-3),
     )  # fmt: skip
+    robot: str = param(
+        QUADBOT.name,
+        "",
+        "the quadbot, or your own four-legged robot (docs/robot-files.md)",
+        name_or_file=ROBOTS.name_or_file(),
+    )
+
+    @property
+    def ROBOT(self) -> WalkingRobot:  # WalkParams' name for the robot a walk uses
+        return ROBOTS.resolve(self.robot)
