@@ -38,7 +38,8 @@ class LeggedJointsEnv(LeggedEnv):
     (info["diverged"]); registered with 1000 steps of 20 ms (20 s).
 
     Args:
-        robot: "hexabot" or "quadbot" (any robot with a '<robot>-walk' scenario).
+        robot: "hexabot" or "quadbot" (any robot with a '<robot>-walk' scenario), or the path of a legged-robot file
+            (.toml, docs/robot-files.md): six legs walk as the hexabot's files do, four as the quadbot's.
         frame_skip: Physics steps (2 ms each) per action.
         terrain: "flat", "slope" (uphill along +x, `slope_deg`), "rough" (`roughness`: a fresh seeded patch of
             ~5 cm bumps at every reset, drawn from the environment's RNG, the level floor beyond it) or "stairs"

@@ -9,6 +9,7 @@ import mujoco
 import numpy as np
 
 from hexabot_sim import params, registry
+from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import legged
 from hexabot_sim.terrain import Ground, RoughPatch, Slope
 from hexabot_sim.terrain.heightfield import CELL, MARGIN, MAX_POINTS
@@ -54,16 +55,43 @@ def walking_robots() -> dict[str, tuple[type[WalkParams], dict]]:
 
 
 def robot_params(robot: str, **overrides) -> WalkParams:
-    """The robot's walk parameters (its '<robot>-walk' defaults, then `overrides`).
+    """The robot's walk parameters (its '<robot>-walk' defaults, then `overrides`). `robot` is a walking robot's
+    name, or the path of a legged-robot file (.toml), walked as that robot with as many legs walks its files.
 
     Raises:
-        ValueError: for a robot without a walk, naming those there are.
+        ValueError: for a robot without a walk, naming those there are; a file's problem in one line.
     """
     robots = walking_robots()
+    if isinstance(robot, str) and robot not in robots and robot.lower().endswith(".toml"):
+        return _file_params(robot, robots, overrides)
     if not isinstance(robot, str) or robot not in robots:  # a list or dict: unhashable, a TypeError
-        raise ValueError(f"unknown robot {robot!r}; known: {', '.join(robots)}")
+        raise ValueError(
+            f"unknown robot {robot!r}; known: {', '.join(robots)}, or the path of a legged-robot file (.toml)"
+        )
     cls, defaults = robots[robot]
     return params.resolve(cls, defaults, overrides)
+
+
+def _file_params(path: str, robots: dict[str, tuple[type[WalkParams], dict]], overrides: dict) -> WalkParams:
+    """robot_params of a legged-robot file: the walk of the robot whose `robot` parameter takes its number of legs
+    (the hexabot's six, the quadbot's four)."""
+    from hexabot_sim.kinematics import legged_file
+
+    try:
+        n = legged_file.read(path).layout.n_legs
+    except UsageError as e:
+        raise ValueError(f"robot: {str(e).splitlines()[0]}") from None
+    takes = {}
+    for cls, defaults in robots.values():
+        choice = params.infos(cls).get("robot", (None,))[0]
+        if choice is not None and choice.name_or_file is not None:
+            builtin = choice.name_or_file.check(choice.name_or_file.names[0])
+            takes[builtin.layout.n_legs] = (cls, defaults)
+    if n not in takes:
+        legs = " or ".join(str(k) for k in sorted(takes))
+        raise ValueError(f"robot: robot file {path}: {n} legs; the environments walk robot files with {legs} legs")
+    cls, defaults = takes[n]
+    return params.resolve(cls, defaults, {**overrides, "robot": path})
 
 
 def check_stairs(stairs) -> tuple[float, float, int]:

@@ -246,3 +246,41 @@ def test_render_fps_is_the_control_rate(frame_skip, fps, gl_backend):
     assert type(env.metadata["render_fps"]) is (int if frame_skip == 10 else float)
     env.reset(seed=0)
     assert env.render().shape == (6, 8, 3)
+
+
+def test_a_robot_file_is_an_environments_robot(tmp_path):
+    """robot= a legged-robot file (.toml): walked as the robot whose walk takes its number of legs (six: the
+    hexabot's, four: the quadbot's), in its generated model. A renamed copy of quadbot.toml gives the quadbot's
+    episode bit for bit; a copy of the environment reads the file's robot too; three legs are refused."""
+    import copy
+    from pathlib import Path
+
+    from hexabot_sim.robots import quadbot
+
+    example = Path(__file__).resolve().parents[2] / "examples" / "my_hexapod.toml"
+    env = LeggedJointsEnv(robot=str(example))
+    assert env.action_space.shape == (18,) and env.model.site("lf_hip").pos.tolist() == [0.16, 0.09, 0.0]
+    check_env(env, skip_render_check=True)
+    copy_file = tmp_path / "myquad.toml"
+    copy_file.write_text(Path(quadbot.__file__).with_name("quadbot.toml").read_text().replace('"quadbot"', '"myquad"'))
+
+    def episode(robot):
+        env = LeggedJointsEnv(robot=robot, terrain="rough")
+        rows = [env.reset(seed=3)[0]]
+        rows += [env.step(a)[0] for a in np.random.default_rng(0).uniform(-1, 1, (10, 12))]
+        return env, np.array(rows)
+
+    mine, rows = episode(str(copy_file))
+    assert np.array_equal(rows, episode("quadbot")[1])
+    twin = copy.deepcopy(mine)
+    a = np.full(12, 0.2)
+    assert np.array_equal(mine.step(a)[0], twin.step(a)[0])
+    three = tmp_path / "three.toml"
+    three.write_text(example.read_text().replace('rows = ["f", "m", "r"]', 'names = ["a", "b", "c"]').replace(
+        "hips = [[0.16, 0.09], [0.0, 0.10], [-0.16, 0.09]]", "hips = [[0.16, 0.0], [-0.1, 0.09], [-0.1, -0.09]]"
+    ).replace("yaws = [45.0, 90.0, 135.0]", "yaws = [0.0, 120.0, -120.0]"))  # fmt: skip
+    with pytest.raises(ValueError, match=r"^robot: robot file .*three.toml: 3 legs; the environments walk robot files "
+                       r"with 4 or 6 legs$"):  # fmt: skip
+        LeggedJointsEnv(robot=str(three))
+    with pytest.raises(ValueError, match=r"^robot: robot file .*none.toml: cannot be read"):
+        LeggedJointsEnv(robot=str(tmp_path / "none.toml"))
