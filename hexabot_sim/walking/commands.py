@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from hexabot_sim.budget import step_count
-from hexabot_sim.control.commands import Schedule, Setpoint
+from hexabot_sim.control.commands import Schedule, Setpoint, add_heights
 from hexabot_sim.control.follower import PathFollower
 from hexabot_sim.control.gait import Command, GaitPlanner
 from hexabot_sim.errors import UsageError
@@ -309,6 +309,10 @@ def switch_problem(p: Any, neutral: np.ndarray, settle: float) -> str:
         if segment.gait != planner.gait.name:
             planner.switch(gaits[segment.gait])
         body = planner.plan(segment.command, n)
+        times = planner.time - dt * np.arange(n, -1, -1)
+        # The rows' heights as the walker adds them (a walk's stand_height of 0.183 m with rows at 0.09 m was
+        # replayed at 0.183 m and refused; rows higher than the walk's were replayed lower than walked).
+        add_heights(body, schedule, (p.step_height, p.stand_height), times, *planner.flags(times))
         hip = np.einsum("lji,klj->kli", rot, body - hips)
         _, ok = legged.ik_hip_batch(layout, hip)
         if not ok.all():

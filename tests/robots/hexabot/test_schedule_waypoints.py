@@ -474,3 +474,11 @@ def test_a_duty_with_a_schedule_in_another_gait_is_refused_naming_both_gaits_not
     changes = [[0, 0.03, 0, 0, "ripple"], [2, 0.03, 0, 0, "wave"]]
     with pytest.raises(UsageError, match=r"schedule row 2 \(t = 2 s\): a schedule that changes gait walks each gait"):
         walk_params(schedule=changes, duty=0.7, period=1.5, duration=4, gait="ripple")
+
+
+def test_a_gait_change_is_checked_at_the_rows_heights_not_the_walks():
+    """The gait change's replay planned the feet at the walk's stand_height, not the rows' the walker lowers them
+    to: stand_height=0.183 with rows at 0.09 and 0.12 m was refused ('at t = 0.7 s foot lr would leave its
+    reachable workspace ...; change gait at a lower speed or keep one gait', before any change; found by fuzzing)."""
+    rows = [[0, 0.05, 0, 0, "tripod", 0.03, 0.09], [1.5, 0.05, 0, 0, "wave", 0.02, 0.12]]
+    assert walk_params(schedule=rows, stand_height=0.183, duration=4).stand_height == 0.183
