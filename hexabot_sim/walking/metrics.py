@@ -126,10 +126,24 @@ def _null_why(metric: Metric, why: str) -> Metric:
     return metric if metric.value is not None else dataclasses.replace(metric, doc=f"{metric.doc}; null here: {why}")
 
 
+_VERTICAL = np.array([0.0, 0.0, 1.0])
+FELL_DOC = (
+    f"the plate touched the ground or tilted beyond {FALL_TILT_DEG:g} deg from the attitude it walks in (the "
+    "slope's, or level with level_body=on)"
+)
+
+
 def walking_metrics(
-    p: WalkParams, t: np.ndarray, qpos: np.ndarray, qvel: np.ndarray, contacts: Contacts, total_mass: float
+    p: WalkParams,
+    t: np.ndarray,
+    qpos: np.ndarray,
+    qvel: np.ndarray,
+    contacts: Contacts,
+    total_mass: float,
+    up: np.ndarray = _VERTICAL,
 ) -> dict[str, Metric]:
-    """The walking metrics of a run, from its recorded state and contacts."""
+    """The walking metrics of a run, from its recorded state and contacts; `up` (3,) is the attitude the body walks
+    in, from which its tilt is measured (the slope's normal where it follows the ground)."""
     window = steady_window(p, t)
     dt = p.timestep
     rpy = rpy_from_quat(qpos[:, 3:7])
@@ -184,7 +198,10 @@ def walking_metrics(
     # Energy: positive and negative joint work both cost (hobby servos do not recover energy).
     power = np.abs(contacts.torque * qvel[:, 6 : 6 + contacts.torque.shape[1]]).sum(axis=1)
     work = float(power[window].sum() * dt)
-    tilt = np.degrees(np.arccos(np.clip(1 - 2 * (qpos[:, 4] ** 2 + qpos[:, 5] ** 2), -1.0, 1.0)))
+    w_, x_, y_, z_ = qpos[:, 3:7].T  # the body's z axis in the world, against `up` (a 45 deg slope walked with
+    # the body on it, 45.08 deg from the vertical, read as a fall)
+    axis = np.stack([2 * (x_ * z_ + w_ * y_), 2 * (y_ * z_ - w_ * x_), 1 - 2 * (x_**2 + y_**2)], axis=1)
+    tilt = np.degrees(np.arccos(np.clip(axis @ np.asarray(up, dtype=float), -1.0, 1.0)))
     fell = bool(contacts.body_contact.any() or (tilt > FALL_TILT_DEG).any())
     peak_torque = float(np.abs(contacts.torque).max())
     return {
@@ -243,7 +260,7 @@ def walking_metrics(
         "torque_limit_fraction": Metric(
             peak_torque / p.ROBOT.torque_limit, "1", f"peak_joint_torque / the {p.ROBOT.torque_limit} N*m limit"
         ),
-        "fell": Metric(fell, "", f"the plate touched the ground or tilted beyond {FALL_TILT_DEG:g} deg"),
+        "fell": Metric(fell, "", FELL_DOC),
     }
 
 

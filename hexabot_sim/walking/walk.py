@@ -52,14 +52,15 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     legs = p.ROBOT.layout.legs
     contacts = replay_contacts(model, t, qpos, qvel, ctrl, legs)
     total_mass = float(model.body_subtreemass[model.body("torso").id])
-    metrics = walking_metrics(p, t, qpos, qvel, contacts, total_mass)
+    ground = terrain(p)
+    up = ground.normal() if p.level_body == "off" else np.array([0.0, 0.0, 1.0])  # the attitude it walks in
+    metrics = walking_metrics(p, t, qpos, qvel, contacts, total_mass, up)
     gait = p.the_gait()
     metrics |= {
         "stride": Metric(math.hypot(p.vx, p.vy) * gait.duty * p.period, "m", "body travel per stance at the command"),
         "duty": Metric(gait.duty, "1", "stance fraction of the gait cycle"),
         "real_time_factor": Metric(t[-1] / wall, "1", "simulated time / wall time of the simulation loop"),
     }
-    ground = terrain(p)
     loaded = contacts.loaded(total_mass)
     planned = controller.planned_stance(t)  # (n, n_legs)
     if not ground.flat or p.on_ground():  # flat runs with the planned controller keep their metrics as they were

@@ -68,6 +68,15 @@ def test_without_levelling_a_steep_slope_is_walked_parallel_to_it():
 
 
 @pytest.mark.slow
+def test_a_walk_on_a_45_degree_slope_parallel_to_it_has_not_fallen():
+    """fell measured the tilt from the vertical: the 45 deg slope (allowed) walked with the body on it, 45.08 deg from
+    the vertical, was reported fallen (found by fuzzing). The tilt is from the attitude the body walks in."""
+    r = walk(slope_deg=45.0, friction=3.0, duration=2.0)
+    assert value(r, "pitch_rms") == pytest.approx(45.0, abs=0.5)
+    assert not value(r, "fell")
+
+
+@pytest.mark.slow
 def test_standing_still_on_the_slope_does_not_slide():
     r = walk(**{**SLOPE, "vx": 0.0, "duration": 8.0})
     assert abs(value(r, "distance_made_good")) < 0.002  # over 5.5 s of stepping in place
