@@ -13,7 +13,7 @@ from hexabot_sim.terrain import Ground
 from hexabot_sim.walking import commands, course
 from hexabot_sim.walking.constants import SETTLE_TIME
 from hexabot_sim.walking.ground import walking_direction
-from hexabot_sim.walking.metrics import Contacts
+from hexabot_sim.walking.metrics import Contacts, planned_stand_heights
 
 LEG_COLOURS = {
     "lf": "tab:blue",
@@ -114,14 +114,18 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
 
     # Body height and attitude.
     fig, axes = plots.figure(2, 1, figsize=(9, 6), sharex=True)
-    planned_h = (p.stand_height + p.ROBOT.layout.foot_radius) * 1000
+    planned_h = (planned_stand_heights(p, t) + p.ROBOT.layout.foot_radius) * 1000  # (n,) [mm]: a schedule's rows'
     ground: Ground = result.extras["terrain"]
     axes[0].plot(t, c["z"] * 1000, color="tab:blue", label="body height")
     if ground.flat:
-        axes[0].axhline(planned_h, **plots.TARGET_STYLE, label="planned height")
+        if np.ptp(planned_h) == 0:
+            axes[0].axhline(planned_h[0], **plots.TARGET_STYLE, label="planned height")
+        else:
+            axes[0].plot(t, planned_h, **plots.TARGET_STYLE, label="planned height")
     else:  # the planned height is above the ground under the body, which rises on a slope, a kerb or stairs
         planned = ground.height(c["x"], c["y"]) * 1000 + planned_h  # (n,) [mm]
-        axes[0].plot(t, planned, **plots.TARGET_STYLE, label=f"planned: ground under\nthe body + {planned_h:.3g} mm")
+        above = f"{planned_h[0]:.3g} mm" if np.ptp(planned_h) == 0 else "the stand height"
+        axes[0].plot(t, planned, **plots.TARGET_STYLE, label=f"planned: ground under\nthe body + {above}")
     axes[0].set_ylabel("height [mm]")
     plots.plain(axes[0])
     plots.min_span(axes[0], 2.0)
