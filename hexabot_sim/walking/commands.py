@@ -224,6 +224,13 @@ def setpoints(p: Any) -> list[Setpoint]:
     return out
 
 
+def start_gait(p: Any) -> Any:
+    """The gait (control.gait.Gait) the walk starts in: a schedule's first row's at its own duty, else the walk's
+    (walking.scene.make_controller)."""
+    first = setpoints(p)[0].gait if p.schedule else p.gait
+    return p.the_gait() if first == p.gait else p.gaits()[first]
+
+
 def problem(p: Any, check: Callable[[Any], str], neutral: np.ndarray, settle: float) -> str:
     """'' if the walk's schedule or waypoints can be walked, else one line saying why not (the checks below)."""
     return schedule_problem(p, check) or switch_problem(p, neutral, settle) or waypoints_problem(p, check, settle)

@@ -29,7 +29,8 @@ def _title(result: ScenarioResult, text: str) -> str:
     p = result.params
     if p.schedule or p.waypoints:
         what = f"a schedule of {len(p.schedule)} rows" if p.schedule else f"{len(p.waypoints)} waypoints"
-        return f"{result.scenario}: {text}\n{p.gait} gait at the start, period {p.period:g} s, command: {what}"
+        first = commands.start_gait(p).name  # a schedule's first row's gait replaces the walk's
+        return f"{result.scenario}: {text}\n{first} gait at the start, period {p.period:g} s, command: {what}"
     return (
         f"{result.scenario}: {text}\n{p.gait} gait, period {p.period:g} s, command vx {p.vx:g} m/s, "
         f"vy {p.vy:g} m/s, yaw rate {p.yaw_rate:g} rad/s"

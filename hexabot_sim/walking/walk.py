@@ -15,7 +15,7 @@ from hexabot_sim.control.commands import Steering
 from hexabot_sim.kinematics import legged
 from hexabot_sim.result import Live, Metric, Progress, ScenarioResult, at_home
 from hexabot_sim.simulate import simulate
-from hexabot_sim.walking import course
+from hexabot_sim.walking import commands, course
 from hexabot_sim.walking.constants import SETTLE_TIME
 from hexabot_sim.walking.figures import _moving_mean, figures
 from hexabot_sim.walking.forces import force_metrics
@@ -55,10 +55,14 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     ground = terrain(p)
     up = ground.normal() if p.level_body == "off" else np.array([0.0, 0.0, 1.0])  # the attitude it walks in
     metrics = walking_metrics(p, t, qpos, qvel, contacts, total_mass, up)
-    gait = p.the_gait()
+    gait = commands.start_gait(p)  # a schedule's first row's gait replaces the walk's
+    changes = len({row.gait for row in commands.setpoints(p)}) > 1 if p.schedule else False
+    duty = Metric(gait.duty, "1", "stance fraction of the gait cycle")
+    if changes:
+        duty = Metric(None, "1", f"{duty.doc}; null here: the schedule changes gait (each walked at its own duty)")
     metrics |= {
         "stride": Metric(math.hypot(p.vx, p.vy) * gait.duty * p.period, "m", "body travel per stance at the command"),
-        "duty": Metric(gait.duty, "1", "stance fraction of the gait cycle"),
+        "duty": duty,
         "real_time_factor": Metric(t[-1] / wall, "1", "simulated time / wall time of the simulation loop"),
     }
     loaded = contacts.loaded(total_mass)
@@ -103,8 +107,12 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     trail[:, 2] = ground.height(trail[:, 0], trail[:, 1]) + 0.002  # the body's path drawn on the ground
     period_rows = max(1, round(p.period / p.timestep))
     speed = np.hypot(_moving_mean(vx_b, period_rows), _moving_mean(vy_b, period_rows))
+    switches = [(-math.inf, gait.name), *controller.planner.switches]  # the gait in force at each row
+    cmd_speed = np.hypot(plan[:, 0], plan[:, 1])
+    walked = np.searchsorted([s for s, _ in switches], t, side="right") - 1
+    names = [name for _, name in switches]
     overlay = [
-        lambda k: f"{p.gait} gait, speed {speed[k] * 1000:.0f} mm/s (command {math.hypot(*plan[k, :2]) * 1000:.0f})",
+        lambda k: f"{names[walked[k]]} gait, speed {speed[k] * 1000:.0f} mm/s (command {cmd_speed[k] * 1000:.0f})",
         lambda k: "feet down: " + " ".join(leg for i, leg in enumerate(legs) if loaded[k, i]),
     ]
     return ScenarioResult(

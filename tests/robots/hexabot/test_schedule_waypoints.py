@@ -489,3 +489,17 @@ def test_the_body_height_sag_is_against_the_schedules_stand_heights():
     at 0.08 then 0.11 m read a sag of about -19 mm for a body at its planned heights (found by fuzzing)."""
     r = walk(schedule=[[0, 0.05, 0, 0, None, 0.03, 0.08], [1.5, 0.05, 0, 0, None, 0.03, 0.11]], duration=4.0)
     assert abs(r.metrics["body_height_sag"].value) < 0.002
+
+
+def test_the_duty_title_and_overlay_name_the_gaits_walked_not_the_walks_gait_the_rows_replace():
+    """A schedule in the ripple gait (the walk's gait: tripod) reported duty 0.5 and 'tripod gait at the start'; a
+    gait change kept its first gait's duty and the video's 'tripod gait' throughout (found by fuzzing)."""
+    r = walk(schedule=[[0, 0.05, 0, 0, "ripple"], [2, 0.05, 0, 0, "wave"]], duration=4.0)
+    assert r.metrics["duty"].value is None and "changes gait" in r.metrics["duty"].doc
+    t, gait = r.columns["t"], r.overlay[0]
+    assert gait(np.searchsorted(t, 1.0)).startswith("ripple gait") and gait(len(t) - 1).startswith("wave gait")
+    one = walk(schedule=[[0, 0.05, 0, 0, "ripple"]], duration=2.0)
+    assert one.metrics["duty"].value == pytest.approx(2 / 3)
+    from hexabot_sim.walking.figures import _title
+
+    assert "ripple gait at the start" in _title(one, "body")
