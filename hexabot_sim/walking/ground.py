@@ -159,8 +159,19 @@ def reflex_on(p: WalkParams) -> bool:
 def _climb_hint(p: WalkParams) -> str:
     """What raises the largest climbable kerb: the lift while the swing limits it, else the legs' reach above the
     stance (a deeper stance: it said "raise 'step_height'" where that could not help)."""
+    from hexabot_sim.walking.parameters import _bound
+
     swing = p.step_height * (1.0 + REFLEX_LIFT if reflex_on(p) else 1.0) - p.ROBOT.layout.foot_radius
-    return "raise 'step_height'" if swing <= p.stand_height - depth_range(p)[0] else "raise 'stand_height'"
+    if swing > p.stand_height - depth_range(p)[0]:
+        return "raise 'stand_height'"
+    if p.step_height < _bound(type(p), "step_height"):
+        return "raise 'step_height'"
+    # The lift at its largest (it said "raise 'step_height'" at 0.1 m): the reflex lifts a blocked foot higher.
+    if not reflex_on(p):
+        needed = (("touchdown=sensed", p.touchdown != "sensed"), ("reflex=on", p.reflex == "off"))
+        sets = [setting for setting, unset in needed if unset]
+        return f"set {' and '.join(sets)} (the elevator reflex lifts a blocked foot higher)"
+    return "lower " + " or ".join(f"'{name}'" for name in ("kerb_height", "stairs_rise") if getattr(p, name))
 
 
 def _least_friction(p: WalkParams) -> tuple[float, str]:

@@ -241,6 +241,20 @@ def test_rough_ground_taking_all_the_climb_refuses_a_kerb_without_a_negative_lim
     assert text.endswith("raise 'step_height' or lower 'roughness'") and "\n" not in text
 
 
+@pytest.mark.parametrize("obstacle", ["kerb_height", "stairs_rise"])
+def test_a_kerb_above_the_largest_lift_names_the_reflex_not_the_step_height(obstacle):
+    """A 10 cm kerb (allowed) with the feet lifted step_height = 0.1 m, its largest, was told "raise 'step_height'"
+    (found by fuzzing). The advice is the elevator reflex, and taken it is accepted."""
+    walk = {obstacle: 0.1, "step_height": 0.1, "vx": 0.05, "stand_height": 0.17, "period": 2.0}
+    for extra, advice in (({}, "touchdown=sensed"), ({"reflex": "off"}, "touchdown=sensed and reflex=on")):
+        with pytest.raises(UsageError) as refused:
+            resolve(**walk, **extra)
+        assert str(refused.value).endswith(f"set {advice} (the elevator reflex lifts a blocked foot higher)")
+    with pytest.raises(UsageError, match=r"; set reflex=on \("):
+        resolve(**walk, touchdown="sensed", reflex="off")
+    resolve(**walk, touchdown="sensed")
+
+
 def test_a_kerb_beyond_the_legs_reach_names_the_stance_not_the_lift():
     """Feet lifted 8 cm on a sideways walk: the legs reach 46 mm above the stance, less than the lift, so a 5 cm kerb
     is limited by the reach; it said "raise 'step_height'", which cannot help (a deeper stance does)."""
