@@ -405,7 +405,10 @@ def feasibility(p: WalkParams) -> str:
         # The swing covers the stance's stride in (1 - duty) / duty of its time, whatever the period.
         advice = (
             f"the {p.gait} gait's swing moves the foot over the ground {duty / (1 - duty):.2g}x as fast as the body at "
-            "any period (a longer one only slows the lift): a gait with less stance is faster"
+            "any period (a longer one only slows the lift): "
+            # A duty of one's own: lowering it is the first fix (a tripod at duty 0.8 was told of other gaits only).
+            + (f"a lower 'duty' (the gait's own: {p.gaits()[p.gait].duty:.3g}) or " if p.duty else "")
+            + "a gait with less stance is faster"
             + (" (ripple, tripod)" if p.gait == "wave" else " (tripod)" if p.gait == "ripple" else "")
         )
     else:

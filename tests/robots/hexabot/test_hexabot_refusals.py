@@ -18,6 +18,8 @@ from hexabot_sim.robots.hexabot.walk import HexabotParams
         ({"gait": "wave", "vx": 0.25}, "the largest feasible in this direction is vx = "),
         # The swing's speed limit does not depend on the period: the advice is another gait, not a shorter period.
         ({"gait": "ripple", "vx": 0.25}, "swing moves the foot over the ground 2x as fast as the body at any period"),
+        # A duty of one's own is named as the fix (a tripod at duty 0.8 was told only of gaits with less stance).
+        ({"vx": 0.2, "duty": 0.8}, "(a longer one only slows the lift): a lower 'duty' (the gait's own: 0.5)"),
         ({"vx": 100}, "did you mean 100 mm/s = 0.1 m/s"),
         ({"seed": "abc"}, "must be a number with 0 <= seed <= 4294967295; got 'abc'"),  # not 4.29497e+09
         ({"gait": "wave", "period": 0.5}, "even stepping in place is infeasible"),
