@@ -156,6 +156,7 @@ class StanceForce:
         self.kp = np.ascontiguousarray(model.actuator_gainprm[: 3 * n, 0], dtype=float)
         self.extra = np.zeros(3 * n)
         self._until = np.full((1, n), 1e9)  # per row of the chunk: time to each leg's next planned lift-off [s]
+        self.stand_rows: np.ndarray | None = None  # per row of the chunk: a changing command's stand height [m]
 
     def plan(self, planner, times: np.ndarray, stance: np.ndarray) -> None:
         """The chunk's rows (times (m,), planned stance (m, n)): the time from each row to each leg's next planned
@@ -175,6 +176,8 @@ class StanceForce:
 
     def pre(self, qpos, trims, sensordata, row, down, k: int) -> np.ndarray:
         """Before the servo step of row k: returns the feed correction (3 n,)."""
+        if self.stand_rows is not None:
+            self.par[self.fk.STAND] = self.stand_rows[k]
         self.fk.force_pre(self.par, self.geo, self.state, self.body, qpos, trims, sensordata, row, down,
                           self._until[k], self.extra)  # fmt: skip
         return self.extra
@@ -185,6 +188,8 @@ class StanceForce:
 
     def step(self, qpos, trims, sensordata, row, down, k: int, feed, consts, q_cmd, dq, ctrl) -> None:
         """pre, the servo step toward `feed` and post in one compiled call (the planned controller)."""
+        if self.stand_rows is not None:
+            self.par[self.fk.STAND] = self.stand_rows[k]
         self.fk.force_step(self.par, self.geo, self.state, self.body, qpos, trims, sensordata, row, down,
                            self._until[k], feed, consts, q_cmd, dq, self.kp, ctrl)  # fmt: skip
 

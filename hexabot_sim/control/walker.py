@@ -244,7 +244,9 @@ class WalkingController:
 
     def _heights(self, targets: np.ndarray, times: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> None:
         """Adds the source's step and stand heights (rows of `times`) to the planned targets (n + 1, legs, 3)."""
-        add_heights(targets, self.source, self._heights0, times, stance, swing_s)
+        stand = add_heights(targets, self.source, self._heights0, times, stance, swing_s)
+        if self.force is not None:  # row by row (it kept its first: a schedule raising the body 30 mm walked back)
+            self.force.stand_rows = stand
 
     def _publish(self, rows: np.ndarray, stance: np.ndarray) -> None:
         """Keeps what the steps of the chunk need from its target rows (n + 1, 3 legs) (hip frames) and stance flags."""
@@ -439,6 +441,8 @@ class GroundController(WalkingController):
         """The source's step height on the swings' lift; its stand height drives the stance plane (which ramps it)."""
         stand = add_heights(targets, self.source, self._heights0, times, stance, swing_s, stand=False)
         self.par[self.kernels.STAND_HEIGHT] = float(stand[-1])
+        if self.force is not None:  # the force control's height, row by row
+            self.force.stand_rows = stand
 
     def _pitch_dz(self) -> np.ndarray:
         """The rolling feet's pitch at the heights the feet stand at now (not the planned flat-ground height)."""

@@ -120,6 +120,21 @@ def test_force_mode_walks_and_is_a_choice_of_load_sharing():
     assert m["foot_bounces"].value == 0
 
 
+@pytest.mark.parametrize("touchdown", ["planned", "sensed"])
+def test_force_mode_follows_a_schedules_stand_height(touchdown):
+    """The force control kept the stand height it started with: a schedule raising it 0.09 -> 0.12 m walked
+    backwards (-0.045 m/s for +0.05) and the body overshot; now it rises along the row's 1 s ramp (found by fuzzing)."""
+    import hexabot_sim as hs
+
+    rows = [[0, 0.05, 0, 0, None, 0.03, 0.09], [1.5, 0.05, 0, 0, None, 0.03, 0.12]]
+    r = hs.run("hexabot-walk", load_sharing="force", feet="pad", swing="quintic", touchdown=touchdown, schedule=rows,
+               duration=3.5)  # fmt: skip
+    t, z = r.columns["t"], r.columns["z"]
+    ramp = 0.098 + 0.03 * np.clip(t - 1.5, 0.0, 1.0)  # the planned body height (stand height + foot radius)
+    assert np.abs(z - ramp)[t > 1.0].max() < (0.004 if touchdown == "planned" else 0.007)
+    assert r.metrics["mean_vx"].value == pytest.approx(0.05, rel=0.02)
+
+
 @pytest.mark.parametrize(
     "scenario, sets",
     [("hexabot-stairs", []), ("hexabot-stairs", ["feet=pad", "swing=quintic", "gait=ripple"]),
