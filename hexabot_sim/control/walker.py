@@ -361,6 +361,7 @@ class GroundController(WalkingController):
         self, model, data, layout, planner, gains, settings, q_start, ground: GroundSettings, source=None
     ) -> None:
         self.ground = ground  # before the base's __init__: its _stance_force reads it
+        self._stand_rows: np.ndarray | None = None  # a changing command's stand height at each row of the chunk
         super().__init__(model, data, layout, planner, gains, settings, q_start, source)
         K = self.kernels
         n = layout.n_legs
@@ -438,11 +439,11 @@ class GroundController(WalkingController):
         self.legs[chosen, K.NEXT_LANDING : K.NEXT_LANDING + 2] = self.planner.landing[chosen]
 
     def _heights(self, targets: np.ndarray, times: np.ndarray, stance: np.ndarray, swing_s: np.ndarray) -> None:
-        """The source's step height on the swings' lift; its stand height drives the stance plane (which ramps it)."""
-        stand = add_heights(targets, self.source, self._heights0, times, stance, swing_s, stand=False)
-        self.par[self.kernels.STAND_HEIGHT] = float(stand[-1])
-        if self.force is not None:  # the force control's height, row by row
-            self.force.stand_rows = stand
+        """The source's step height on the swings' lift; its stand height drives the stance plane row by row (the
+        chunk's last row drove it up to 1 s ahead), and the force control's height."""
+        self._stand_rows = add_heights(targets, self.source, self._heights0, times, stance, swing_s, stand=False)
+        if self.force is not None:
+            self.force.stand_rows = self._stand_rows
 
     def _pitch_dz(self) -> np.ndarray:
         """The rolling feet's pitch at the heights the feet stand at now (not the planned flat-ground height)."""
@@ -486,6 +487,8 @@ class GroundController(WalkingController):
             self._record(n)
             self._started = True
         extra = self._no_extra
+        if self._stand_rows is not None:
+            self.par[K.STAND_HEIGHT] = self._stand_rows[k]
         if self.admittance is not None:
             extra = self.admittance.update(self._sensordata, self._row_prev, stance[k])
         force = self.force

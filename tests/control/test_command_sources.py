@@ -138,3 +138,16 @@ def test_a_waypoints_heading_is_held_along_the_segment_that_ends_there():
     assert f.arrived_at is not None and abs(pose[0] - 0.6) < 0.01
     assert pose[2] == pytest.approx(math.pi / 2, abs=0.02)
     assert worst < 0.005  # turning while walking sideways does not pull it off the line
+
+
+def test_with_sensed_touchdown_a_rows_stand_height_ramps_over_the_period_not_ahead_of_it():
+    """The ground controller's stance plane took the chunk's last stand height (a chunk is up to 1 s): a row raising
+    it 0.09 -> 0.12 m over its 1 s ramp lifted the body 12 mm in the first 0.1 s, 14 mm ahead of the ramp (found by
+    fuzzing). Row by row, the plane follows the ramp (its height gain's lag: a few mm behind)."""
+    import hexabot_sim as hs
+
+    rows = [[0, 0.05, 0, 0, None, 0.03, 0.09], [1.5, 0.05, 0, 0, None, 0.03, 0.12]]
+    r = hs.run("hexabot-walk", touchdown="sensed", schedule=rows, duration=3.5)
+    t, z = r.columns["t"], r.columns["z"]
+    ahead = (z - (0.098 + 0.03 * np.clip(t - 1.5, 0.0, 1.0)))[t > 1.0]  # above the planned body height
+    assert ahead.max() < 0.002 and ahead.min() > -0.008
