@@ -403,13 +403,19 @@ def feasibility(p: WalkParams) -> str:
     stride = math.hypot(p.vx, p.vy) * duty * p.period
     if problem.startswith("joints would turn"):
         # The swing covers the stance's stride in (1 - duty) / duty of its time, whatever the period.
+        # A duty of one's own: lowering it is the first fix (a tripod at duty 0.8 was told of other gaits only); the
+        # gaits with less stance are named from the robot's (the crawl was told of none; the tripod, which has none,
+        # was told to take one).
+        own = p.gaits()[p.gait].duty
+        faster = [name for name, g in sorted(p.gaits().items(), key=lambda item: -item[1].duty) if g.duty < own]
+        fixes = [f"a lower 'duty' (the gait's own: {own:.3g})"] * bool(p.duty)
+        fixes += ["a gait with less stance"] * bool(faster)
+        slowest = f"no gait has less stance than the {p.gait}: lower the command (or raise 'max_joint_speed')"
         advice = (
             f"the {p.gait} gait's swing moves the foot over the ground {duty / (1 - duty):.2g}x as fast as the body at "
             "any period (a longer one only slows the lift): "
-            # A duty of one's own: lowering it is the first fix (a tripod at duty 0.8 was told of other gaits only).
-            + (f"a lower 'duty' (the gait's own: {p.gaits()[p.gait].duty:.3g}) or " if p.duty else "")
-            + "a gait with less stance is faster"
-            + (" (ripple, tripod)" if p.gait == "wave" else " (tripod)" if p.gait == "ripple" else "")
+            + (f"{' or '.join(fixes)} is faster" if fixes else slowest)
+            + (f" ({', '.join(faster)})" if faster else "")
         )
     else:
         advice = "a shorter 'period' shortens the stride"
