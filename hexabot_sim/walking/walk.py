@@ -53,8 +53,7 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     contacts = replay_contacts(model, t, qpos, qvel, ctrl, legs)
     total_mass = float(model.body_subtreemass[model.body("torso").id])
     ground = terrain(p)
-    up = ground.normal() if p.level_body == "off" else np.array([0.0, 0.0, 1.0])  # the attitude it walks in
-    metrics = walking_metrics(p, t, qpos, qvel, contacts, total_mass, up)
+    metrics = walking_metrics(p, t, qpos, qvel, contacts, total_mass, ground)
     gait = commands.start_gait(p)  # a schedule's first row's gait replaces the walk's
     changes = len({row.gait for row in commands.setpoints(p)}) > 1 if p.schedule else False
     duty = Metric(gait.duty, "1", "stance fraction of the gait cycle")

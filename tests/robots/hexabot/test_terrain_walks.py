@@ -77,6 +77,17 @@ def test_a_walk_on_a_45_degree_slope_parallel_to_it_has_not_fallen():
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("level", ["off", "on"])
+def test_the_body_height_sag_on_a_slope_is_over_the_slope_not_over_the_start(level):
+    """body_height_sag took the world height: a 20 deg slope walked down read the descent as a 64 mm sag, and the
+    45 deg one walked up -60 mm (found by fuzzing). It is the planned height over the slope under the body, along the
+    body's up (the slope's normal, or the vertical with level_body=on)."""
+    slope = {"slope_deg": 20.0 if level == "off" else 10.0, "level_body": level}
+    r = walk(**slope, slope_heading="downhill", touchdown="sensed", duration=3.0)
+    assert abs(value(r, "body_height_sag")) < 0.005  # it read 19 mm (on), 49 mm (off)
+
+
+@pytest.mark.slow
 def test_standing_still_on_the_slope_does_not_slide():
     r = walk(**{**SLOPE, "vx": 0.0, "duration": 8.0})
     assert abs(value(r, "distance_made_good")) < 0.002  # over 5.5 s of stepping in place
