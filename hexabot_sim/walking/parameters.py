@@ -377,9 +377,9 @@ def feasibility(p: WalkParams) -> str:
         faster = " (or raise 'max_joint_speed')" if standing.startswith("joints would turn") else ""
         # A duty of one's own shortens the swing to (1 - duty) x period: say so (duty=0.99 was blamed on the rest).
         duty = f", duty {p.duty:g}: a swing of {(1 - p.duty) * p.period:.3g} s" if p.duty else ""
-        fixes = (
+        fixes = (  # 'lower duty' only above the gait's own, the least it takes
             "lengthen 'period', lower 'duty' or lower 'step_height'"
-            if p.duty
+            if p.duty > p.gaits()[p.gait].duty
             else ("lengthen 'period' or lower 'step_height'")
         )
         return (
@@ -408,7 +408,7 @@ def feasibility(p: WalkParams) -> str:
         # was told to take one).
         own = p.gaits()[p.gait].duty
         faster = [name for name, g in sorted(p.gaits().items(), key=lambda item: -item[1].duty) if g.duty < own]
-        fixes = [f"a lower 'duty' (the gait's own: {own:.3g})"] * bool(p.duty)
+        fixes = [f"a lower 'duty' (the gait's own: {own:.3g})"] * (p.duty > own)
         fixes += ["a gait with less stance"] * bool(faster)
         slowest = f"no gait has less stance than the {p.gait}: lower the command (or raise 'max_joint_speed')"
         advice = (

@@ -22,6 +22,13 @@ from hexabot_sim.robots.hexabot.walk import HexabotParams
         ({"vx": 0.2, "duty": 0.8}, "(a longer one only slows the lift): a lower 'duty' (the gait's own: 0.5)"),
         # The tripod has no gait with less stance (it was told to take one).
         ({"vx": 0.1, "step_height": 0.1}, "lift): no gait has less stance than the tripod: lower the command"),
+        # A duty equal to the gait's own is not told to be lowered (the range starts there).
+        (
+            {"gait": "wave", "duty": 5 / 6, "period": 0.5, "vx": 0},
+            "s): joints would turn at 12.2 rad/s, above 0.9 x "
+            "max_joint_speed; lengthen 'period' or lower 'step_height'",
+        ),
+        ({"duty": 0.5, "vx": 0.1, "step_height": 0.1}, "no gait has less stance than the tripod"),
         ({"vx": 100}, "did you mean 100 mm/s = 0.1 m/s"),
         ({"seed": "abc"}, "must be a number with 0 <= seed <= 4294967295; got 'abc'"),  # not 4.29497e+09
         ({"gait": "wave", "period": 0.5}, "even stepping in place is infeasible"),
