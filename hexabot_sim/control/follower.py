@@ -15,7 +15,8 @@ The path is the polyline from the start pose (0, 0) through the waypoints (world
 - the twist changes by at most `ACCELERATION` per second (the legs' stances stay ground-fixed: the controller
   plans each update's constant twist).
 It has arrived when it is within `ARRIVE_RADIUS` of the last waypoint with its progress within twice that of the
-path's end; from then on it stands.
+path's end, and within `ARRIVE_HEADING` of the last waypoint's heading where one is given (it turns on the spot to
+it); from then on it stands.
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ ACCELERATION: float = 0.2  # [m/s^2] (and rad/s^2) largest change of the command
 SLOW_RADIUS: float = 0.1  # [m] the speed tapers linearly to zero over this distance before the last waypoint
 ARRIVE_RADIUS: float = 0.01  # [m] arrived: this close to the last waypoint, the whole path behind
 SEARCH_AHEAD: float = 0.3  # [m] the closest point is searched this far ahead of the last progress
+ARRIVE_HEADING: float = 0.02  # [rad] arrived: this close to the last waypoint's heading, where one is given
 
 
 class PathFollower:
@@ -64,6 +66,7 @@ class PathFollower:
         self.total = float(self.cum[-1])
         directions = np.arctan2(seg[:, 1], seg[:, 0])
         self.headings = np.array([d if h is None else h for d, (_, _, h) in zip(directions, waypoints, strict=True)])
+        self.final_heading = waypoints[-1][2]  # given (or None): reached before it arrives
         self.speed, self.max_yaw_rate, self.start = speed, max_yaw_rate, start
         self.gait, self._heights = gait, (step_height, stand_height)
         self.s = 0.0
@@ -107,7 +110,11 @@ class PathFollower:
             self.s, near, i = self.closest(xy, self.s, SEARCH_AHEAD)
             end = self.points[-1]
             left = self.total - self.s + float(np.hypot(*(xy - near)))
-            if self.total - self.s < 2 * ARRIVE_RADIUS and float(np.hypot(*(xy - end))) < ARRIVE_RADIUS:
+            # The last heading where given: it stopped on the point facing wherever it got (0.31 rad of 3.1).
+            turned = self.final_heading is None or abs(math.remainder(self.final_heading - yaw, 2 * math.pi)) < (
+                ARRIVE_HEADING
+            )
+            if self.total - self.s < 2 * ARRIVE_RADIUS and float(np.hypot(*(xy - end))) < ARRIVE_RADIUS and turned:
                 self.arrived_at = t
             else:
                 speed = self.speed * min(1.0, left / SLOW_RADIUS)

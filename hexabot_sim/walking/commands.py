@@ -354,6 +354,9 @@ def waypoints_problem(p: Any, check: Callable[[Any], str], settle: float) -> str
                 )
     follower = course(p, settle)
     needed = settle + p.period + follower.total / p.path_speed * 1.2 + 1.0
+    if follower.final_heading is not None:  # the turn to it, which may come after the point (it is reached first)
+        before = follower.headings[-2] if len(follower.headings) > 1 else 0.0
+        needed += abs(math.remainder(follower.final_heading - before, 2 * math.pi)) / p.path_yaw_rate * 1.2
     if p.duration < needed:
         # The longest walk this timestep's run budget takes (it advised a duration the budget then refused).
         limit = p.longest_duration()
@@ -364,8 +367,9 @@ def waypoints_problem(p: Any, check: Callable[[Any], str], settle: float) -> str
             "shorten the course or raise path_speed"
         )
         return (
-            f"waypoints: the course is {follower.total:.3g} m long; at path_speed {p.path_speed:g} m/s the walk needs "
-            f"about {needed:.3g} s; {advice}"
+            f"waypoints: the course is {follower.total:.3g} m long; at path_speed {p.path_speed:g} m/s"
+            + (f" (turning at path_yaw_rate {p.path_yaw_rate:g} rad/s)" if follower.final_heading is not None else "")
+            + f" the walk needs about {needed:.3g} s; {advice}"
         )
     return ""
 

@@ -151,3 +151,23 @@ def test_with_sensed_touchdown_a_rows_stand_height_ramps_over_the_period_not_ahe
     t, z = r.columns["t"], r.columns["z"]
     ahead = (z - (0.098 + 0.03 * np.clip(t - 1.5, 0.0, 1.0)))[t > 1.0]  # above the planned body height
     assert ahead.max() < 0.002 and ahead.min() > -0.008
+
+
+def test_the_last_waypoints_heading_is_reached_before_arriving_and_its_turn_timed():
+    """A short last segment with a heading: the follower arrived on the point facing wherever it got (0.31 rad of
+    3.1 in a walk), and the duration check counted no turn (found by fuzzing). It turns on the spot to the heading
+    before it arrives, and the walk's duration must leave time for the turn."""
+    from hexabot_sim import params
+    from hexabot_sim.errors import UsageError
+    from hexabot_sim.robots.hexabot.walk import HexabotParams
+
+    f = PathFollower([(0.05, 0.0, 3.1)], 0.1, 0.5, 0.5, "tripod", 0.03, 0.09)
+    pose, t = np.zeros(3), 0.0
+    while t < 30.0 and f.arrived_at is None:
+        seg = f.segment(t, tuple(pose))
+        pose = _se2(pose, seg.command, seg.until - t)
+        t = seg.until
+    assert f.arrived_at is not None and np.hypot(pose[0] - 0.05, pose[1]) < 0.01
+    assert math.remainder(pose[2] - 3.1, 2 * math.pi) == pytest.approx(0.0, abs=0.02)
+    with pytest.raises(UsageError, match=r"\(turning at path_yaw_rate 0\.5 rad/s\) the walk needs about"):
+        params.resolve(HexabotParams, {}, {"waypoints": [[0.05, 0, 3.1]], "duration": 3.2})
