@@ -369,7 +369,7 @@ def waypoints_problem(p: Any, check: Callable[[Any], str], settle: float) -> str
         return (
             f"waypoints: the course is {follower.total:.3g} m long; at path_speed {p.path_speed:g} m/s"
             + (f" (turning at path_yaw_rate {p.path_yaw_rate:g} rad/s)" if follower.final_heading is not None else "")
-            + f" the walk needs about {needed:.3g} s; {advice}"
+            + f" the walk needs about {allowed(needed, 'up')} s; {advice}"
         )
     return ""
 

@@ -60,6 +60,8 @@ def test_infeasible_commands_are_refused_up_front(overrides, fragment):
         ({"slope_deg": 30.0, "level_body": "on"}, r"steepest levelled slope is (\S+) deg", "slope_deg"),
         ({"kerb_height": 0.05}, r"largest climbable, (\S+) mm", "kerb_height"),
         ({"kerb_height": 0.02, "stand_height": 0.03}, r"\(at most (\S+) mm\)", "kerb_height"),
+        # 'needs about 17.3 s' (17.308) was refused when typed back (found by fuzzing).
+        ({"waypoints": [[1.234, 0]], "duration": 10.0}, r"the walk needs about (\S+) s", "duration"),
     ],
 )
 def test_the_values_a_refusal_suggests_are_accepted(overrides, pattern, fix):
