@@ -140,7 +140,7 @@ class RoughPatch:
             shown, most = apart(points, limits.max_points, "down")
             return (
                 f"the rough ground under this walk would be a {x1 - x0:.3g} x {y1 - y0:.3g} m heightfield of "
-                f"{shown} points (at most {most}); shorten 'duration' or lower the speed"
+                f"{shown} points (at most {most}); {limits.points_hint}"
             )
         return ""
 

@@ -25,6 +25,7 @@ class Limits:
         underside_hint: What to change to raise it, e.g. "raise 'stand_height'".
         clearance: [m] an obstacle stays this far below the underside.
         max_points: Largest heightfield (grid points) a run may build.
+        points_hint: What to change to build a smaller one (the field covers where the walk may go).
     """
 
     friction: float
@@ -37,6 +38,7 @@ class Limits:
     clearance: float
     max_points: int
     friction_why: str = ""
+    points_hint: str = "shorten 'duration' or lower the speed"
 
     def rise_problem(self, height: float, what: str, each: str, largest: str) -> str:
         """'' if a step up of `height` [m] clears the body and can be climbed, else why not (one line), e.g. what

@@ -26,7 +26,7 @@ from hexabot_sim.control.gait import Command, GaitPlanner
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import legged
 from hexabot_sim.params import _show, allowed, apart, read_bounded
-from hexabot_sim.walking.constants import STAND_HEIGHT_MAX, STAND_HEIGHT_MIN
+from hexabot_sim.walking.constants import MEASURE_TIME, SETTLE_TIME, STAND_HEIGHT_MAX, STAND_HEIGHT_MIN
 
 # Rows of a table. Each schedule row's check plans its cycle (~6 ms for a new twist: 200 distinct rows took 1.2 s),
 # so a schedule is kept to what a few seconds check; a waypoint costs nothing to check.
@@ -236,6 +236,13 @@ def problem(p: Any, check: Callable[[Any], str], neutral: np.ndarray, settle: fl
     return schedule_problem(p, check) or switch_problem(p, neutral, settle) or waypoints_problem(p, check, settle)
 
 
+def _shortest(p: Any) -> float:
+    """The shortest walk [s]: a row's or the follower's twist is checked as a walk of its own this long, so what
+    grows with the duration (the rough ground's size: a row of 0.35 m/s for 10 s in a 1990 s walk was refused as a
+    698 m heightfield) is the walk's own check, over the course it plans."""
+    return SETTLE_TIME + p.period + MEASURE_TIME
+
+
 def schedule_problem(p: Any, check: Callable[[Any], str]) -> str:
     """'' if every row can be walked, else one line naming the row: its gait, its values as a walk's parameters,
     what its legs can deliver (`check(params)`: walking.parameters.feasibility)."""
@@ -277,7 +284,7 @@ def schedule_problem(p: Any, check: Callable[[Any], str]) -> str:
         try:
             q = dataclasses.replace(
                 p, vx=c.vx, vy=c.vy, yaw_rate=c.yaw_rate, gait=row.gait, step_height=row.step_height,
-                stand_height=row.stand_height, schedule=(), waypoints=(),
+                stand_height=row.stand_height, schedule=(), waypoints=(), duration=_shortest(p),
             )  # fmt: skip
         except ValueError as e:
             return f"{where}: {e}"
@@ -342,7 +349,7 @@ def waypoints_problem(p: Any, check: Callable[[Any], str], settle: float) -> str
             a = math.radians(angle)
             try:  # replace() checks the walk it makes: its own refusal is the problem to report
                 q = dataclasses.replace(p, vx=p.path_speed * math.cos(a), vy=p.path_speed * math.sin(a), yaw_rate=w,
-                                        schedule=(), waypoints=())  # fmt: skip
+                                        schedule=(), waypoints=(), duration=_shortest(p))  # fmt: skip
                 problem = check(q)
             except ValueError as e:
                 problem = str(e)

@@ -213,6 +213,8 @@ def terrain_problem(p: WalkParams) -> str:
         underside_hint="raise 'stand_height'",
         clearance=KERB_PLATE_CLEARANCE,
         max_points=HFIELD_MAX_POINTS,
+        # A course's field covers its waypoints whatever the duration or speed (they were advised, and did nothing).
+        points_hint="bring the waypoints closer together" if p.waypoints else "shorten 'duration' or lower the speed",
     )  # fmt: skip
     problem = ground.problem(limits)
     if problem:

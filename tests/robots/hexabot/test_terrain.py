@@ -241,6 +241,17 @@ def test_rough_ground_taking_all_the_climb_refuses_a_kerb_without_a_negative_lim
     assert text.endswith("raise 'step_height' or lower 'roughness'") and "\n" not in text
 
 
+def test_the_rough_grounds_size_is_checked_over_the_course_not_each_row_walked_for_the_whole_walk():
+    """A schedule row was checked as a walk of its own for the whole duration: 0.35 m/s for 10 s, then standing, in a
+    1990 s walk was refused as a 698 m heightfield ('shorten duration or lower the speed'). A waypoint course's field
+    covers its waypoints, and the advice was the duration and the speed, which changed nothing (found by fuzzing)."""
+    resolve(roughness=0.01, schedule=[[0, 0.35, 0, 0], [10, 0, 0, 0]], duration=1990)
+    with pytest.raises(UsageError, match=r"51\.2 x 51\.2 m heightfield .*; bring the waypoints closer together$"):
+        resolve(roughness=0.01, waypoints=[[50, 0], [50, 50]], path_speed=0.3, duration=1000)
+    with pytest.raises(UsageError, match=r"^the rough ground under this walk .*; shorten 'duration'"):
+        resolve(roughness=0.01, schedule=[[0, 0.39, 0, 0]], duration=1990)
+
+
 @pytest.mark.parametrize("obstacle", ["kerb_height", "stairs_rise"])
 def test_a_kerb_above_the_largest_lift_names_the_reflex_not_the_step_height(obstacle):
     """A 10 cm kerb (allowed) with the feet lifted step_height = 0.1 m, its largest, was told "raise 'step_height'"
