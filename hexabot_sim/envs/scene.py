@@ -81,12 +81,7 @@ def _file_params(path: str, robots: dict[str, tuple[type[WalkParams], dict]], ov
         n = legged_file.read(path).layout.n_legs
     except UsageError as e:
         raise ValueError(f"robot: {str(e).splitlines()[0]}") from None
-    takes = {}
-    for cls, defaults in robots.values():
-        choice = params.infos(cls).get("robot", (None,))[0]
-        if choice is not None and choice.name_or_file is not None:
-            builtin = choice.name_or_file.check(choice.name_or_file.names[0])
-            takes[builtin.layout.n_legs] = (cls, defaults)
+    takes = {cls.ROBOTS.legs: (cls, defaults) for cls, defaults in robots.values()}
     if n not in takes:
         legs = " or ".join(str(k) for k in sorted(takes))
         raise ValueError(f"robot: robot file {path}: {n} legs; the environments walk robot files with {legs} legs")

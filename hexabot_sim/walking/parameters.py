@@ -49,10 +49,13 @@ class WalkingRobot:
 
 @dataclasses.dataclass(frozen=True)
 class WalkParams:
-    """Parameters of a walk (body frame: x forward, y left, z up). Each robot's subclass sets ROBOT, and the
-    gait's choices and default (its gaits are the ones for its number of legs, control.gait.gaits_for)."""
+    """Parameters of a walk (body frame: x forward, y left, z up). Each robot's subclass sets ROBOTS and `robot`, and
+    the gait's choices and default (its gaits are the ones for its number of legs, control.gait.gaits_for)."""
 
-    ROBOT: ClassVar[WalkingRobot]
+    # The robots a walk takes (walking.robot_choice.RobotChoice: the built-in one, or a file with as many legs), and
+    # the `robot` parameter naming one: each robot's subclass sets both.
+    ROBOTS: ClassVar[Any]
+    robot: ClassVar[str]
 
     gait: str = param("tripod", "", "which legs swing when", choices=tuple(GAITS))
     vx: float = param(0.1, "m/s", "commanded forward speed", ge=-1.0, le=1.0, typo=("mm/s", 1e-3))
@@ -137,6 +140,11 @@ class WalkParams:
         if self.on_ground() or self.slope_deg or self.roughness or self.kerb_height or self.stairs_rise:
             step_s = TERRAIN_STEP_SECONDS
         return step_s, row_s, row_bytes
+
+    @property
+    def ROBOT(self) -> WalkingRobot:
+        """The robot this walk walks (a file that changed or went away since it was checked: ValueError)."""
+        return self.ROBOTS.resolve(self.robot)
 
     def longest_duration(self) -> float:
         """The longest walk [s] at this timestep that params.check_run_cost takes (its steps, memory, output and

@@ -7,11 +7,12 @@ from __future__ import annotations
 import dataclasses
 import functools
 import os
+from typing import Any
 
 from hexabot_sim.control.gait import gaits_for
 from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import legged_file
-from hexabot_sim.params import NameOrFile
+from hexabot_sim.params import NameOrFile, param
 from hexabot_sim.walking.parameters import WalkingRobot
 
 COUNTS: dict[int, str] = {3: "three", 4: "four", 5: "five", 6: "six", 8: "eight"}  # in words, in messages
@@ -51,6 +52,10 @@ class RobotChoice:
         """The parameter's names and check (params.param's `name_or_file`)."""
         legs = COUNTS.get(self.legs, str(self.legs))
         return NameOrFile((self.builtin.name,), f"legged-robot file (.toml) with {legs} legs", self.robot)
+
+    def param(self, doc: str) -> Any:
+        """The `robot` parameter's field (params.param): the built-in robot by default."""
+        return param(self.builtin.name, "", doc, name_or_file=self.name_or_file())
 
     def resolve(self, robot: str) -> WalkingRobot:
         """`robot` for WalkParams.ROBOT: a file that changed or went away since the parameter was checked is a

@@ -4,8 +4,8 @@ without MuJoCo (the scenario module is hexabot/walk.py)."""
 from __future__ import annotations
 
 import dataclasses
+from typing import ClassVar
 
-from hexabot_sim.params import param
 from hexabot_sim.robots.hexabot import model as hx
 from hexabot_sim.walking.parameters import WalkingRobot, WalkParams
 from hexabot_sim.walking.robot_choice import RobotChoice
@@ -24,13 +24,5 @@ ROBOTS = RobotChoice(HEXABOT, hx.MODEL, "hexabot-walk")
 class HexabotParams(WalkParams):
     """Parameters of the walking-hexabot scenarios (body frame: x forward, y left, z up)."""
 
-    robot: str = param(
-        HEXABOT.name,
-        "",
-        "the hexabot, or your own six-legged robot (docs/robot-files.md)",
-        name_or_file=ROBOTS.name_or_file(),
-    )
-
-    @property
-    def ROBOT(self) -> WalkingRobot:  # WalkParams' name for the robot a walk uses
-        return ROBOTS.resolve(self.robot)
+    ROBOTS: ClassVar[RobotChoice] = ROBOTS
+    robot: str = ROBOTS.param("the hexabot, or your own six-legged robot (docs/robot-files.md)")

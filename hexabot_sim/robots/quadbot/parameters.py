@@ -4,6 +4,7 @@ without MuJoCo (the scenario module is quadbot/walk.py)."""
 from __future__ import annotations
 
 import dataclasses
+from typing import ClassVar
 
 from hexabot_sim.control.gait import gaits_for
 from hexabot_sim.params import param
@@ -36,13 +37,5 @@ class QuadbotParams(WalkParams):
         0.0, "m", "foot depth below the hips while standing (body height - foot radius); 0 = the robot's own "
         "(the quadbot's 0.07, a robot file's [stance] height)", ge=0.0, le=STAND_HEIGHT_MAX, typo=("mm", 1e-3),
     )  # fmt: skip
-    robot: str = param(
-        QUADBOT.name,
-        "",
-        "the quadbot, or your own four-legged robot (docs/robot-files.md)",
-        name_or_file=ROBOTS.name_or_file(),
-    )
-
-    @property
-    def ROBOT(self) -> WalkingRobot:  # WalkParams' name for the robot a walk uses
-        return ROBOTS.resolve(self.robot)
+    ROBOTS: ClassVar[RobotChoice] = ROBOTS
+    robot: str = ROBOTS.param("the quadbot, or your own four-legged robot (docs/robot-files.md)")
