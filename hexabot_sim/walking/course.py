@@ -88,7 +88,9 @@ def course_metrics(
             end - settle if arrived else None, "s", "from the start of walking to arriving at the last waypoint"
             + ("" if arrived else "; null here: the walk ended before it arrived"),
         ),
-        "course_arrived": Metric(arrived, "", f"the body came within {1000 * 0.01:g} mm of the last waypoint"),
+        "course_arrived": Metric(
+            arrived, "", f"the body came within {1000 * 0.01:g} mm of the last waypoint (facing its heading, if any)"
+        ),
         "course_cost_of_transport": Metric(
             energy / (total_mass * 9.81 * travelled) if travelled > 0 else None, "1",
             "joint work |tau dq| / (m g distance walked) over the course",
