@@ -15,7 +15,8 @@ import pytest
 from hexabot_sim.control import kernels
 from hexabot_sim.control.gait import GAITS, Command, Gait, GaitPlanner, gaits_for
 from hexabot_sim.control.resolved_rate import ResolvedRateGains
-from hexabot_sim.control.walker import GroundController, GroundSettings, WalkingController, WalkSettings
+from hexabot_sim.control.walk_settings import GroundSettings, WalkSettings
+from hexabot_sim.control.walker import GroundController, WalkingController
 from hexabot_sim.kinematics import legged, legged_mjcf
 from hexabot_sim.robots.hexabot import model as hx
 

@@ -77,7 +77,7 @@ class Admittance:
         from hexabot_sim.control import compliance_kernels as ck
 
         self._kernel = ck.admittance
-        self._dz = ck.DZ
+        self._dz, self._stance_time = ck.DZ, ck.STANCE_TIME
         n = len(legs)
         self.settings = settings
         self.geo = np.zeros((n, 5))
@@ -92,6 +92,15 @@ class Admittance:
         self.par[ck.STANCE_TIME], self.par[ck.LEAST_WEIGHT] = stance_time, settings.least_weight
         self.state = np.zeros((n, 4))
         self.extra = np.zeros(3 * n)  # the feed correction of the step (z entries only)
+
+    @property
+    def stance_time(self) -> float:
+        """The gait's stance time [s]: a foot's share ramps down over the last ramp_time of it."""
+        return float(self.par[self._stance_time])
+
+    @stance_time.setter
+    def stance_time(self, value: float) -> None:
+        self.par[self._stance_time] = value
 
     @property
     def offsets(self) -> np.ndarray:

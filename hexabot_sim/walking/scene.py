@@ -13,7 +13,8 @@ from hexabot_sim.control.compliance import AdmittanceSettings
 from hexabot_sim.control.force_control import for_overlap
 from hexabot_sim.control.gait import Command, GaitPlanner
 from hexabot_sim.control.resolved_rate import ResolvedRateGains
-from hexabot_sim.control.walker import GroundController, GroundSettings, WalkingController, WalkSettings
+from hexabot_sim.control.walk_settings import GroundSettings, WalkSettings
+from hexabot_sim.control.walker import GroundController, WalkingController
 from hexabot_sim.kinematics import legged
 from hexabot_sim.kinematics.legged_mjcf import FOOT_PAD_MARGIN, FOOT_PAD_SOLIMP, FOOT_PAD_SOLREF
 from hexabot_sim.terrain import Ground

@@ -191,3 +191,23 @@ def test_the_height_and_slope_errors_are_drawn_to_the_stance_plane_over_their_ow
         for j, tau in enumerate((0.05, 0.5, 0.5)):
             expect = err[j] + (e0[j] - err[j]) * (1.0 - DT / (tau + DT)) ** k
             assert abs(body[fk.E + j] - expect) < 1e-12, (k, j)
+
+
+def test_the_admittance_ramps_follow_the_gait_a_schedule_changes_to():
+    """The admittance's share ramps end with the stance: after a tripod -> wave change its stance time stayed the
+    tripod's 0.5 s of the wave's 0.833 s (found by fuzzing; the ramps act with least_weight < 1)."""
+    from hexabot_sim import params
+    from hexabot_sim.result import at_home
+    from hexabot_sim.robots.hexabot.walk import HexabotParams
+    from hexabot_sim.walking.scene import build_xml, make_controller
+
+    rows = [[0, 0.05, 0, 0, "tripod"], [2, 0.05, 0, 0, "wave"]]
+    p = params.resolve(HexabotParams, {}, {"load_sharing": "admittance", "schedule": rows, "duration": 6})
+    model, data = at_home(build_xml(p))
+    controller = make_controller(p, model, data)
+    assert controller.admittance.stance_time == pytest.approx(0.5)
+    for _ in range(2500):  # 5 s: the wave from 2 s on
+        controller(model, data)
+        mujoco.mj_step(model, data)
+    assert controller.planner.gait.name == "wave"
+    assert controller.admittance.stance_time == pytest.approx(controller.planner.stance_time) == pytest.approx(5 / 6)

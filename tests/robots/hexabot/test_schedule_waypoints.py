@@ -336,37 +336,6 @@ def test_the_twist_a_schedule_or_waypoints_replace_does_not_enter_the_terrain_ch
     assert len(ranges) == 1 and min(ranges)[0] < 0.05 < 0.15 < min(ranges)[1]
 
 
-def test_the_acceleration_limit_follows_the_walks_commanded_not_a_replaced_twist():
-    """The controller's joint-acceleration limit planned the walk's own vx, vy, yaw_rate too, which a schedule or
-    waypoints replace: an ignored vx = 1 m/s raised it to ~23,000 rad/s^2 (no limit at all), and a wave course kept
-    the default vx's 453 whatever its path_speed. It plans stepping in place, the rows and the follower's fastest
-    twists (the peak computed here from each twist's planned cycle, independently of the scene's list)."""
-    from hexabot_sim.control.gait import Command
-    from hexabot_sim.kinematics import legged
-    from hexabot_sim.walking.constants import ACCELERATION_HEADROOM, ACCELERATION_LIMIT
-    from hexabot_sim.walking.ground import _plan_cycle
-    from hexabot_sim.walking.parameters import unchecked
-    from hexabot_sim.walking.scene import acceleration_limit
-
-    rows = [[0, 0.05, 0, 0]]
-    assert {acceleration_limit(walk_params(schedule=rows, vx=vx, duration=6)) for vx in (0.1, 1)} == {
-        ACCELERATION_LIMIT
-    }
-    p = walk_params(waypoints=[[0.3, 0]], gait="wave", duration=30, path_speed=0.05, path_yaw_rate=0.2)
-    peak = 0.0
-    for a in np.radians(np.arange(0, 360, 45)):
-        for w in (-0.2, 0.0, 0.2):  # 0: stepping in place's yaw; the follower turns at +-path_yaw_rate
-            speed = 0.05 if w else 0.0
-            cmd = Command(speed * math.cos(a), speed * math.sin(a), w if speed else 0.0)
-            q = unchecked(p, vx=cmd.vx, vy=cmd.vy, yaw_rate=cmd.yaw_rate, waypoints=())
-            hip, dt = _plan_cycle(q, cmd)
-            joints, _ = legged.ik_hip_batch(p.ROBOT.layout, hip)
-            peak = max(peak, float(np.abs(np.diff(joints, 2, axis=0)).max()) / dt**2)
-    assert peak > ACCELERATION_LIMIT
-    assert acceleration_limit(p) == pytest.approx(ACCELERATION_HEADROOM * peak, rel=1e-9)
-    assert acceleration_limit(p) < acceleration_limit(unchecked(p, waypoints=()))  # the default vx 0.1's
-
-
 def test_the_slope_kerb_and_stairs_face_the_way_a_schedule_or_course_sets_out_not_the_replaced_vx_vy():
     """The terrain's direction came from the walk's own vx, vy (0.1, 0 by default), which a schedule or waypoints
     replace: a schedule crabbing left (+y) met a kerb laid across +x, beside it. Now the kerb, the stairs and the
