@@ -11,6 +11,12 @@ STAND_HEIGHT_MIN: float = 0.02  # [m] the lowest stand_height a walk takes
 # reach refuses the rest (kinematics.legged.tallest_stance): the hexabot's 0.1833 m, a tall robot file's more.
 STAND_HEIGHT_MAX: float = 20.0
 
+# [m] load_sharing=force with level_body=on: the least distance of the body's centre inside the feet down over the
+# planned cycle. Measured on quadbot-walk's crawl at 0.05 m/s: duty 0.75 (0 mm) and 0.8 (1.2 mm) rolled 32 and 15 deg
+# peak to peak and lost 64 and 76 % of the speed; 0.85 (2.4 mm), 0.88 (3.3 mm) and 0.9 (3.6 mm) walked within 5 %
+# and 1.2 deg (the hexabot's gaits: 84-95 mm).
+FORCE_LEVEL_MARGIN: float = 0.002
+
 SETTLE_TIME: float = 0.5  # [s] standing on the neutral stance before the gait clock starts
 
 SPEED_MARGIN: float = 0.9  # planned joint speeds must stay below this fraction of max_joint_speed

@@ -10,12 +10,13 @@ from typing import Any, ClassVar
 import numpy as np
 
 from hexabot_sim.budget import check_run_cost, most_rows, step_count
-from hexabot_sim.control.gait import GAITS, PROFILES, Command, Gait, gaits_for
+from hexabot_sim.control.gait import GAITS, PROFILES, Command, Gait, GaitPlanner, gaits_for
 from hexabot_sim.kinematics import legged
 from hexabot_sim.params import allowed, param
 from hexabot_sim.walking import commands
 from hexabot_sim.walking.constants import (
     CSV_FIXED_COLUMNS,
+    FORCE_LEVEL_MARGIN,
     INTEGRATORS,
     MEASURE_TIME,
     RUN_COST,
@@ -192,6 +193,8 @@ class WalkParams:
             )
         if self.load_sharing == "force":
             self._check_force_gaits()
+            if self.level_body == "on":
+                self._check_force_level()
         shortest = SETTLE_TIME + self.period + MEASURE_TIME
         if self.duration < shortest - 1e-9:
             raise ValueError(
@@ -233,6 +236,26 @@ class WalkParams:
                     f"moments, and the {name} gait has {down} (measured on quadbot-trot at 0.1 m/s: 99 foot bounces "
                     "against 42, roll 2.1 deg against 1.0, speed -3.3 % against -1.3 %); use load_sharing=off or "
                     "admittance"
+                )
+
+    def _check_force_level(self) -> None:
+        """load_sharing=force with level_body=on levels the body by the feet's forces alone: a gait whose planned
+        body centre comes within FORCE_LEVEL_MARGIN of the edge of the feet down (the quadbot's crawl reaches it, a
+        crawl without a body shift) is refused, at the walk's command and a schedule's rows'."""
+        walks = [(self.gait, Command() if self.schedule or self.waypoints else self.command())]
+        walks += [(row.gait, row.command) for row in commands.setpoints(self)] if self.schedule else []
+        for name, cmd in dict.fromkeys(walks):
+            if name not in self.gaits():
+                continue  # an unknown gait is refused, with its row, by the schedule's check
+            q = self if name == self.gait else unchecked(self, gait=name, duty=0.0)
+            margin = least_support_margin(q, cmd)
+            if margin < FORCE_LEVEL_MARGIN:
+                raise ValueError(
+                    f"parameter 'load_sharing' = force with level_body=on needs the body's centre at least "
+                    f"{FORCE_LEVEL_MARGIN * 1000:g} mm inside the feet down all through the gait, and the {name} gait "
+                    f"of {self.ROBOT.name} comes within {max(margin, 0.0) * 1000:.1f} mm of their edge (measured on "
+                    "quadbot-walk's crawl: at 0 and 1.2 mm it rolled 15-32 deg and lost 64-76 % of its speed, at 2.4 "
+                    "mm and more it walked); use level_body=off, load_sharing=off or admittance, or a higher 'duty'"
                 )
 
     def _own_height(self) -> str:
@@ -344,6 +367,20 @@ def support_problem(p: WalkParams) -> str:
                 "move the hips or turn the yaws"
             )
     return ""
+
+
+def least_support_margin(p: WalkParams, cmd: Command, samples: int = 240) -> float:
+    """The least distance [m] of the body's centre inside the feet down (three or more) over a steady cycle of the
+    gait's plan at this command (negative: outside; inf: never three down)."""
+    dt = p.period / samples
+    planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), dt, profile=p.swing)
+    chunks = [planner.plan(cmd, planner.max_chunk)]
+    while planner.time < 2 * p.period - 1e-9:
+        chunks.append(planner.plan(cmd, planner.max_chunk)[1:])
+    feet = np.concatenate(chunks)
+    down = planner.in_stance(np.arange(len(feet)) * dt)
+    margins = [_hull_margin(feet[k, down[k], :2]) for k in range(samples, len(feet)) if down[k].sum() >= 3]
+    return min(margins, default=math.inf)
 
 
 def _hull_margin(points: np.ndarray) -> float:
