@@ -144,8 +144,10 @@ class WalkParams:
 
     @property
     def ROBOT(self) -> WalkingRobot:
-        """The robot this walk walks (a file that changed or went away since it was checked: ValueError)."""
-        return self.ROBOTS.resolve(self.robot)
+        """The robot this walk walks, read once when the parameters were made: a robot file changed or removed since
+        changes nothing (an environment's resets had put the old model in the new file's stance, or refused)."""
+        robot = self.__dict__.get("_robot")
+        return robot if robot is not None else self.ROBOTS.resolve(self.robot)
 
     def longest_duration(self) -> float:
         """The longest walk [s] at this timestep that params.check_run_cost takes (its steps, memory, output and
@@ -154,6 +156,7 @@ class WalkParams:
         return min((rows - 1) * self.timestep, _bound(type(self), "duration"))
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "_robot", self.ROBOTS.resolve(self.robot))  # the file's version checked here
         own = not self.stand_height or self.stand_height == self.ROBOT.layout.stand_height
         if not self.stand_height:  # the robot's own (resolved here: everything downstream reads the number)
             object.__setattr__(self, "stand_height", self.ROBOT.layout.stand_height)
@@ -345,6 +348,8 @@ def unchecked(p: WalkParams, **changes: object) -> WalkParams:
     q = object.__new__(type(p))
     for field in dataclasses.fields(p):
         object.__setattr__(q, field.name, changes.get(field.name, getattr(p, field.name)))
+    if "robot" not in changes:
+        object.__setattr__(q, "_robot", p.ROBOT)
     return q
 
 

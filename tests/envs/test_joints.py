@@ -284,3 +284,25 @@ def test_a_robot_file_is_an_environments_robot(tmp_path):
         LeggedJointsEnv(robot=str(three))
     with pytest.raises(ValueError, match=r"^robot: robot file .*none.toml: cannot be read"):
         LeggedJointsEnv(robot=str(tmp_path / "none.toml"))
+
+
+def test_an_environment_keeps_the_robot_file_it_was_made_with(tmp_path):
+    """The model is compiled at make: a reset takes the robot from the parameters made then, not from the file again
+    (a file edited to another robot had the old model reset in the new one's stance, or refused: six legs, or the
+    file removed, or a pickled environment's file absent where it is loaded)."""
+    import pickle
+    from pathlib import Path
+
+    from hexabot_sim.robots import quadbot
+
+    text = Path(quadbot.__file__).with_name("quadbot.toml").read_text().replace('"quadbot"', '"myquad"')
+    path = tmp_path / "myquad.toml"
+    path.write_text(text)
+    env = LeggedJointsEnv(robot=str(path))
+    first = env.reset(seed=1)[0]
+    frozen = pickle.dumps(env)
+    path.write_text(text.replace("l3 = 0.1 ", "l3 = 0.14 ").replace("height = 0.07", "height = 0.1"))
+    assert np.array_equal(env.reset(seed=1)[0], first)
+    path.unlink()
+    assert np.array_equal(env.reset(seed=1)[0], first)
+    assert np.array_equal(pickle.loads(frozen).reset(seed=1)[0], first)
