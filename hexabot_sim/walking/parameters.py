@@ -25,6 +25,7 @@ from hexabot_sim.walking.constants import (
     STAND_HEIGHT_MAX,
     STAND_HEIGHT_MIN,
     TERRAIN_STEP_SECONDS,
+    TWO_FEET_APART_DEG,
 )
 from hexabot_sim.walking.ground import _plan_cycle, neutral, terrain_problem
 
@@ -354,15 +355,28 @@ def unchecked(p: WalkParams, **changes: object) -> WalkParams:
 
 
 def support_problem(p: WalkParams) -> str:
-    """'' if every set of feet the gait stands on (three or more: not a trot's two) surrounds the body's centre at
-    the neutral stance, else why not. The gaits take the legs in the layout's order (the left row front to rear,
-    then the right row): a robot file whose 'names' list them otherwise (lf, rf, lm, ...) stood a tripod on its
-    three left feet and shuffled at -0.013 m/s for 0.1; legs turned all one way stood nowhere and fell."""
+    """'' if every set of feet the gait stands on surrounds the body's centre at the neutral stance (a trot's two:
+    lie on opposite sides of it, constants.TWO_FEET_APART_DEG), else why not. The gaits take the legs in the layout's
+    order (the left row front to rear, then the right row): a robot file whose 'names' list them otherwise (lf, rf,
+    lm, ...) stood a tripod on its three left feet and shuffled at -0.013 m/s for 0.1; legs turned all one way stood
+    nowhere and fell."""
     gait = p.the_gait()
     layout = p.ROBOT.layout
     feet = layout.neutral_feet_body()[:, :2]  # (n, 2)
     for down in gait.stance_sets():
         margin = _hull_margin(feet[list(down)]) if len(down) >= 3 else math.inf
+        if len(down) == 2:  # a trot's pair: on opposite sides of the centre (the gait balances on their line)
+            a, b = feet[list(down)]
+            cos = a @ b / max(float(np.linalg.norm(a) * np.linalg.norm(b)), 1e-12)
+            apart = math.degrees(math.acos(min(1.0, max(-1.0, cos))))
+            if apart < TWO_FEET_APART_DEG:
+                legs = " and ".join(layout.legs[i] for i in down)
+                return (
+                    f"the {gait.name} gait stands on {legs} at once, and their feet are not on opposite sides of the "
+                    f"body's centre ({apart:.0f} deg apart seen from it at the neutral stance, at least "
+                    f"{TWO_FEET_APART_DEG:g} needed): the gaits take the legs in the robot file's order, the left row "
+                    "front to rear, then the right row; reorder 'names', or move the hips or turn the yaws"
+                )
         if margin < -1e-9:
             legs = ", ".join(layout.legs[i] for i in down)
             return (

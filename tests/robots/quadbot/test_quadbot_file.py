@@ -64,14 +64,20 @@ def test_other_leg_counts_and_a_crawl_that_cannot_stand_are_refused_before_the_w
     """A six-legged file in a quadbot scenario and a four-legged one in hexabot-walk: one line naming the counts.
     Rear hips narrower than the front ones (0.05 against 0.09 m): the crawl's three feet lr, rf, rr leave the
     body's centre outside them (the lr-rf diagonal crosses x = 0 at y = -20 mm: a crawl without a body shift would
-    tip), refused; the trot of the same file walks."""
+    tip), refused; the trot of the same file walks. A file whose 'names' pair the trot's legs front and rear (lf, lr,
+    rr, rf: a bound, -94 % of the speed, fell false) is refused naming the pair."""
     trapezoid = _variant(tmp_path, "trapezoid", ("[[0.10, 0.06], [-0.10, 0.06]]", "[[0.10, 0.09], [-0.10, 0.05]]"),
                          ("size = [0.26, 0.16, 0.03]", "size = [0.26, 0.20, 0.03]"))  # fmt: skip
+    bound = _variant(tmp_path, "bound", ('rows = ["f", "r"]', 'names = ["lf", "lr", "rr", "rf"]'),
+                     ("[[0.10, 0.06], [-0.10, 0.06]]", "[[0.10, 0.06], [-0.10, 0.06], [-0.10, -0.06], [0.10, -0.06]]"),
+                     ("[45.0, 135.0]", "[45.0, 135.0, -135.0, -45.0]"))  # fmt: skip
     cases = [
         ("quadbot-walk", HEXAPOD_FILE, "6 legs; quadbot-walk walks 4-legged robots (its gaits crawl, trot are for 4"),
         ("hexabot-walk", trapezoid, "4 legs; hexabot-walk walks 6-legged robots (its gaits tripod, ripple, wave"),
         ("quadbot-walk", trapezoid, "the crawl gait stands on lr, rf, rr at once, and their feet do not surround the "
          "body's centre (it is at least 15 mm outside them at the neutral stance)"),
+        ("quadbot-trot", bound, "the trot gait stands on lf and rf at once, and their feet are not on opposite sides "
+         "of the body's centre (77 deg apart seen from it at the neutral stance, at least 120 needed)"),
     ]  # fmt: skip
     for scenario, path, message in cases:
         out = tmp_path / "out"
