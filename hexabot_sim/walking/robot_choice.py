@@ -25,7 +25,8 @@ class RobotChoice:
     Attributes:
         builtin: The robot of the scenarios (its scene hosts a file's robot).
         model: The MJCF file (models/<model>.xml) its scene includes, replaced by a file's generated model.
-        scenario: The scenario named in a refusal, e.g. "hexabot-walk".
+        scenario: The scenarios named in a refusal, e.g. "the hexabot's scenarios" (a refusal of quadbot-trot named
+            quadbot-walk).
     """
 
     builtin: WalkingRobot
@@ -72,7 +73,7 @@ def _from_file(choice: RobotChoice, path: str, size: int, mtime: int, shown: str
     n = spec.layout.n_legs
     if n != choice.legs:
         raise UsageError(
-            f"robot file {spec.source}: {n} legs; {choice.scenario} walks {choice.legs}-legged robots (its gaits "
+            f"robot file {spec.source}: {n} legs; {choice.scenario} walk {choice.legs}-legged robots (their gaits "
             f"{', '.join(gaits_for(choice.legs))} are for {choice.legs} legs)"
         )
     replace = ((f"{choice.model}.xml", spec.robot_xml()),)

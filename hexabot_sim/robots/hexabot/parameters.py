@@ -17,7 +17,7 @@ HEXABOT = WalkingRobot(
     torque_limit=hx.ROBOT.torque_limit,  # [N m] the joints' actuatorfrcrange (hexabot.toml, models/hexabot.xml)
 )
 # The hexabot, or a legged-robot file with six legs (its gaits are for six).
-ROBOTS = RobotChoice(HEXABOT, hx.MODEL, "hexabot-walk")
+ROBOTS = RobotChoice(HEXABOT, hx.MODEL, "the hexabot's scenarios")
 
 
 @dataclasses.dataclass(frozen=True)

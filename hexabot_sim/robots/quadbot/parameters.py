@@ -20,7 +20,7 @@ QUADBOT = WalkingRobot(
     torque_limit=ROBOT.torque_limit,  # [N m] the joints' actuatorfrcrange (quadbot.toml, models/quadbot.xml)
 )
 # The quadbot, or a legged-robot file with four legs (its gaits are for four).
-ROBOTS = RobotChoice(QUADBOT, MODEL, "quadbot-walk")
+ROBOTS = RobotChoice(QUADBOT, MODEL, "the quadbot's scenarios")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -64,7 +64,7 @@ def test_a_leg_without_a_coxa_compiles_and_stands(tmp_path: Path) -> None:
         ("l2 = 0.08", "l2 = true", "[leg]: 'l2' must be a finite number [m]; got True"),
         ("height = 0.10", "height = 0.3", "[stance]: the legs cannot reach the ground at height 0.3 m"),
         ("torque_limit = 1.5", "torque_limit = 0.5", "[leg]: the servos are too weak to stand"),
-        ('rows = ["f", "m", "r"]', 'rows = ["f", "r"]', "4 legs; hexabot-walk walks 6-legged robots"),
+        ('rows = ["f", "m", "r"]', 'rows = ["f", "r"]', "4 legs; the hexabot's scenarios walk 6-legged robots"),
         # A bidi override or ESC went raw to the terminal and the MJCF comment (found by fuzzing):
         ('summary = "six', 'summary = "a\\u202eb six', "'summary' must be one line of text"),
         ('summary = "six', 'summary = "a\\u001b[2J six', "'summary' must be one line of text"),

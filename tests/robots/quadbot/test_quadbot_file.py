@@ -61,7 +61,7 @@ def test_a_longer_quadruped_of_its_own_walks_at_the_commanded_speed(
 def test_other_leg_counts_and_a_crawl_that_cannot_stand_are_refused_before_the_walk(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """A six-legged file in a quadbot scenario and a four-legged one in hexabot-walk: one line naming the counts.
+    """A six-legged file in a quadbot scenario and a four-legged one in a hexabot one: one line naming the counts.
     Rear hips narrower than the front ones (0.05 against 0.09 m): the crawl's three feet lr, rf, rr leave the
     body's centre outside them (the lr-rf diagonal crosses x = 0 at y = -20 mm: a crawl without a body shift would
     tip), refused; the trot of the same file walks. A file whose 'names' pair the trot's legs front and rear (lf, lr,
@@ -72,8 +72,10 @@ def test_other_leg_counts_and_a_crawl_that_cannot_stand_are_refused_before_the_w
                      ("[[0.10, 0.06], [-0.10, 0.06]]", "[[0.10, 0.06], [-0.10, 0.06], [-0.10, -0.06], [0.10, -0.06]]"),
                      ("[45.0, 135.0]", "[45.0, 135.0, -135.0, -45.0]"))  # fmt: skip
     cases = [
-        ("quadbot-walk", HEXAPOD_FILE, "6 legs; quadbot-walk walks 4-legged robots (its gaits crawl, trot are for 4"),
-        ("hexabot-walk", trapezoid, "4 legs; hexabot-walk walks 6-legged robots (its gaits tripod, ripple, wave"),
+        ("quadbot-trot", HEXAPOD_FILE, "6 legs; the quadbot's scenarios walk 4-legged robots (their gaits crawl, "
+         "trot are for 4"),  # it named quadbot-walk
+        ("hexabot-turn", trapezoid, "4 legs; the hexabot's scenarios walk 6-legged robots (their gaits tripod, "
+         "ripple, wave"),
         ("quadbot-walk", trapezoid, "the crawl gait stands on lr, rf, rr at once, and their feet do not surround the "
          "body's centre (it is at least 15 mm outside them at the neutral stance)"),
         ("quadbot-trot", bound, "the trot gait stands on lf and rf at once, and their feet are not on opposite sides "
