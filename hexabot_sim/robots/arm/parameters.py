@@ -71,10 +71,22 @@ class ArmTrackParams:
             )
         run_plan = plan_for(self)
         if self.duration == 0:
-            object.__setattr__(self, "duration", RAMP_TIME + run_plan.path.period)
+            auto, longest = RAMP_TIME + run_plan.path.period, _bound("duration")
+            if auto > longest:  # a slow or long path: the cost check's "lower 'duration'" did not apply to 0
+                raise ValueError(
+                    f"parameter 'duration' = 0 runs the {RAMP_TIME:g} s ramp and one cycle of the path, here "
+                    f"{auto:.3g} s at speed {self.speed:g} m/s, more than {longest:g} s: raise 'speed', lower 'size' "
+                    "or give a 'duration'"
+                )
+            object.__setattr__(self, "duration", auto)
         check_duration(self.duration, self.timestep)
         n = step_count(self.duration, self.timestep)
         check_run_cost(n, n + 1, 60, *RUN_COST, "raise 'timestep' or lower 'duration'")
+
+
+def _bound(name: str) -> float:
+    """The upper bound of a parameter of ArmTrackParams."""
+    return next(f.metadata["param"].le for f in dataclasses.fields(ArmTrackParams) if f.name == name)
 
 
 def _file_key(robot: str) -> tuple:

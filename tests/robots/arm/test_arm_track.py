@@ -242,6 +242,16 @@ def test_a_path_out_of_reach_is_refused_before_the_run(capsys, tmp_path):
     assert "arm-track on scara: the path at t = " in err and "is out of reach within the joint ranges" in err
 
 
+def test_a_default_duration_beyond_its_range_is_refused_naming_what_sets_it(capsys, tmp_path):
+    """duration = 0 is the ramp and one cycle: at speed 1e-9 m/s 3.14e8 s, refused by the cost check with "raise
+    'timestep' or lower 'duration'" (neither helps: duration was 0); at 1e-5 m/s and timestep 0.01 s it ran 31,416 s,
+    beyond the parameter's 3600 s."""
+    for sets in (("speed=1e-9",), ("speed=1e-5", "timestep=0.01", "servo_bandwidth=5")):
+        err = refused(capsys, tmp_path, *sets)
+        assert "parameter 'duration' = 0 runs the 0.5 s ramp and one cycle of the path, here 3.14e+" in err, err
+        assert "more than 3600 s: raise 'speed', lower 'size' or give a 'duration'" in err
+
+
 def test_the_python_api_gives_the_same_message(capsys, tmp_path):
     err = refused(capsys, tmp_path, "robot=elbow", "offset_z=2")
     with pytest.raises(UsageError) as info:
