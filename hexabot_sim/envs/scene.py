@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 
 import mujoco
 import numpy as np
@@ -56,12 +57,15 @@ def walking_robots() -> dict[str, tuple[type[WalkParams], dict]]:
 
 def robot_params(robot: str, **overrides) -> WalkParams:
     """The robot's walk parameters (its '<robot>-walk' defaults, then `overrides`). `robot` is a walking robot's
-    name, or the path of a legged-robot file (.toml), walked as that robot with as many legs walks its files.
+    name, or the path (str or os.PathLike) of a legged-robot file (.toml), walked as that robot with as many legs walks
+    its files.
 
     Raises:
         ValueError: for a robot without a walk, naming those there are; a file's problem in one line.
     """
     robots = walking_robots()
+    if isinstance(robot, os.PathLike):  # a pathlib.Path, as hs.run takes (it was an "unknown robot")
+        robot = os.fspath(robot)
     if isinstance(robot, str) and robot not in robots and robot.lower().endswith(".toml"):
         return _file_params(robot, robots, overrides)
     if not isinstance(robot, str) or robot not in robots:  # a list or dict: unhashable, a TypeError

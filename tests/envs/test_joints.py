@@ -272,6 +272,7 @@ def test_a_robot_file_is_an_environments_robot(tmp_path):
 
     mine, rows = episode(str(copy_file))
     assert np.array_equal(rows, episode("quadbot")[1])
+    assert np.array_equal(episode(copy_file)[1], rows)  # a pathlib.Path, as hs.run takes: it was an "unknown robot"
     twin = copy.deepcopy(mine)
     a = np.full(12, 0.2)
     assert np.array_equal(mine.step(a)[0], twin.step(a)[0])
