@@ -55,9 +55,12 @@ def _controller_params(base: WalkParams, ranges: np.ndarray) -> WalkParams:
         try:
             p = dataclasses.replace(base, vx=float(vx), vy=float(vy), yaw_rate=float(w), step_height=float(h))
         except ValueError as e:
+            reason = str(e)
+            if reason.startswith("even stepping in place is infeasible"):  # its advice named the walk's period and
+                reason = reason.rpartition("; ")[0] + "; lower step_height_range"  # step_height: not keywords here
             raise ValueError(
                 f"twist_range and step_height_range must hold commands the legs can deliver; at vx {vx:g}, "
-                f"vy {vy:g}, yaw rate {w:g}, step height {h:g}: {e}"
+                f"vy {vy:g}, yaw rate {w:g}, step height {h:g}: {reason}"
             ) from None
         limit = acceleration_limit(p)
         if limit > best_limit:

@@ -68,6 +68,26 @@ def test_ranges_the_legs_cannot_deliver_are_refused():
         env.step(np.zeros(3))
 
 
+def test_a_step_height_the_legs_cannot_lift_names_the_environments_keyword(tmp_path):
+    """A short-legged quadruped file cannot step in place at the default range's 4.5 cm: the refusal advised the walk's
+    "lengthen 'period' or lower 'step_height' (or raise 'max_joint_speed')", none of them this environment's keywords;
+    a lower step_height_range makes it."""
+    from pathlib import Path
+
+    from hexabot_sim.robots import quadbot
+
+    text = Path(quadbot.__file__).with_name("quadbot.toml").read_text()
+    for old, new in (("l2 = 0.1 ", "l2 = 0.05 "), ("l3 = 0.1 ", "l3 = 0.05 "), ("height = 0.07", "height = 0.05"),
+                     ("reach = 0.13", "reach = 0.09")):  # fmt: skip
+        text = text.replace(old, new)
+    path = tmp_path / "short.toml"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=r"step height 0\.045: even stepping in place is infeasible with the crawl "
+                       r"gait .* above 0\.9 x max_joint_speed; lower step_height_range$"):  # fmt: skip
+        LeggedCommandEnv(robot=str(path))
+    assert LeggedCommandEnv(robot=str(path), step_height_range=(0.015, 0.03)).ranges[3, 1] == 0.03
+
+
 def test_an_unknown_keyword_is_a_value_error_naming_the_known_ones():
     """gymnasium.make(..., reset_noise_scale=0.1) (a joints environment's keyword) was a TypeError naming nothing."""
     with pytest.raises(ValueError, match="unknown keyword 'reset_noise_scale' of LeggedCommandEnv; known: robot, "):
