@@ -16,6 +16,7 @@ from hexabot_sim.terrain import Ground, RoughPatch, Slope
 from hexabot_sim.terrain.heightfield import CELL, MARGIN, MAX_POINTS
 from hexabot_sim.terrain.limits import apart
 from hexabot_sim.terrain.stairs import Stairs
+from hexabot_sim.walking.constants import STAND_HEIGHT_MIN
 from hexabot_sim.walking.ground import start_pose
 from hexabot_sim.walking.parameters import WalkParams
 from hexabot_sim.walking.scene import build_xml
@@ -82,9 +83,16 @@ def _file_params(path: str, robots: dict[str, tuple[type[WalkParams], dict]], ov
     from hexabot_sim.kinematics import legged_file
 
     try:
-        n = legged_file.read(path).layout.n_legs
+        layout = legged_file.read(path).layout
     except UsageError as e:
         raise ValueError(f"robot: {str(e).splitlines()[0]}") from None
+    n = layout.n_legs
+    if layout.stand_height < STAND_HEIGHT_MIN:  # the walk's refusal advised its stand_height: not a keyword here
+        raise ValueError(
+            f"robot: robot file {path}: [stance] height {layout.stand_height:g} m is lower than the walk's lowest "
+            f"stance, {STAND_HEIGHT_MIN:g} m (an environment stands the robot at its file's height): give the file a "
+            "taller stance"
+        )
     takes = {cls.ROBOTS.legs: (cls, defaults) for cls, defaults in robots.values()}
     if n not in takes:
         legs = " or ".join(str(k) for k in sorted(takes))

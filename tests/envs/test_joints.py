@@ -283,6 +283,12 @@ def test_a_robot_file_is_an_environments_robot(tmp_path):
     with pytest.raises(ValueError, match=r"^robot: robot file .*three.toml: 3 legs; the environments walk robot files "
                        r"with 4 or 6 legs$"):  # fmt: skip
         LeggedJointsEnv(robot=str(three))
+    low = tmp_path / "low.toml"  # refused by the walk with "set stand_height", not a keyword of the environments
+    text = copy_file.read_text()
+    low.write_text(text.replace("height = 0.07", "height = 0.015").replace("0.16, 0.03]", "0.16, 0.01]"))
+    refusal = r"^robot: robot file .*low.toml: \[stance\] height 0.015 m is lower than the walk's lowest stance, "
+    with pytest.raises(ValueError, match=refusal + r"0.02 m \(an environment .*: give the file a taller stance$"):
+        LeggedJointsEnv(robot=str(low))
     with pytest.raises(ValueError, match=r"^robot: robot file .*none.toml: cannot be read"):
         LeggedJointsEnv(robot=str(tmp_path / "none.toml"))
 
