@@ -258,8 +258,9 @@ class _Reader:
 
     def spec(self, builtin: bool) -> RobotSpec:
         if isinstance(self.doc, dict) and not {"leg", "legs"}.isdisjoint(self.doc) and "joints" not in self.doc:
-            raise self.fail("", "is a legged-robot file, not a serial-arm (DH) robot file: walk it with hexabot-walk "
-                            "--set robot=FILE (docs/robot-files.md#legged-robot-files)")  # fmt: skip
+            raise self.fail("", "is a legged-robot file, not a serial-arm (DH) robot file: walk it with --set "
+                            "robot=FILE in hexabot-walk (six legs) or quadbot-walk (four legs) "
+                            "(docs/robot-files.md#legged-robot-files)")  # fmt: skip
         doc = self.keys(self.doc, TOP_KEYS, "", ("name", "convention", "angles", "joints"))
         name = self.name(doc["name"], "", "'name'")
         summary = doc.get("summary", "")

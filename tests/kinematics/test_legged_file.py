@@ -184,4 +184,8 @@ def test_an_arm_file_given_as_a_legged_one_and_the_reverse_say_which_kind_they_a
     assert "\n" not in str(e.value)
     with pytest.raises(UsageError, match=r"is a legged-robot file, not a serial-arm \(DH\) robot file") as e:
         robot_file.read(EXAMPLE)
-    assert "hexabot-walk --set robot=" in str(e.value) and "\n" not in str(e.value)
+    assert "\n" not in str(e.value)
+    # A four-legged file was told "walk it with hexabot-walk --set robot=FILE", which refuses four legs:
+    with pytest.raises(UsageError) as e:
+        robot_file.read(Path(legged_file.__file__).parents[1] / "robots" / "quadbot" / "quadbot.toml")
+    assert "walk it with --set robot=FILE in hexabot-walk (six legs) or quadbot-walk (four legs)" in str(e.value)
