@@ -93,8 +93,9 @@ def test_runs_too_large_are_refused_with_the_numbers(capsys, tmp_path, argv, fra
 def test_integrator_and_choices_are_case_insensitive():
     p = params.resolve(pendulum.PendulumParams, {}, {"integrator": "rk4"})
     assert p.integrator == "RK4"
-    p = params.resolve(leg.LegStepParams, {}, {"integrator": " IMPLICITFAST ", "mode": "Kinematic", "profile": "SINE"})
-    assert (p.integrator, p.mode, p.profile) == ("implicitfast", "kinematic", "sine")
+    p = params.resolve(leg.LegStepParams, {}, {"integrator": " IMPLICITFAST ", "mode": "Dynamic", "profile": "SINE"})
+    assert (p.integrator, p.mode, p.profile) == ("implicitfast", "dynamic", "sine")
+    assert params.resolve(leg.LegStepParams, {}, {"mode": "Kinematic"}).mode == "kinematic"
 
 
 # --- every parameter of every scenario: just outside refused, just inside accepted -------------------------

@@ -38,6 +38,9 @@ def _length_doc(link: str, default: float) -> str:
     return f"{link} length; 0 = the robot's (leg: {default:g}), else {MIN_LENGTH:g} m or more"
 
 
+DYNAMIC_ONLY: tuple[str, ...] = ("gravity_compensation", "substeps", "integrator")  # LegParams of the dynamic mode
+
+
 @dataclasses.dataclass(frozen=True)
 class LegParams:
     """Leg, controller and simulation settings shared by leg-step and leg-sweep (hip frame: x forward, z up)."""
@@ -86,6 +89,14 @@ class LegParams:
                 f"parameters 'task_gain' * 'timestep' must be <= {limit} (the foot error would overshoot every control "
                 f"period); got {self.task_gain!r} 1/s * {self.timestep!r} s = {product}"
             )
+        if self.mode == "kinematic":  # q is imposed: no servos, no MuJoCo steps (they were silently ignored)
+            for field in dataclasses.fields(LegParams):
+                value = getattr(self, field.name)
+                if field.name in DYNAMIC_ONLY and value != field.default:
+                    raise ValueError(
+                        f"parameter '{field.name}' = {value!r} acts in mode=dynamic only (kinematic imposes q, "
+                        f"without servos or MuJoCo steps); set mode=dynamic or leave it at {field.default!r}"
+                    )
         for name in ("l1", "l2", "l3"):
             if 0 < getattr(self, name) < MIN_LENGTH:
                 raise ValueError(

@@ -73,3 +73,18 @@ def test_cli_writes_grid_and_figures(tmp_path, capsys):
     assert header[:2] == ["amplitude", "omega"] and "max_deviation" in header
     record = json.loads((out / "run.json").read_text())
     assert record["params"]["omegas"] == [1.0, 2.0] and record["metrics"]["cells"] == 4
+
+
+@pytest.mark.parametrize(("scenario", "change"), [("leg-sweep", {"substeps": 4}), ("leg-step", {"mode": "kinematic",
+                         "integrator": "Euler"}), ("leg-sweep", {"gravity_compensation": "off"})])  # fmt: skip
+def test_a_dynamic_setting_in_the_kinematic_mode_is_refused_not_ignored(scenario, change):
+    """leg-sweep's default mode is kinematic (q imposed): substeps, integrator and gravity_compensation gave the same
+    grid bit for bit whatever their value."""
+    import hexabot_sim as hs
+
+    name, value = list(change.items())[-1]
+    with pytest.raises(UsageError, match=rf"^parameter '{name}' = '?{value}'? acts in mode=dynamic only .*; set "
+                       r"mode=dynamic or leave it at "):  # fmt: skip
+        hs.run(scenario, **change, amplitudes="0.05", omegas="1") if scenario == "leg-sweep" else hs.run(
+            scenario, **change, duration=0.1
+        )
