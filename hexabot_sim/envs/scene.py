@@ -67,8 +67,10 @@ def robot_params(robot: str, **overrides) -> WalkParams:
     robots = walking_robots()
     if isinstance(robot, os.PathLike):  # a pathlib.Path, as hs.run takes (it was an "unknown robot")
         robot = os.fspath(robot)
-    if isinstance(robot, str) and robot not in robots and robot.lower().endswith(".toml"):
-        return _file_params(robot, robots, overrides)
+    if isinstance(robot, str) and robot.lower() in robots:  # names match case-insensitively, as the CLI's
+        robot = robot.lower()
+    elif isinstance(robot, str) and (robot.lower().endswith(".toml") or os.path.isfile(robot)):
+        return _file_params(robot, robots, overrides)  # any file, as the CLI's robot= (q.txt was an unknown robot)
     if not isinstance(robot, str) or robot not in robots:  # a list or dict: unhashable, a TypeError
         raise ValueError(
             f"unknown robot {robot!r}; known: {', '.join(robots)}, or the path of a legged-robot file (.toml)"

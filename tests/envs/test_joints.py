@@ -273,6 +273,12 @@ def test_a_robot_file_is_an_environments_robot(tmp_path):
     mine, rows = episode(str(copy_file))
     assert np.array_equal(rows, episode("quadbot")[1])
     assert np.array_equal(episode(copy_file)[1], rows)  # a pathlib.Path, as hs.run takes: it was an "unknown robot"
+    # Any file, and names in any case, as the CLI's robot=: 'q.txt' and 'QuadBot' were unknown robots.
+    txt = tmp_path / "q.txt"
+    txt.write_text(copy_file.read_text())
+    assert np.array_equal(episode(str(txt))[1], rows) and np.array_equal(episode("QuadBot")[1], rows)
+    with pytest.raises(ValueError, match=r"^unknown robot 'quadbott'; known: hexabot, quadbot, or the path of"):
+        LeggedJointsEnv(robot="quadbott")
     twin = copy.deepcopy(mine)
     a = np.full(12, 0.2)
     assert np.array_equal(mine.step(a)[0], twin.step(a)[0])
