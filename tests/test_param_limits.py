@@ -75,7 +75,8 @@ def test_bad_values_exit_2_with_one_line(capsys, tmp_path, argv, fragments):
             ["leg-sweep", "--set", "periods=100", "--set", "timestep=1e-4", "--set", "workers=1"],
             ["would take 3.61e+08 steps", "fewer cells"],
         ),
-        (["leg-sweep", "--set", "amplitudes=" + ",".join(["0.01"] * 21), "--set", "omegas=" + ",".join(["1"] * 20)],
+        (["leg-sweep", "--set", "amplitudes=" + ",".join(f"0.0{i:02d}" for i in range(1, 22)), "--set",
+          "omegas=" + ",".join(f"1.{i:02d}" for i in range(20))],
          ["at most 400 cells", "21 x 20 = 420"]),
         # A video is estimated too (rendering is software OpenGL here): 4.5 h of 4K frames at 240 fps.
         (["pendulum", "--set", "duration=600", "--video", "--size", "3840x2160", "--fps", "240"],

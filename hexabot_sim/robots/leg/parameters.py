@@ -214,6 +214,11 @@ class LegSweepParams(LegParams):
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        for name in ("amplitudes", "omegas"):  # a value twice made the same cell twice (sweep --grid refuses it)
+            values = getattr(self, name)
+            twice = next((v for i, v in enumerate(values) if v in values[:i]), None)
+            if twice is not None:
+                raise ValueError(f"parameter {name!r}: the value {twice:g} appears twice; give each value once")
         cells = len(self.amplitudes) * len(self.omegas)
         if cells > MAX_CELLS:
             raise ValueError(

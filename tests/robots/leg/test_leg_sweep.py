@@ -45,6 +45,8 @@ def test_sweep_reports_cases_run_in_parallel_like_serially():
         ("0.1,,0.2", "comma-separated list"),
         ("0.1,-1", "must be a number with 0.01 <= omegas"),
         ("a", "must be a number"),
+        # A value twice made the same cell twice (found by fuzzing; sweep --grid refuses it too).
+        ("1,2,1", "parameter 'omegas': the value 1 appears twice; give each value once"),
     ],
 )
 def test_bad_grid(value, fragment):
