@@ -340,25 +340,34 @@ def switch_problem(p: Any, neutral: np.ndarray, settle: float) -> str:
     return ""
 
 
+def follower_twists(p: Any) -> list[Command]:
+    """The fastest twists the path follower may ask for: path_speed in eight directions, turning either way at
+    path_yaw_rate (none without waypoints)."""
+    twists = []
+    for angle in range(0, 360, 45) if p.waypoints else ():
+        a = math.radians(angle)
+        twists += [Command(p.path_speed * math.cos(a), p.path_speed * math.sin(a), w)
+                   for w in (-p.path_yaw_rate, p.path_yaw_rate)]  # fmt: skip
+    return twists
+
+
 def waypoints_problem(p: Any, check: Callable[[Any], str], settle: float) -> str:
     """'' if the course can be walked: the follower's fastest twists are feasible and the walk is long enough."""
     if not p.waypoints:
         return ""
-    for angle in range(0, 360, 45):
-        for w in (-p.path_yaw_rate, p.path_yaw_rate):
-            a = math.radians(angle)
-            try:  # replace() checks the walk it makes: its own refusal is the problem to report
-                q = dataclasses.replace(p, vx=p.path_speed * math.cos(a), vy=p.path_speed * math.sin(a), yaw_rate=w,
-                                        schedule=(), waypoints=(), duration=_shortest(p))  # fmt: skip
-                problem = check(q)
-            except ValueError as e:
-                problem = str(e)
-            if problem:
-                return (
-                    f"waypoints: the follower may ask for path_speed {p.path_speed:g} m/s in any direction while "
-                    f"turning at path_yaw_rate {p.path_yaw_rate:g} rad/s, and {problem}; lower path_speed or "
-                    "path_yaw_rate"
-                )
+    for c in follower_twists(p):
+        try:  # replace() checks the walk it makes: its own refusal is the problem to report
+            q = dataclasses.replace(p, vx=c.vx, vy=c.vy, yaw_rate=c.yaw_rate, schedule=(), waypoints=(),
+                                    duration=_shortest(p))  # fmt: skip
+            problem = check(q)
+        except ValueError as e:
+            problem = str(e)
+        if problem:
+            return (
+                f"waypoints: the follower may ask for path_speed {p.path_speed:g} m/s in any direction while "
+                f"turning at path_yaw_rate {p.path_yaw_rate:g} rad/s, and {problem}; lower path_speed or "
+                "path_yaw_rate"
+            )
     follower = course(p, settle)
     needed = settle + p.period + follower.total / p.path_speed * 1.2 + 1.0
     if follower.final_heading is not None:  # the turn to it, which may come after the point (it is reached first)

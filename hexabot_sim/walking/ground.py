@@ -35,14 +35,22 @@ def neutral(p: WalkParams) -> np.ndarray:
     return layout.neutral_feet_body()
 
 
-def _plan_cycle(p: WalkParams, cmd: Command, samples: int = 240) -> tuple[np.ndarray, float]:
-    """Targets (n, 6, 3) in the hip frames over two steady gait cycles, and their time step."""
+def plan_steady(p: WalkParams, cmd: Command, samples: int = 240) -> tuple[np.ndarray, np.ndarray, float]:
+    """The plan of two steady gait cycles at this command: foot targets (n, legs, 3) in the body frame, the planned
+    stance (n, legs) and their time step (the first cycle, the start-up from neutral, dropped)."""
     dt = p.period / samples
     planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), dt, profile=p.swing)
     chunks = [planner.plan(cmd, planner.max_chunk)]
     while planner.time < 3 * p.period - 1e-9:
         chunks.append(planner.plan(cmd, planner.max_chunk)[1:])
-    body = np.concatenate(chunks)[int(samples * 1.0) :]  # drop the first cycle (start-up from neutral)
+    body = np.concatenate(chunks)
+    stance = planner.in_stance(np.arange(len(body)) * dt)
+    return body[samples:], stance[samples:], dt
+
+
+def _plan_cycle(p: WalkParams, cmd: Command, samples: int = 240) -> tuple[np.ndarray, float]:
+    """Targets (n, 6, 3) in the hip frames over two steady gait cycles, and their time step."""
+    body, _, dt = plan_steady(p, cmd, samples)
     layout = p.ROBOT.layout
     hip = np.einsum("lji,klj->kli", layout.hip_rotations(), body - layout.hip_positions())
     return hip, dt

@@ -9,8 +9,9 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from hexabot_sim import params
 from hexabot_sim.budget import check_run_cost, most_rows, step_count
-from hexabot_sim.control.gait import GAITS, PROFILES, Command, Gait, GaitPlanner, gaits_for
+from hexabot_sim.control.gait import GAITS, PROFILES, Command, Gait, gaits_for
 from hexabot_sim.kinematics import legged
 from hexabot_sim.params import allowed, param
 from hexabot_sim.walking import commands
@@ -27,7 +28,7 @@ from hexabot_sim.walking.constants import (
     TERRAIN_STEP_SECONDS,
     TWO_FEET_APART_DEG,
 )
-from hexabot_sim.walking.ground import _plan_cycle, neutral, terrain_problem
+from hexabot_sim.walking.ground import _plan_cycle, neutral, plan_steady, terrain_problem
 
 
 @dataclasses.dataclass(frozen=True)
@@ -264,7 +265,7 @@ class WalkParams:
 
     def _own_height(self) -> str:
         """' (0: the robot's own)' where stand_height takes 0 (not the quadbot's, whose range starts at 0.02 m)."""
-        low = next(f.metadata["param"].ge for f in dataclasses.fields(self) if f.name == "stand_height")
+        low = params.infos(type(self))["stand_height"][0].ge
         return " (0: the robot's own)" if low == 0 else ""
 
     def _check_servos(self, layout: legged.Layout) -> None:
@@ -391,14 +392,8 @@ def support_problem(p: WalkParams) -> str:
 def least_support_margin(p: WalkParams, cmd: Command, samples: int = 240) -> float:
     """The least distance [m] of the body's centre inside the feet down (three or more) over a steady cycle of the
     gait's plan at this command (negative: outside; inf: never three down)."""
-    dt = p.period / samples
-    planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), dt, profile=p.swing)
-    chunks = [planner.plan(cmd, planner.max_chunk)]
-    while planner.time < 2 * p.period - 1e-9:
-        chunks.append(planner.plan(cmd, planner.max_chunk)[1:])
-    feet = np.concatenate(chunks)
-    down = planner.in_stance(np.arange(len(feet)) * dt)
-    margins = [_hull_margin(feet[k, down[k], :2]) for k in range(samples, len(feet)) if down[k].sum() >= 3]
+    feet, down, _ = plan_steady(p, cmd, samples)
+    margins = [_hull_margin(feet[k, down[k], :2]) for k in range(len(feet)) if down[k].sum() >= 3]
     return min(margins, default=math.inf)
 
 
@@ -491,7 +486,7 @@ def feasibility(p: WalkParams) -> str:
 
 def _bound(cls: type, name: str) -> float:
     """A parameter's upper bound (its `le`), as `hexabot-sim list` shows it."""
-    return next(f.metadata["param"].le for f in dataclasses.fields(cls) if f.name == name)
+    return params.infos(cls)[name][0].le
 
 
 def csv_columns(robot: WalkingRobot) -> int:

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import math
-
 import mujoco
 import numpy as np
 
@@ -120,14 +118,8 @@ def _row_walks(p: WalkParams) -> list[tuple[WalkParams, Command]]:
 
 
 def _follower_walks(p: WalkParams) -> list[tuple[WalkParams, Command]]:
-    """The path follower's fastest twists as walks of their own (path_speed in eight directions, turning either way
-    at path_yaw_rate: what commands.waypoints_problem checked); none without waypoints."""
-    walks = []
-    for angle in range(0, 360, 45) if p.waypoints else ():
-        for w in (-p.path_yaw_rate, p.path_yaw_rate):
-            c = Command(p.path_speed * math.cos(math.radians(angle)), p.path_speed * math.sin(math.radians(angle)), w)
-            walks.append((unchecked(p, vx=c.vx, vy=c.vy, yaw_rate=c.yaw_rate, waypoints=()), c))
-    return walks
+    """The path follower's fastest twists (commands.follower_twists) as walks of their own; none without waypoints."""
+    return [(unchecked(p, vx=c.vx, vy=c.vy, yaw_rate=c.yaw_rate, waypoints=()), c) for c in commands.follower_twists(p)]
 
 
 def _commanded_walks(p: WalkParams) -> list[tuple[WalkParams, Command]]:
@@ -144,11 +136,8 @@ def _walk_depth_range(p: WalkParams) -> tuple[float, float]:
     walk of its own; ground.depth_range steps in place for the walk with a schedule or waypoints), not the walk's
     own vx, vy and yaw_rate a schedule replaces (an ignored vx = 1 m/s left (0.09, 0.09) m: no room to find the
     ground)."""
-    lo, hi = math.inf, -math.inf
-    for q, _ in _commanded_walks(p):
-        row_lo, row_hi = depth_range(q)
-        lo, hi = (row_lo, row_hi) if lo == math.inf else (max(lo, row_lo), min(hi, row_hi))
-    return lo, hi
+    ranges = [depth_range(q) for q, _ in _commanded_walks(p)]
+    return max(lo for lo, _ in ranges), min(hi for _, hi in ranges)
 
 
 def acceleration_limit(p: WalkParams) -> float:
@@ -168,9 +157,7 @@ def make_controller(
     """The walking controller of a run (the ground-finding one for sensed touchdown or a levelled body); its
     command from `source` (the viewer's steering), else the walk's schedule or waypoints, else vx, vy, yaw_rate."""
     trims, _, _ = perturbations(p)
-    gait = p.the_gait()
-    if p.schedule and commands.setpoints(p)[0].gait != p.gait:  # the walk starts in the first row's gait
-        gait = p.gaits()[commands.setpoints(p)[0].gait]
+    gait = commands.start_gait(p)  # a schedule's first row's gait replaces the walk's
     planner = GaitPlanner(
         gait, p.period, p.step_height, neutral(p), p.timestep, start_time=SETTLE_TIME, profile=p.swing
     )

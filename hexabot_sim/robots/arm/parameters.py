@@ -12,7 +12,7 @@ import numpy as np
 
 from hexabot_sim.budget import check_duration, check_run_cost, step_count
 from hexabot_sim.kinematics import robots
-from hexabot_sim.params import NameOrFile, apart, param
+from hexabot_sim.params import NameOrFile, apart, infos, param
 from hexabot_sim.robots.arm.path import PATHS, PLANES, RAMP_TIME, Path, Plan, plan
 
 ROBOT = NameOrFile(tuple(robots.ROBOTS), "robot file (.toml)", robots.resolve)
@@ -71,7 +71,7 @@ class ArmTrackParams:
             )
         run_plan = plan_for(self)
         if self.duration == 0:
-            auto, longest = RAMP_TIME + run_plan.path.period, _bound("duration")
+            auto, longest = RAMP_TIME + run_plan.path.period, infos(ArmTrackParams)["duration"][0].le
             if auto > longest:  # a slow or long path: the cost check's "lower 'duration'" did not apply to 0
                 raise ValueError(
                     f"parameter 'duration' = 0 runs the {RAMP_TIME:g} s ramp and one cycle of the path, here "
@@ -82,11 +82,6 @@ class ArmTrackParams:
         check_duration(self.duration, self.timestep)
         n = step_count(self.duration, self.timestep)
         check_run_cost(n, n + 1, 60, *RUN_COST, "raise 'timestep' or lower 'duration'")
-
-
-def _bound(name: str) -> float:
-    """The upper bound of a parameter of ArmTrackParams."""
-    return next(f.metadata["param"].le for f in dataclasses.fields(ArmTrackParams) if f.name == name)
 
 
 def _file_key(robot: str) -> tuple:
