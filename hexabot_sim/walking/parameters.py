@@ -255,10 +255,15 @@ class WalkParams:
             q = self if name == self.gait else unchecked(self, gait=name, duty=0.0)
             margin = least_support_margin(q, cmd)
             if margin < FORCE_LEVEL_MARGIN:
+                # Outside them (a crawl on a trapezoid: 15 mm) was told "comes within 0.0 mm of their edge".
+                where = (
+                    f"comes within {max(margin, 0.0) * 1000:.1f} mm of their edge" if margin > -5e-5
+                    else f"leaves its centre {-margin * 1000:.1f} mm outside them"
+                )  # fmt: skip
                 raise ValueError(
                     f"parameter 'load_sharing' = force with level_body=on needs the body's centre at least "
                     f"{FORCE_LEVEL_MARGIN * 1000:g} mm inside the feet down all through the gait, and the {name} gait "
-                    f"of {self.ROBOT.name} comes within {max(margin, 0.0) * 1000:.1f} mm of their edge (measured on "
+                    f"of {self.ROBOT.name} {where} (measured on "
                     "quadbot-walk's crawl: at 0 and 1.2 mm it rolled 15-32 deg and lost 64-76 % of its speed, at 2.4 "
                     "mm and more it walked); use level_body=off, load_sharing=off or admittance, or a higher 'duty'"
                 )

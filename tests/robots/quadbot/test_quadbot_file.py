@@ -10,6 +10,7 @@ import pytest
 from helpers import cli
 
 import hexabot_sim as hs
+from hexabot_sim.errors import UsageError
 from hexabot_sim.kinematics import legged_file
 from hexabot_sim.robots import quadbot
 
@@ -87,3 +88,7 @@ def test_other_leg_counts_and_a_crawl_that_cannot_stand_are_refused_before_the_w
         assert code == 2 and stdout == "" and err.count("\n") == 1 and not out.exists(), err
         assert message in err, err
     assert hs.run("quadbot-trot", robot=str(trapezoid), duration=1.6).metrics["fell"].value is False
+    # With force control and a level body its crawl's centre, outside the feet down, is said to be outside them (it
+    # read "comes within 0.0 mm of their edge").
+    with pytest.raises(UsageError, match=r"the crawl gait of trapezoid leaves its centre 1\d\.\d mm outside them"):
+        hs.run("quadbot-walk", robot=str(trapezoid), load_sharing="force", level_body="on")
