@@ -12,6 +12,7 @@ touchdown), rough ones hexabot-rough (roughness 1 cm, touchdown=sensed) at the s
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from concurrent.futures import ProcessPoolExecutor
 
@@ -30,11 +31,11 @@ def one(case: tuple) -> str:
 
     scenario, gait, seed, duration, options = case
     r = hs.run(scenario, gait=gait, vx=SPEEDS[gait], duration=duration, seed=seed, **options)
-    m = {k: v.value for k, v in r.metrics.items()}
+    m = {k: (math.nan if v.value is None else v.value) for k, v in r.metrics.items()}  # None: none measured
     ground = "flat" if scenario == "hexabot-walk" else f"rough {seed}"
     speed = m["vx_error"] if m.get("vx_error") is not None else m.get("speed_made_good_error", float("nan"))
     return (
-        f"{gait:6s} {ground:8s} bounces {m['foot_bounces']:4d}  ripple {100 * m['stance_force_ripple']:5.1f} %  "
+        f"{gait:6s} {ground:8s} bounces {m['foot_bounces']:4.0f}  ripple {100 * m['stance_force_ripple']:5.1f} %  "
         f"impact {m['touchdown_impact_ratio']:5.2f}  loaded {m['stance_loaded_fraction']:.3f} / "
         f"{m['stance_loaded_fraction_min']:.3f}  share_min {m['load_share_min']:.2f}  speed {100 * speed:+6.2f} %  "
         f"slip {m['slip_per_stance']:5.2f} mm  sag {1000 * m['body_height_sag']:5.2f} mm  roll/pitch p-p "

@@ -262,12 +262,16 @@ def force_step(par, geo, state, body, qpos, trims, sensordata, row, down, until,
 
 
 @jit
-def ground_down(flags, stance_modes, out):
-    """out[i] = the ground controller's leg i is down: its mode (flags[i, 0]) one of `stance_modes` (STANCE, EARLY)
-    and grounded (flags[i, 2])."""
+def ground_down(flags, stance_modes, near, state, out):
+    """out[i] = the ground controller's leg i is down: its mode (flags[i, 0]) STANCE or EARLY (`stance_modes`) and
+    grounded (flags[i, 2]). A leg in mode `near` (NEAR: touched close to its swing's end, which it goes on to) is an
+    early touch (state EARLY, as the planned controller's): in force mode, its swing's height the reference."""
     for i in range(flags.shape[0]):
         mode = flags[i, 0]
-        out[i] = (mode == stance_modes[0] or mode == stance_modes[1]) and flags[i, 2] != 0
+        grounded = flags[i, 2] != 0
+        out[i] = (mode == stance_modes[0] or mode == stance_modes[1]) and grounded
+        if mode == near and grounded:
+            state[i, EARLY] = 1.0
 
 
 def compile_all() -> None:
@@ -280,7 +284,7 @@ def compile_all() -> None:
     trims, extra, row = np.zeros(3 * n), np.zeros(3 * n), np.zeros(3 * n)
     force_pre(par, geo, state, body, qpos, trims, np.zeros(8), row, np.ones(n, dtype=np.bool_), np.ones(n), extra)
     force_post(par, state, qpos, trims, np.zeros(3 * n), np.zeros(3 * n), np.ones(3 * n), np.zeros(6 * n))
-    ground_down(np.zeros((n, 3), dtype=np.int64), np.zeros(2, dtype=np.int64), np.zeros(n, dtype=np.bool_))
+    ground_down(np.zeros((n, 3), dtype=np.int64), np.zeros(2, dtype=np.int64), 4, state, np.zeros(n, dtype=np.bool_))
     from hexabot_sim.control import resolved_rate
     from hexabot_sim.kinematics.leg import LegGeometry
 

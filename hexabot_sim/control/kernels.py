@@ -21,9 +21,10 @@ State of the ground-finding legs (GroundController), one row per leg:
   lift-off, the lift-off time [s], the horizontal target offset (x, y) [m] in the hip frame, the
   offset at lift-off, the landing point (x, y) of the swing under way in the body frame, the
   planner's landing point of the next swing (set with each chunk's plan), the elevator reflex's
-  trigger time [s] and the horizontal target (x, y) [m] (hip frame) it holds while lifting, and the
-  stance height's change per step [m] until the next plane update;
-- `flags` int (n, 3): swing mode (STANCE, SWING, EARLY, SEEKING), planned stance at the last step, grounded.
+  trigger time [s] and the horizontal target (x, y) [m] (hip frame) it holds while lifting, the
+  stance height's change per step [m] until the next plane update, and the landing's height over the stance
+  plane from a terrain map [m] (0 without one: map_kernels.py);
+- `flags` int (n, 3): swing mode (STANCE, SWING, EARLY, SEEKING, NEAR), planned stance at the last step, grounded.
 """
 
 from __future__ import annotations
@@ -51,11 +52,12 @@ def jit(function):
 rate_steps = jit(resolved_rate.rate_steps)
 feed = jit(resolved_rate.feed)
 
-# Swing state machine, per leg.
-STANCE, SWING, EARLY, SEEKING = 0, 1, 2, 3
+# Swing state machine, per leg. NEAR: touched within EARLY_BAND of the swing's end height, which it goes on to.
+STANCE, SWING, EARLY, SEEKING, NEAR = 0, 1, 2, 3, 4
 # Columns of `legs`.
-Z, Z_LIFT, T_LIFT, OFFSET, OFFSET_LIFT, LANDING, NEXT_LANDING, T_REFLEX, HOLD, Z_STEP = 0, 1, 2, 3, 5, 7, 9, 11, 12, 14
-NLEG = 15
+Z, Z_LIFT, T_LIFT, OFFSET, OFFSET_LIFT, LANDING, NEXT_LANDING, T_REFLEX, HOLD, Z_STEP, MAP_DZ = (
+    0, 1, 2, 3, 5, 7, 9, 11, 12, 14, 15)  # fmt: skip
+NLEG = 16
 # Columns of `flags`.
 MODE, WAS_STANCE, GROUNDED = 0, 1, 2
 # Per-leg constants `geo` (n, NGEO): cos and sin of the hip yaw, hip position (x, y) in the body frame, the
@@ -65,8 +67,8 @@ NGEO = 6
 # Scalars `par`: GroundSettings, the gait's timing and the command's ramp.
 (SENSED, LEVEL, STAND_HEIGHT, DEPTH_MIN, DEPTH_MAX, ATTITUDE_GAIN, HEIGHT_GAIN, TOUCH_THRESHOLD, UPDATE_EVERY,
  SWING_TIME, SEEK_SPEED, DT, SETTLE_TIME, RAMP_TIME, QUAT_ADR,
- REFLEX_LIFT, REFLEX_UNTIL, REFLEX_RISE) = range(18)  # fmt: skip
-NPAR = 18
+ REFLEX_LIFT, REFLEX_UNTIL, REFLEX_RISE, EARLY_BAND) = range(19)  # fmt: skip
+NPAR = 19
 REFLEX_FROM: float = 0.2  # a touch earlier in the swing is the foot leaving the ground, not an obstacle
 # Counters `counts`: control steps so far, plane updates, updates whose heights were clipped to the workspace.
 STEPS, UPDATES, CLIPPED = 0, 1, 2
@@ -202,7 +204,9 @@ def targets(par, geo, legs, flags, plane, cmd, row, stance, t, row_prev, sensord
     Per leg: a planned stance goes on at its height z; a planned lift-off starts a swing from the
     lift-off height toward the stance plane under the landing point (smoothstep) plus the planner's
     lift, the lift-off offset fading out over the first half; a touch in the second half of a swing
-    (sensed) ends it early, the target then ground-fixed at the command's stance velocity; a swing
+    (sensed) ends it early, the target then ground-fixed at the command's stance velocity, unless the target is
+    within EARLY_BAND of the swing's end height (NEAR: a soft foot's first contact, which the swing goes on
+    through to its planned end, as with planned touchdown); a swing
     that reaches its planned touchdown untouched keeps descending (SEEKING) until it touches or
     leaves the workspace (no ground). Swings that ended are written to events as (leg, planned
     touchdown time, touch time or NaN); returns how many.
@@ -234,11 +238,11 @@ def targets(par, geo, legs, flags, plane, cmd, row, stance, t, row_prev, sensord
             flags[i, GROUNDED] = 1
         elif mode == EARLY and planned:
             mode = STANCE
-        if mode == SWING:
+        if mode == SWING or mode == NEAR:
             s = min((t - legs[i, T_LIFT]) / swing_time, 1.0)
             u = s * s * (3 - 2 * s)
             z_lift = legs[i, Z_LIFT]
-            under = plane[0] + plane[1] * legs[i, LANDING] + plane[2] * legs[i, LANDING + 1]
+            under = plane[0] + plane[1] * legs[i, LANDING] + plane[2] * legs[i, LANDING + 1] + legs[i, MAP_DZ]
             base = z_lift + (under - z_lift) * u  # toward the stance plane under the landing point
             z = base + row[j + 2] - geo[i, NEUTRAL_Z]  # + the planner's lift
             if s < 0.5:
@@ -249,7 +253,8 @@ def targets(par, geo, legs, flags, plane, cmd, row, stance, t, row_prev, sensord
             else:
                 legs[i, OFFSET] = legs[i, OFFSET + 1] = 0.0
             # Elevator reflex: a touch before REFLEX_UNTIL of the swing is an obstacle in the way, not the ground.
-            blocked = sensed and touching and REFLEX_FROM < s < par[REFLEX_UNTIL] and par[REFLEX_LIFT] > 0.0
+            blocked = sensed and touching and mode == SWING and REFLEX_FROM < s < par[REFLEX_UNTIL]
+            blocked = blocked and par[REFLEX_LIFT] > 0.0
             if blocked and legs[i, T_REFLEX] < legs[i, T_LIFT]:  # the first touch of this swing: hold and lift
                 legs[i, T_REFLEX] = t
                 legs[i, HOLD] = out[j] + legs[i, OFFSET]
@@ -258,18 +263,25 @@ def targets(par, geo, legs, flags, plane, cmd, row, stance, t, row_prev, sensord
                 z, hold = reflex(par, legs, i, t, s, z)
                 legs[i, OFFSET] = (legs[i, HOLD] - out[j]) * hold
                 legs[i, OFFSET + 1] = (legs[i, HOLD + 1] - out[j + 1]) * hold
-            if sensed and s >= 0.5 and touching and not blocked:
+            touched = mode == SWING and sensed and s >= 0.5 and touching and not blocked
+            if touched:
                 n_events = _event(events, n_events, i, legs[i, T_LIFT] + swing_time, t)
+            near = par[EARLY_BAND] > 0.0 and z - under < par[EARLY_BAND]
+            if touched and (planned or not near):
                 legs[i, Z] = z
                 mode = STANCE if planned else EARLY
-            elif planned:  # the planned touchdown came without a touch
+            elif planned:  # the planned touchdown came without a touch (or after one NEAR its end)
                 legs[i, Z] = base
-                if sensed:
+                if mode == NEAR:
+                    mode = STANCE
+                elif sensed:
                     mode = SEEKING
                 else:
                     mode = STANCE
                     n_events = _event(events, n_events, i, t, t)
             else:  # still swinging
+                if touched:
+                    mode = NEAR
                 out[j] += legs[i, OFFSET]
                 out[j + 1] += legs[i, OFFSET + 1]
                 out[j + 2] = z
@@ -343,10 +355,10 @@ def ground_step(par, geo, k, legs, flags, plane, counts, cmd, rows, stance, r, t
 
 
 # What a walk compiles: "walk" (every walk: the servo step, the ground-finding legs, the gait plan), "force" (the
-# stance force control, load_sharing=force: force_kernels.py) and "admittance" (load_sharing=admittance:
-# compliance_kernels.py). A default walk compiles only the first: 62 % of the three's cold compile, 27 of 44 s on a
-# loaded 2-core machine (scripts/bench.py --only compile).
-GROUPS: tuple[str, ...] = ("walk", "force", "admittance")
+# stance force control, load_sharing=force: force_kernels.py), "admittance" (load_sharing=admittance:
+# compliance_kernels.py) and "map" (terrain_map=on: map_kernels.py). A default walk compiles only the first: 62 % of
+# the first three's cold compile, 27 of 44 s on a loaded 2-core machine (scripts/bench.py --only compile).
+GROUPS: tuple[str, ...] = ("walk", "force", "admittance", "map")
 _WARM: set[str] = set()
 
 
@@ -413,11 +425,12 @@ class _StopBetweenPasses(numba.core.event.Listener):
 
 
 def _all_kernels() -> tuple:
-    """Every compiled kernel of the walking controllers: these, the legs' admittance (compliance_kernels.py) and the
-    gait plan's (plan_kernels.py)."""
-    from hexabot_sim.control import compliance_kernels, force_kernels, plan_kernels
+    """Every compiled kernel of the walking controllers: these, the legs' admittance (compliance_kernels.py), the
+    force control's, the terrain map's and the gait plan's (plan_kernels.py)."""
+    from hexabot_sim.control import compliance_kernels, force_kernels, map_kernels, plan_kernels
 
-    return _KERNELS + compliance_kernels.KERNELS + force_kernels.KERNELS + plan_kernels.KERNELS
+    kernels = compliance_kernels.KERNELS + force_kernels.KERNELS + map_kernels.KERNELS + plan_kernels.KERNELS
+    return _KERNELS + kernels
 
 
 def _compile_all(groups: tuple[str, ...]) -> None:
@@ -429,8 +442,10 @@ def _compile_all(groups: tuple[str, ...]) -> None:
 
 
 def _compile_each(groups: tuple[str, ...] = GROUPS) -> None:
-    from hexabot_sim.control import compliance_kernels, force_kernels, plan_kernels
+    from hexabot_sim.control import compliance_kernels, force_kernels, map_kernels, plan_kernels
 
+    if "map" in groups:
+        map_kernels.compile_all()
     if "admittance" in groups:
         compliance_kernels.compile_all()
     if "force" in groups:

@@ -8,6 +8,7 @@ import dataclasses
 from hexabot_sim.control.compliance import AdmittanceSettings
 from hexabot_sim.control.force_control import ForceSettings
 from hexabot_sim.control.gait import Command
+from hexabot_sim.terrain.heightmap import HeightMap
 
 
 @dataclasses.dataclass(frozen=True)
@@ -59,6 +60,11 @@ class GroundSettings:
             in the first half of the swing and is an early touchdown in the second).
         reflex_until: Swing fraction before which a touch triggers the reflex instead of a touchdown.
         reflex_rise: Time the reflex takes to lift [s].
+        early_band: A touch with the swing's target less than this above its end height [m] is not an early
+            touchdown: the swing goes on to its planned end, as with planned touchdown (a soft foot's pad meets the
+            ground a little above the height it stands at); 0: every touch in the second half ends the swing.
+        terrain_map: The ground's heights as the robot's map holds them (terrain/heightmap.py): each swing ends on
+            the map's ground under its landing point (control/map_kernels.py); None: on the stance plane.
     """
 
     sensed: bool = True
@@ -72,6 +78,8 @@ class GroundSettings:
     reflex_lift: float = 0.0
     reflex_until: float = 0.75
     reflex_rise: float = 0.1
+    early_band: float = 0.0
+    terrain_map: HeightMap | None = None
 
 
 @dataclasses.dataclass(frozen=True)

@@ -20,6 +20,7 @@ from hexabot_sim.terrain import Ground, Kerb, Limits, RoughPatch, Slope, Stairs
 from hexabot_sim.terrain.heightfield import CELL as HFIELD_CELL
 from hexabot_sim.terrain.heightfield import MARGIN as HFIELD_MARGIN
 from hexabot_sim.terrain.heightfield import MAX_POINTS as HFIELD_MAX_POINTS
+from hexabot_sim.terrain.heightmap import HeightMap
 from hexabot_sim.terrain.kerb import KERB_LENGTH, KERB_WIDTH
 from hexabot_sim.walking import commands
 from hexabot_sim.walking.constants import KERB_PLATE_CLEARANCE, REFLEX_LIFT, SETTLE_TIME
@@ -65,13 +66,11 @@ def walking_direction(p: WalkParams, course: np.ndarray | None = None) -> np.nda
     return np.array([p.vx, p.vy]) / speed if speed > 0 else np.array([1.0, 0.0])
 
 
-def terrain(p: WalkParams) -> Ground:
-    """The run's ground: slope direction from the walking direction, heightfield over the walk's area."""
-    course = commands.path(p, SETTLE_TIME) if p.schedule or p.waypoints else None  # planned once, used thrice
-    along = walking_direction(p, course)
-    uphill = {"uphill": along, "downhill": -along, "across": np.array([-along[1], along[0]])}[p.slope_heading]
+def _walk_area(p: WalkParams, course: np.ndarray | None) -> tuple[tuple[float, float, float, float], float]:
+    """The world box (x_min, x_max, y_min, y_max) [m] the walk covers, HFIELD_MARGIN beyond its course on every side,
+    and the farthest it goes from its start [m]."""
     speed = math.hypot(p.vx, p.vy)
-    distance = speed * p.duration  # the farthest the walk goes from its start
+    distance = speed * p.duration
     if course is not None:  # a box holding the course (the schedule's planned path)
         extent = commands.extent(course, HFIELD_MARGIN)
         distance = float(np.hypot(course[:, 0], course[:, 1]).max())
@@ -84,6 +83,15 @@ def terrain(p: WalkParams) -> Ground:
             min(0.0, end[0]) - HFIELD_MARGIN, max(0.0, end[0]) + HFIELD_MARGIN,
             min(0.0, end[1]) - HFIELD_MARGIN, max(0.0, end[1]) + HFIELD_MARGIN,
         )  # fmt: skip
+    return extent, distance
+
+
+def terrain(p: WalkParams) -> Ground:
+    """The run's ground: slope direction from the walking direction, heightfield over the walk's area."""
+    course = commands.path(p, SETTLE_TIME) if p.schedule or p.waypoints else None  # planned once, used thrice
+    along = walking_direction(p, course)
+    uphill = {"uphill": along, "downhill": -along, "across": np.array([-along[1], along[0]])}[p.slope_heading]
+    extent, distance = _walk_area(p, course)
     if p.slope_deg:  # the patch lies in the ground frame: a world distance d is d / cos(slope) along the slope
         extent = tuple(v / math.cos(math.radians(p.slope_deg)) for v in extent)
     extent = tuple(round(v / HFIELD_CELL) * HFIELD_CELL for v in extent)
@@ -119,6 +127,26 @@ def terrain(p: WalkParams) -> Ground:
         rough=RoughPatch(p.roughness, p.seed, extent) if p.roughness else None,
         obstacles=obstacles,
     )
+
+
+def terrain_map(p: WalkParams) -> HeightMap | None:
+    """The robot's map of the run's ground over the walk's area (terrain_map=on, with its map_error), else None."""
+    if p.terrain_map != "on":
+        return None
+    course = commands.path(p, SETTLE_TIME) if p.schedule or p.waypoints else None
+    return HeightMap.sample(terrain(p), _walk_area(p, course)[0], p.map_error, p.seed)
+
+
+def _map_problem(p: WalkParams) -> str:
+    """'' unless the terrain map's parameters are given without what they apply to."""
+    if p.terrain_map == "on" and p.touchdown != "sensed":
+        return (
+            "parameter 'terrain_map' = on needs touchdown=sensed: the swings land on the map's ground and the feet's "
+            "touch sensors end the swings the map got wrong"
+        )
+    if p.map_error and p.terrain_map != "on":
+        return "parameter 'map_error' is the terrain map's error: it needs terrain_map=on (and touchdown=sensed)"
+    return ""
 
 
 def depth_range(p: WalkParams) -> tuple[float, float]:
@@ -201,6 +229,9 @@ def _least_friction(p: WalkParams) -> tuple[float, str]:
 def terrain_problem(p: WalkParams) -> str:
     """'' if the ground can be walked as asked, else a one-line reason (the terrain types' own refusals, with
     what this robot can take, and a level body's reach on a slope)."""
+    problem = _map_problem(p)
+    if problem:
+        return problem
     ground = terrain(p)
     layout = p.ROBOT.layout
     underside = p.stand_height + layout.foot_radius - layout.plate[2]  # the plate's underside above the ground

@@ -20,6 +20,7 @@ from hexabot_sim.walking import commands
 from hexabot_sim.walking.constants import (
     ACCELERATION_HEADROOM,
     ACCELERATION_LIMIT,
+    PAD_EARLY_BAND,
     REFLEX_LIFT,
     SCENE_EXTENT,
     SETTLE_TIME,
@@ -27,7 +28,7 @@ from hexabot_sim.walking.constants import (
     SLOPE_CAMERA_HEIGHT,
     TERRAIN_NOSLIP_ITERATIONS,
 )
-from hexabot_sim.walking.ground import _plan_cycle, depth_range, neutral, start_pose, terrain
+from hexabot_sim.walking.ground import _plan_cycle, depth_range, neutral, start_pose, terrain, terrain_map
 from hexabot_sim.walking.parameters import WalkParams, unchecked
 from hexabot_sim.walking.perturb import perturbations
 
@@ -175,5 +176,6 @@ def make_controller(
     ground = GroundSettings(
         sensed=p.touchdown == "sensed", level=p.level_body == "on", stand_height=p.stand_height,
         depth_range=_walk_depth_range(p), reflex_lift=p.step_height * REFLEX_LIFT if p.reflex == "on" else 0.0,
+        early_band=PAD_EARLY_BAND if p.feet == "pad" else 0.0, terrain_map=terrain_map(p),
     )  # fmt: skip
     return GroundController(model, data, p.ROBOT.layout, planner, gains, settings, q0, ground, source)

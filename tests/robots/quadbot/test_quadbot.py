@@ -179,7 +179,7 @@ def test_the_stance_force_control_with_a_level_body_needs_the_centre_inside_the_
     from helpers import cli, walk_params
 
     from hexabot_sim.control.gait import Command
-    from hexabot_sim.walking.parameters import least_support_margin
+    from hexabot_sim.walking.support import least_support_margin
 
     for overrides, margin in (({}, "0.0"), ({"duty": 0.8}, "1.2")):
         args = [f"--set={k}={v}" for k, v in {"load_sharing": "force", "level_body": "on", **overrides}.items()]

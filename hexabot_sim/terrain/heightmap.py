@@ -1,0 +1,59 @@
+"""A terrain map: the ground's height on a regular grid of the world's (x, y), as a walking robot's elevation map
+holds it.
+
+A robot that sees the ground (a depth camera or a lidar, fused into an elevation map over its odometry) knows where
+the next foothold lies before its foot gets there. `HeightMap.sample` builds that map from the run's own ground
+(terrain.Ground.height: the surface MuJoCo collides), on cells of CELL, with an optional error: independent Gaussian
+noise per grid point (seeded), standing for the sensor's and the map's errors. Between grid points the map is
+bilinear (what the controller reads: control/map_kernels.py; `height` here is the same in numpy).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+CELL: float = 0.01  # [m] the map's grid spacing: half the rough patch's (heightfield.CELL), so its facets are resolved
+MAX_POINTS: int = 4_000_000  # a larger area gets coarser cells (32 MB of float64 at most)
+
+
+@dataclasses.dataclass(frozen=True)
+class HeightMap:
+    """Heights (ny, nx) [m] at x0 + i cell, y0 + j cell (world frame); outside the grid, its nearest edge's."""
+
+    x0: float
+    y0: float
+    cell: float
+    heights: np.ndarray
+
+    @classmethod
+    def sample(cls, ground, extent: tuple[float, float, float, float], error: float = 0.0, seed: int = 0) -> HeightMap:
+        """The map of `ground` (terrain.Ground) over extent = (x_min, x_max, y_min, y_max) [m], each height off by
+        N(0, error) [m] (seeded by `seed`)."""
+        x_min, x_max, y_min, y_max = extent
+        cell = max(CELL, math.sqrt((x_max - x_min) * (y_max - y_min) / MAX_POINTS))
+        nx = max(2, math.ceil((x_max - x_min) / cell) + 1)
+        ny = max(2, math.ceil((y_max - y_min) / cell) + 1)
+        x = x_min + cell * np.arange(nx)
+        y = y_min + cell * np.arange(ny)
+        heights = np.asarray(ground.height(*np.meshgrid(x, y)), dtype=float)
+        if error > 0:
+            heights = heights + np.random.default_rng([seed, 0x6D6170]).normal(0.0, error, heights.shape)
+        return cls(float(x_min), float(y_min), float(cell), np.ascontiguousarray(heights))
+
+    def params(self) -> np.ndarray:
+        """(x0, y0, cell) as the compiled controller reads them."""
+        return np.array([self.x0, self.y0, self.cell])
+
+    def height(self, x: np.ndarray | float, y: np.ndarray | float) -> np.ndarray:
+        """The map's height [m] at world points (x, y): bilinear between grid points."""
+        ny, nx = self.heights.shape
+        a = np.clip((np.asarray(x, dtype=float) - self.x0) / self.cell, 0.0, nx - 1.0)
+        b = np.clip((np.asarray(y, dtype=float) - self.y0) / self.cell, 0.0, ny - 1.0)
+        i = np.minimum(np.floor(a).astype(int), nx - 2)
+        j = np.minimum(np.floor(b).astype(int), ny - 2)
+        u, v = a - i, b - j
+        h = self.heights
+        return (1 - v) * ((1 - u) * h[j, i] + u * h[j, i + 1]) + v * ((1 - u) * h[j + 1, i] + u * h[j + 1, i + 1])

@@ -1,0 +1,157 @@
+"""Swings that land on a terrain map (terrain_map=on, issue 19) and a soft foot's first contact near its swing's end
+(the pad's early band): the map against MuJoCo's own ray casting, the compiled reading and frames against closed
+forms, and the walks."""
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+from helpers import compiled_scene, metric, walk_params
+
+import hexabot_sim as hs
+from hexabot_sim.control import kernels as K
+from hexabot_sim.control import map_kernels
+from hexabot_sim.terrain.heightmap import HeightMap
+from hexabot_sim.walking import ground as walking_ground
+
+FORCE_PAD = {"load_sharing": "force", "feet": "pad", "swing": "quintic"}
+
+
+def _rough_map(**overrides):
+    p = walk_params(roughness=0.01, seed=3, touchdown="sensed", terrain_map="on", **overrides)
+    return p, walking_ground.terrain_map(p)
+
+
+def test_the_map_is_the_ground_mujoco_collides():
+    """The map's heights, read between its grid points, are the heightfield's as MuJoCo's ray casting finds it, to
+    0.2 mm (the 2 cm heightfield's triangles read bilinearly on the map's 1 cm grid: 0.18 mm at worst of 400 points,
+    0.03 mm RMS, measured; the bumps are 10 mm)."""
+    p, hmap = _rough_map()
+    model, data = compiled_scene(p)
+    x0, x1, y0, y1 = walking_ground.terrain(p).rough.extent
+    rng = np.random.default_rng(5)
+    terrain_only = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)
+    geom = np.zeros(1, dtype=np.int32)
+    errors = []
+    for x, y in rng.uniform([x0, y0], [x1, y1], size=(400, 2)):
+        distance = mujoco.mj_ray(model, data, np.array([x, y, 1.0]), np.array([0.0, 0.0, -1.0]), terrain_only, 1, -1,
+                                 geom)  # fmt: skip
+        errors.append(abs(1.0 - distance - float(hmap.height(x, y))))
+    assert hmap.cell == 0.01
+    assert max(errors) < 2e-4
+    assert math.sqrt(np.mean(np.square(errors))) < 5e-5
+    assert float(np.ptp(hmap.heights)) > 0.015  # a rough patch, not a level map
+
+
+def test_the_maps_error_is_seeded_noise_of_the_asked_size():
+    _, exact = _rough_map()
+    _, noisy = _rough_map(map_error=0.002)
+    _, again = _rough_map(map_error=0.002)
+    diff = noisy.heights - exact.heights
+    assert np.array_equal(noisy.heights, again.heights)
+    assert float(diff.std()) == pytest.approx(0.002, rel=0.02)
+    assert abs(float(diff.mean())) < 1e-4
+
+
+def test_the_compiled_map_reads_as_the_numpy_one_inside_and_beyond_its_edges():
+    _, hmap = _rough_map()
+    ny, nx = hmap.heights.shape
+    rng = np.random.default_rng(2)
+    span_x, span_y = hmap.cell * (nx - 1), hmap.cell * (ny - 1)
+    points = rng.uniform([hmap.x0 - 0.5, hmap.y0 - 0.5], [hmap.x0 + span_x + 0.5, hmap.y0 + span_y + 0.5], (500, 2))
+    compiled = [map_kernels.map_height(hmap.params(), hmap.heights, x, y) for x, y in points]
+    assert np.allclose(compiled, hmap.height(points[:, 0], points[:, 1]), atol=1e-12, rtol=0)
+    # A grid point reads its own height; beyond the grid, the nearest edge's.
+    assert map_kernels.map_height(hmap.params(), hmap.heights, hmap.x0 + 3 * hmap.cell, hmap.y0) == pytest.approx(
+        hmap.heights[0, 3], abs=1e-15
+    )
+    assert map_kernels.map_height(hmap.params(), hmap.heights, hmap.x0 - 5.0, hmap.y0 - 5.0) == hmap.heights[0, 0]
+
+
+def test_a_swings_landing_height_is_the_maps_ground_under_where_the_body_will_be():
+    """One swinging leg, the body turned 30 deg and tilted, the command moving it on for 0.2 s: the landing point is
+    carried to the world as the body will stand at the touchdown, the map (a tilted plane, which bilinear reads
+    exactly) read there; MAP_DZ is that ground, a foot radius up, over the stance plane's point, along the body's z."""
+    slope = (0.01, 0.05, -0.02)  # z = a + b x + c y [m]
+    xs, ys = np.arange(-2, 3) * 1.0, np.arange(-2, 4) * 1.0
+    heights = slope[0] + slope[1] * xs[None, :] + slope[2] * ys[:, None]
+    hmap = HeightMap(-2.0, -2.0, 1.0, np.ascontiguousarray(heights))
+    radius = 0.008
+    mpar = np.array([*hmap.params(), radius, 0.0])  # no filter: the value itself
+    yaw, roll = math.radians(30), math.radians(4)
+    quat = np.zeros(4)
+    mujoco.mju_euler2Quat(quat, np.array([roll, 0.0, yaw]), "XYZ")  # extrinsic: roll about x, then yaw about z
+    qpos = np.zeros(7 + 18)
+    qpos[:3], qpos[3:7] = (1.0, 0.5, 0.12), quat
+    par = np.zeros(K.NPAR)
+    par[K.DT], par[K.SWING_TIME], par[K.SETTLE_TIME] = 0.002, 0.5, 0.0
+    legs, flags = np.zeros((6, K.NLEG)), np.zeros((6, 3), dtype=np.int64)
+    flags[:, K.MODE] = K.STANCE
+    flags[2, K.MODE] = K.SWING
+    t = 3.0
+    legs[2, K.T_LIFT] = t - 0.3  # 0.2 s to the touchdown
+    legs[2, K.LANDING : K.LANDING + 2] = (0.15, 0.12)
+    plane = np.array([-0.1, 0.02, -0.01])
+    cmd = np.array([0.1, -0.04, 0.3])
+    map_kernels.landing_offsets(par, mpar, hmap.heights, legs, flags, plane, qpos, cmd, t)
+    # By hand: the body at the touchdown is 0.2 s on, turned by 0.06 rad and moved by (0.02, -0.008) in today's frame.
+    turn = 0.3 * 0.2
+    lx, ly = 0.15, 0.12
+    point = np.array([
+        math.cos(turn) * lx - math.sin(turn) * ly + 0.1 * 0.2,
+        math.sin(turn) * lx + math.cos(turn) * ly - 0.04 * 0.2,
+        plane[0] + plane[1] * lx + plane[2] * ly,
+    ])  # fmt: skip
+    rot = np.zeros(9)
+    mujoco.mju_quat2Mat(rot, quat)
+    rot = rot.reshape(3, 3)
+    world = qpos[:3] + rot @ point
+    ground = slope[0] + slope[1] * world[0] + slope[2] * world[1]
+    assert legs[2, K.MAP_DZ] == pytest.approx((ground + radius - world[2]) * rot[2, 2], abs=1e-12)
+    assert np.all(legs[[0, 1, 3, 4, 5], K.MAP_DZ] == 0.0)  # stance legs: untouched
+    # Filtered: a step's share dt / tau of the way.
+    legs2 = np.zeros_like(legs)
+    legs2[2] = legs[2]
+    legs2[2, K.MAP_DZ] = 0.0
+    map_kernels.landing_offsets(par, np.array([*hmap.params(), radius, 0.02]), hmap.heights, legs2, flags, plane,
+                                qpos, cmd, t)  # fmt: skip
+    assert legs2[2, K.MAP_DZ] == pytest.approx(legs[2, K.MAP_DZ] * 0.002 / 0.02, abs=1e-15)
+
+
+def test_the_maps_parameters_are_refused_without_what_they_apply_to():
+    with pytest.raises(ValueError, match="'terrain_map' = on needs touchdown=sensed"):
+        walk_params(terrain_map="on")
+    with pytest.raises(ValueError, match="'map_error' is the terrain map's error: it needs terrain_map=on"):
+        walk_params(roughness=0.01, touchdown="sensed", map_error=0.001)
+    with pytest.raises(ValueError, match="map_error"):
+        walk_params(roughness=0.01, touchdown="sensed", terrain_map="on", map_error=-0.001)
+
+
+@pytest.mark.slow
+def test_a_pads_first_contact_near_its_swings_end_is_not_an_early_touchdown():
+    """With sensed touchdown the pad meets the ground ~20 ms before the planned touchdown, 0.8 mm above the swing's
+    end: taken as an early touchdown, the target stopped there and the landing foot rebounded off the pad at every
+    hand-over (4 bounces in the tripod's 4 s, 2 in the wave's, measured with the band at 0); within the band the
+    swing goes on to its end, as with planned touchdown."""
+    for gait, vx in (("tripod", 0.1), ("wave", 0.05)):
+        r = hs.run("hexabot-walk", gait=gait, vx=vx, duration=4, touchdown="sensed", **FORCE_PAD)
+        assert metric(r, "foot_bounces") == 0, gait
+        assert metric(r, "stance_loaded_fraction_min") == 1.0, gait
+
+
+@pytest.mark.slow
+def test_with_the_map_the_feet_land_on_time_and_stay_loaded_on_rough_ground():
+    """1 cm rough ground, the tripod at 0.1 m/s, 4 s: without the map the feet meet the bumps up to 68 ms before or
+    after the planned touchdown and one foot is loaded 0.96 of its stance; with it, the pads touch within 22 ms (the
+    pad's first contact, ~20 ms early, as on the flat) and every foot is loaded all through its stance."""
+    common = dict(gait="tripod", vx=0.1, duration=4, seed=0, **FORCE_PAD)
+    without = hs.run("hexabot-rough", **common)
+    mapped = hs.run("hexabot-rough", terrain_map="on", **common)
+    assert metric(without, "touchdown_error_max") > 0.05
+    assert metric(without, "stance_loaded_fraction_min") < 0.97
+    assert metric(mapped, "touchdown_error_max") < 0.025
+    assert metric(mapped, "late_touchdowns") == 0
+    assert metric(mapped, "foot_bounces") == 0
+    assert metric(mapped, "stance_loaded_fraction_min") == 1.0
+    assert not metric(mapped, "fell")
