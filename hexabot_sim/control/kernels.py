@@ -22,8 +22,8 @@ State of the ground-finding legs (GroundController), one row per leg:
   offset at lift-off, the landing point (x, y) of the swing under way in the body frame, the
   planner's landing point of the next swing (set with each chunk's plan), the elevator reflex's
   trigger time [s] and the horizontal target (x, y) [m] (hip frame) it holds while lifting, the
-  stance height's change per step [m] until the next plane update, and the landing's height over the stance
-  plane from a terrain map [m] (0 without one: map_kernels.py);
+  stance height's change per step [m] until the next plane update, and the swing's landing height from a
+  terrain map [m] (NaN without one: the stance plane's; map_kernels.py);
 - `flags` int (n, 3): swing mode (STANCE, SWING, EARLY, SEEKING, NEAR), planned stance at the last step, grounded.
 """
 
@@ -55,7 +55,7 @@ feed = jit(resolved_rate.feed)
 # Swing state machine, per leg. NEAR: touched within EARLY_BAND of the swing's end height, which it goes on to.
 STANCE, SWING, EARLY, SEEKING, NEAR = 0, 1, 2, 3, 4
 # Columns of `legs`.
-Z, Z_LIFT, T_LIFT, OFFSET, OFFSET_LIFT, LANDING, NEXT_LANDING, T_REFLEX, HOLD, Z_STEP, MAP_DZ = (
+Z, Z_LIFT, T_LIFT, OFFSET, OFFSET_LIFT, LANDING, NEXT_LANDING, T_REFLEX, HOLD, Z_STEP, MAP_Z = (
     0, 1, 2, 3, 5, 7, 9, 11, 12, 14, 15)  # fmt: skip
 NLEG = 16
 # Columns of `flags`.
@@ -242,7 +242,9 @@ def targets(par, geo, legs, flags, plane, cmd, row, stance, t, row_prev, sensord
             s = min((t - legs[i, T_LIFT]) / swing_time, 1.0)
             u = s * s * (3 - 2 * s)
             z_lift = legs[i, Z_LIFT]
-            under = plane[0] + plane[1] * legs[i, LANDING] + plane[2] * legs[i, LANDING + 1] + legs[i, MAP_DZ]
+            under = legs[i, MAP_Z]  # the terrain map's ground under the landing point, else the stance plane's
+            if math.isnan(under):
+                under = plane[0] + plane[1] * legs[i, LANDING] + plane[2] * legs[i, LANDING + 1]
             base = z_lift + (under - z_lift) * u  # toward the stance plane under the landing point
             z = base + row[j + 2] - geo[i, NEUTRAL_Z]  # + the planner's lift
             if s < 0.5:

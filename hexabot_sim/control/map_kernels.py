@@ -4,15 +4,14 @@ Without a map a swing ends on the stance plane under its landing point (the plan
 uneven ground the foot meets the ground above or below it: above, still descending fast (the landing's impact
 throws the body and unloads the other feet); below, seeking it after the planned touchdown. With a map
 (terrain/heightmap.py) the swing ends where the map says the ground is: each step, for every swinging leg, the
-landing point (the planner's, body frame at touchdown) is carried to the world by the body's position and heading
-and the commanded motion until the touchdown, and the map's height is read there. Its height over the plane through
-the map's ground under the feet down goes to the legs' MAP_DZ column, which the swing's target adds to the stance
-plane's height there (kernels.targets): the map's relative heights, so the body's own height (which the robot knows
-least well) is not needed, nor does its bobbing reach the swing. The touch sensors still end a swing the map got
-wrong (sensed touchdown).
+landing point (the planner's, body frame at touchdown) is carried to the world by the body's pose and the commanded
+motion until the touchdown, the map's height is read there, and that ground's height in today's body frame goes to
+the legs' MAP_Z column, where the swing ends instead of the stance plane (kernels.targets). It is followed with a
+20 ms time constant: read every step through the body's pose, it would carry the body's bobbing into the swing feet.
+The touch sensors still end a swing the map got wrong (sensed touchdown).
 
-The body's position and heading come from the free joint: a perfect state estimate in the horizontal (a real
-robot's estimator and map errors are the map's `error`, terrain/heightmap.py).
+The body's pose comes from the free joint: a perfect state estimate (a real robot's estimator and map errors are
+the map's `error`, terrain/heightmap.py).
 """
 
 from __future__ import annotations
@@ -31,10 +30,13 @@ NMPAR = 5
 
 @K.jit
 def map_height(mpar, hmap, x, y):
-    """The map's height [m] at the world point (x, y): bilinear between grid points, the nearest edge's outside."""
+    """The map's height [m] at the world point (x, y): bilinear between grid points; NaN outside the grid (the map
+    knows nothing there)."""
     ny, nx = hmap.shape
-    a = min(max((x - mpar[X0]) / mpar[CELL], 0.0), nx - 1.0)
-    b = min(max((y - mpar[Y0]) / mpar[CELL], 0.0), ny - 1.0)
+    a = (x - mpar[X0]) / mpar[CELL]
+    b = (y - mpar[Y0]) / mpar[CELL]
+    if not (0.0 <= a <= nx - 1.0 and 0.0 <= b <= ny - 1.0):
+        return np.nan
     i = min(int(a), nx - 2)  # a >= 0: truncation is the floor
     j = min(int(b), ny - 2)
     u, v = a - i, b - j
@@ -44,10 +46,11 @@ def map_height(mpar, hmap, x, y):
 
 
 @K.jit
-def landing_offsets(par, mpar, hmap, legs, flags, plane, qpos, cmd, t):
-    """Moves legs[:, MAP_DZ] of the swinging legs toward the map's ground under each landing point, over the stance
-    plane there, along the body's z [m] (the foot's centre a radius above the ground), with the time constant
-    mpar[FILTER]."""
+def landing_heights(par, mpar, hmap, legs, flags, plane, qpos, cmd, t):
+    """Sets legs[:, MAP_Z] of the swinging legs: the height [m] along the body's z, below its origin, of the map's
+    ground under each landing point (the foot's centre a radius above it), followed with the time constant
+    mpar[FILTER] from the swing's first step; NaN for the other legs, and where the landing point is off the map (the
+    swing then ends on the stance plane, its touch sensor finding the ground)."""
     w, x, y, z = qpos[3], qpos[4], qpos[5], qpos[6]
     r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)
     r10, r11, r12 = 2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)
@@ -58,11 +61,12 @@ def landing_offsets(par, mpar, hmap, legs, flags, plane, qpos, cmd, t):
     for i in range(legs.shape[0]):
         mode = flags[i, K.MODE]
         if mode != K.SWING and mode != K.NEAR:
+            legs[i, K.MAP_Z] = np.nan
             continue
         tau = max(legs[i, K.T_LIFT] + par[K.SWING_TIME] - t, 0.0)  # [s] to the planned touchdown
         lx, ly = legs[i, K.LANDING], legs[i, K.LANDING + 1]
         # The landing point in today's body frame: where the body will be at the touchdown (the command's twist
-        # held: turned by wz tau, moved by v tau), the point planned in that frame.
+        # held: turned by wz tau, moved by v tau), the point planned in that frame, at the stance plane's height.
         c, s = math.cos(wz * tau), math.sin(wz * tau)
         bx = c * lx - s * ly + vx * tau
         by = s * lx + c * ly + vy * tau
@@ -70,8 +74,14 @@ def landing_offsets(par, mpar, hmap, legs, flags, plane, qpos, cmd, t):
         px = qpos[0] + r00 * bx + r01 * by + r02 * bz
         py = qpos[1] + r10 * bx + r11 * by + r12 * bz
         pz = qpos[2] + r20 * bx + r21 * by + r22 * bz
-        dz = (map_height(mpar, hmap, px, py) + mpar[FOOT_RADIUS] - pz) * r22
-        legs[i, K.MAP_DZ] += share * (dz - legs[i, K.MAP_DZ])
+        # The foot's centre on the map's ground: the plane's point moved along the world's vertical by the gap, in
+        # the body frame (its z component: r22 per metre of the vertical).
+        landing = bz + (map_height(mpar, hmap, px, py) + mpar[FOOT_RADIUS] - pz) * r22
+        old = legs[i, K.MAP_Z]
+        if math.isnan(landing):  # off the map
+            legs[i, K.MAP_Z] = np.nan
+            continue
+        legs[i, K.MAP_Z] = landing if math.isnan(old) else old + share * (landing - old)
 
 
 def compile_all() -> None:
@@ -81,7 +91,7 @@ def compile_all() -> None:
     legs, flags = np.zeros((n, K.NLEG)), np.zeros((n, 3), dtype=np.int64)
     qpos = np.zeros(7 + 3 * n)
     qpos[3] = 1.0
-    landing_offsets(par, mpar, np.zeros((2, 2)), legs, flags, np.zeros(3), qpos, np.zeros(3), 0.0)
+    landing_heights(par, mpar, np.zeros((2, 2)), legs, flags, np.zeros(3), qpos, np.zeros(3), 0.0)
 
 
-KERNELS = (map_height, landing_offsets)
+KERNELS = (map_height, landing_heights)

@@ -50,11 +50,13 @@ def kernels(*groups: str):
 
 
 MAX_HEADING_CORRECTION: float = 0.3  # [rad/s] largest yaw-rate correction heading hold adds
-# [s] A swing's landing height follows the terrain map's (map_kernels.landing_offsets) with this time constant: read
+# [s] A swing's landing height follows the terrain map's (map_kernels.landing_heights) with this time constant: read
 # every step through the body's pose, it carries the body's bobbing into the swing feet. Measured (1 cm rough ground,
-# load_sharing=force feet=pad swing=quintic terrain_map=on, seeds 0 and 1, 8 s; force ripple of W/6, tripod / ripple /
-# wave): unfiltered 8.3-9.1 / 11.6-11.7 / 10.8-10.9 %, 10 ms 7.1-7.6 / 9.7-10.1 / 9.4-9.7 %, 20 ms 7.0-7.3 / 9.3-9.7 /
-# 9.5-9.8 %, 30 ms 7.0-7.3 / 9.1-9.5 / 9.5-9.8 % (0-3 foot bounces in each).
+# load_sharing=force feet=pad swing=quintic terrain_map=on, seeds 0 and 1, 8 s; tripod / ripple / wave): the force
+# ripple of W/6 unfiltered 7.0-7.8 / 8.5-8.7 / 9.4-9.9 %, the wave's impact ratio 2.51-2.96; 10 ms 6.7-7.0 / 7.1-7.2 /
+# 8.6-8.8 %, 3.17-3.18; 20 ms 6.5-6.8 / 6.8-7.0 / 8.7-8.9 %, 3.34-3.42; 50 ms 6.4-6.6 / 6.7-6.9 / 9.2-9.5 %, 3.90-4.22
+# with 1-11 foot bounces (0-1 at 10 and 20 ms). 20 ms kept: on the flat (sensed touchdown) the wave then has no
+# bounce, 9 in 6 s at 10 ms.
 MAP_FILTER: float = 0.02
 
 
@@ -331,6 +333,7 @@ class GroundController(WalkingController):
         self.par[K.REFLEX_RISE] = ground.reflex_rise
         self.par[K.EARLY_BAND] = ground.early_band
         self.legs[:, K.T_REFLEX] = -math.inf
+        self.legs[:, K.MAP_Z] = math.nan  # no map, or not swinging: swings end on the stance plane
         self.events: list[Touchdown] = []
         self._new_swing_time_at = math.inf  # [s] after a gait switch: when the kernel takes the new gait's swing time
         self._events = np.zeros((n, 3))  # swings that ended in one step (kernels.targets): one a leg at most
@@ -440,7 +443,7 @@ class GroundController(WalkingController):
             extra = force.pre(self._qpos, self.trims, self._sensordata, self._row_prev, self._down, k)
         if self._map is not None:
             mk, mpar, hmap = self._map
-            mk.landing_offsets(self.par, mpar, hmap, self.legs, self.flags, self.plane, self._qpos, self.cmd, t)
+            mk.landing_heights(self.par, mpar, hmap, self.legs, self.flags, self.plane, self._qpos, self.cmd, t)
         n = K.ground_step(self.par, self.geo, self.consts, self.legs, self.flags, self.plane, self.counts, self.cmd,
                           rows, stance, k, t, self._row_prev, self.q_cmd, self.dq, self.trims, self._qpos,
                           self._sensordata, self._ctrl, self._events, extra)  # fmt: skip

@@ -21,7 +21,7 @@ MAX_POINTS: int = 4_000_000  # a larger area gets coarser cells (32 MB of float6
 
 @dataclasses.dataclass(frozen=True)
 class HeightMap:
-    """Heights (ny, nx) [m] at x0 + i cell, y0 + j cell (world frame); outside the grid, its nearest edge's."""
+    """Heights (ny, nx) [m] at x0 + i cell, y0 + j cell (world frame); outside the grid the map knows nothing (NaN)."""
 
     x0: float
     y0: float
@@ -48,12 +48,15 @@ class HeightMap:
         return np.array([self.x0, self.y0, self.cell])
 
     def height(self, x: np.ndarray | float, y: np.ndarray | float) -> np.ndarray:
-        """The map's height [m] at world points (x, y): bilinear between grid points."""
+        """The map's height [m] at world points (x, y): bilinear between grid points, NaN outside the grid."""
         ny, nx = self.heights.shape
-        a = np.clip((np.asarray(x, dtype=float) - self.x0) / self.cell, 0.0, nx - 1.0)
-        b = np.clip((np.asarray(y, dtype=float) - self.y0) / self.cell, 0.0, ny - 1.0)
+        a = (np.asarray(x, dtype=float) - self.x0) / self.cell
+        b = (np.asarray(y, dtype=float) - self.y0) / self.cell
+        inside = (a >= 0) & (a <= nx - 1) & (b >= 0) & (b <= ny - 1)
+        a, b = np.clip(a, 0.0, nx - 1.0), np.clip(b, 0.0, ny - 1.0)
         i = np.minimum(np.floor(a).astype(int), nx - 2)
         j = np.minimum(np.floor(b).astype(int), ny - 2)
         u, v = a - i, b - j
         h = self.heights
-        return (1 - v) * ((1 - u) * h[j, i] + u * h[j, i + 1]) + v * ((1 - u) * h[j + 1, i] + u * h[j + 1, i + 1])
+        z = (1 - v) * ((1 - u) * h[j, i] + u * h[j, i + 1]) + v * ((1 - u) * h[j + 1, i] + u * h[j + 1, i + 1])
+        return np.where(inside, z, np.nan)

@@ -54,69 +54,74 @@ def test_the_maps_error_is_seeded_noise_of_the_asked_size():
     assert abs(float(diff.mean())) < 1e-4
 
 
-def test_the_compiled_map_reads_as_the_numpy_one_inside_and_beyond_its_edges():
+def test_the_compiled_map_reads_as_the_numpy_one_and_knows_nothing_beyond_its_edges():
     _, hmap = _rough_map()
     ny, nx = hmap.heights.shape
     rng = np.random.default_rng(2)
     span_x, span_y = hmap.cell * (nx - 1), hmap.cell * (ny - 1)
     points = rng.uniform([hmap.x0 - 0.5, hmap.y0 - 0.5], [hmap.x0 + span_x + 0.5, hmap.y0 + span_y + 0.5], (500, 2))
     compiled = [map_kernels.map_height(hmap.params(), hmap.heights, x, y) for x, y in points]
-    assert np.allclose(compiled, hmap.height(points[:, 0], points[:, 1]), atol=1e-12, rtol=0)
-    # A grid point reads its own height; beyond the grid, the nearest edge's.
+    assert np.allclose(compiled, hmap.height(points[:, 0], points[:, 1]), atol=1e-12, rtol=0, equal_nan=True)
+    assert 0 < np.isnan(compiled).sum() < len(points)  # both inside and outside were drawn
+    # A grid point reads its own height (the far corner too); beyond the grid, nothing.
     assert map_kernels.map_height(hmap.params(), hmap.heights, hmap.x0 + 3 * hmap.cell, hmap.y0) == pytest.approx(
         hmap.heights[0, 3], abs=1e-15
     )
-    assert map_kernels.map_height(hmap.params(), hmap.heights, hmap.x0 - 5.0, hmap.y0 - 5.0) == hmap.heights[0, 0]
+    far = (hmap.x0 + span_x, hmap.y0 + span_y)
+    assert map_kernels.map_height(hmap.params(), hmap.heights, *far) == pytest.approx(hmap.heights[-1, -1], abs=1e-15)
+    assert math.isnan(map_kernels.map_height(hmap.params(), hmap.heights, hmap.x0 - 1e-6, hmap.y0))
 
 
 def test_a_swings_landing_height_is_the_maps_ground_under_where_the_body_will_be():
-    """One swinging leg, the body turned 30 deg and tilted, the command moving it on for 0.2 s: the landing point is
-    carried to the world as the body will stand at the touchdown, the map (a tilted plane, which bilinear reads
-    exactly) read there; MAP_DZ is that ground, a foot radius up, over the stance plane's point, along the body's z."""
+    """One swinging leg, the body turned 30 deg and rolled 4 deg, the command moving it on for 0.2 s: the landing
+    point is carried to the world as the body will stand at the touchdown, the map (a tilted plane, which bilinear
+    reads exactly) read there; MAP_Z is that ground, a foot radius up, in today's body frame (its z along the world's
+    vertical through the point); NaN for the legs not swinging."""
     slope = (0.01, 0.05, -0.02)  # z = a + b x + c y [m]
     xs, ys = np.arange(-2, 3) * 1.0, np.arange(-2, 4) * 1.0
     heights = slope[0] + slope[1] * xs[None, :] + slope[2] * ys[:, None]
     hmap = HeightMap(-2.0, -2.0, 1.0, np.ascontiguousarray(heights))
     radius = 0.008
-    mpar = np.array([*hmap.params(), radius, 0.0])  # no filter: the value itself
     yaw, roll = math.radians(30), math.radians(4)
     quat = np.zeros(4)
-    mujoco.mju_euler2Quat(quat, np.array([roll, 0.0, yaw]), "XYZ")  # extrinsic: roll about x, then yaw about z
+    mujoco.mju_euler2Quat(quat, np.array([roll, 0.0, yaw]), "XYZ")
     qpos = np.zeros(7 + 18)
     qpos[:3], qpos[3:7] = (1.0, 0.5, 0.12), quat
-    par = np.zeros(K.NPAR)
-    par[K.DT], par[K.SWING_TIME], par[K.SETTLE_TIME] = 0.002, 0.5, 0.0
-    legs, flags = np.zeros((6, K.NLEG)), np.zeros((6, 3), dtype=np.int64)
-    flags[:, K.MODE] = K.STANCE
-    flags[2, K.MODE] = K.SWING
-    t = 3.0
-    legs[2, K.T_LIFT] = t - 0.3  # 0.2 s to the touchdown
-    legs[2, K.LANDING : K.LANDING + 2] = (0.15, 0.12)
-    plane = np.array([-0.1, 0.02, -0.01])
-    cmd = np.array([0.1, -0.04, 0.3])
-    map_kernels.landing_offsets(par, mpar, hmap.heights, legs, flags, plane, qpos, cmd, t)
-    # By hand: the body at the touchdown is 0.2 s on, turned by 0.06 rad and moved by (0.02, -0.008) in today's frame.
-    turn = 0.3 * 0.2
-    lx, ly = 0.15, 0.12
-    point = np.array([
-        math.cos(turn) * lx - math.sin(turn) * ly + 0.1 * 0.2,
-        math.sin(turn) * lx + math.cos(turn) * ly - 0.04 * 0.2,
-        plane[0] + plane[1] * lx + plane[2] * ly,
-    ])  # fmt: skip
     rot = np.zeros(9)
     mujoco.mju_quat2Mat(rot, quat)
     rot = rot.reshape(3, 3)
-    world = qpos[:3] + rot @ point
-    ground = slope[0] + slope[1] * world[0] + slope[2] * world[1]
-    assert legs[2, K.MAP_DZ] == pytest.approx((ground + radius - world[2]) * rot[2, 2], abs=1e-12)
-    assert np.all(legs[[0, 1, 3, 4, 5], K.MAP_DZ] == 0.0)  # stance legs: untouched
-    # Filtered: a step's share dt / tau of the way.
-    legs2 = np.zeros_like(legs)
-    legs2[2] = legs[2]
-    legs2[2, K.MAP_DZ] = 0.0
-    map_kernels.landing_offsets(par, np.array([*hmap.params(), radius, 0.02]), hmap.heights, legs2, flags, plane,
-                                qpos, cmd, t)  # fmt: skip
-    assert legs2[2, K.MAP_DZ] == pytest.approx(legs[2, K.MAP_DZ] * 0.002 / 0.02, abs=1e-15)
+    par = np.zeros(K.NPAR)
+    par[K.DT], par[K.SWING_TIME], par[K.SETTLE_TIME] = 0.002, 0.5, 0.0
+    t = 3.0
+    plane = np.array([-0.1, 0.02, -0.01])
+    cmd = np.array([0.1, -0.04, 0.3])
+
+    def landing(filter_time, before=math.nan):
+        legs, flags = np.zeros((6, K.NLEG)), np.zeros((6, 3), dtype=np.int64)
+        flags[:, K.MODE] = K.STANCE
+        flags[2, K.MODE] = K.SWING
+        legs[2, K.T_LIFT] = t - 0.3  # 0.2 s to the touchdown
+        legs[2, K.LANDING : K.LANDING + 2] = (0.15, 0.12)
+        legs[2, K.MAP_Z] = before
+        mpar = np.array([*hmap.params(), radius, filter_time])
+        map_kernels.landing_heights(par, mpar, hmap.heights, legs, flags, plane, qpos, cmd, t)
+        assert np.all(np.isnan(legs[[0, 1, 3, 4, 5], K.MAP_Z]))
+        return legs[2, K.MAP_Z]
+
+    # By hand: the body at the touchdown is 0.2 s on, turned by 0.06 rad and moved by (0.02, -0.008) in today's frame.
+    turn = 0.3 * 0.2
+    lx, ly = 0.15, 0.12
+    bx = math.cos(turn) * lx - math.sin(turn) * ly + 0.1 * 0.2
+    by = math.sin(turn) * lx + math.cos(turn) * ly - 0.04 * 0.2
+    bz = plane[0] + plane[1] * lx + plane[2] * ly
+    world = qpos[:3] + rot @ np.array([bx, by, bz])
+    gap = slope[0] + slope[1] * world[0] + slope[2] * world[1] + radius - world[2]  # along the world's vertical
+    expected = (rot.T @ (world + np.array([0.0, 0.0, gap]) - qpos[:3]))[2]
+    assert landing(0.0) == pytest.approx(expected, abs=1e-12)
+    assert landing(0.02) == pytest.approx(expected, abs=1e-12)  # a swing's first reading is taken as it is
+    assert landing(0.02, before=-0.1) == pytest.approx(-0.1 + (expected + 0.1) * 0.002 / 0.02, abs=1e-12)
+    qpos[0] = 50.0  # the landing point off the map: NaN, the swing ends on the stance plane
+    assert math.isnan(landing(0.02, before=-0.1))
 
 
 def test_the_maps_parameters_are_refused_without_what_they_apply_to():
