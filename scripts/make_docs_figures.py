@@ -1,7 +1,8 @@
 """Regenerates the figures and the video frame shown in README.md and the pages in docs/ (docs/*.png).
 
-Usage: python scripts/make_docs_figures.py [--hexabot | --terrain | --forces | --commands]
-       (only the walking hexabot's / the terrain's / the foot forces' / the changing commands' figures)
+Usage: python scripts/make_docs_figures.py [--hexabot | --terrain | --forces | --rough-forces | --commands]
+       (only the walking hexabot's / the terrain's / the foot forces' (flat and rough) / the rough ground's foot forces'
+       / the changing commands' figures)
 """
 
 from __future__ import annotations
@@ -120,6 +121,7 @@ def force_figures(modes: tuple[str, ...] = tuple(FORCE_MODES), stairs: bool = Tr
             sets = [word for value in FORCE_MODES[mode] for word in ("--set", value)]
             folder = run("hexabot-walk", "--set", f"gait={gait}", "--set", f"vx={vx}", "--set", "duration=8", *sets)
             (DOCS / f"forces_{gait}_{mode}.png").write_bytes((folder / "foot_forces.png").read_bytes())
+    rough_force_figures()
     if not stairs:
         return
     folder = run("hexabot-stairs", "--video")
@@ -127,7 +129,21 @@ def force_figures(modes: tuple[str, ...] = tuple(FORCE_MODES), stairs: bool = Tr
     save_frame(folder / "video.mp4", 270, DOCS / "terrain_stairs_frame.png")  # t = 9 s, on the second step
 
 
+def rough_force_figures() -> None:
+    """The feet's forces on 1 cm rough ground (seed 0), with the stance force control on the pad, without and with the
+    terrain map (issue 19: the landings)."""
+    for gait, vx in (("tripod", "0.1"), ("ripple", "0.1"), ("wave", "0.05")):
+        for name, extra in (("force", ()), ("map", ("--set", "terrain_map=on"))):
+            sets = [word for value in FORCE_MODES["force"] for word in ("--set", value)]
+            folder = run("hexabot-rough", "--set", f"gait={gait}", "--set", f"vx={vx}", "--set", "duration=8", *sets,
+                         *extra)  # fmt: skip
+            (DOCS / f"forces_rough_{gait}_{name}.png").write_bytes((folder / "foot_forces.png").read_bytes())
+
+
 if __name__ == "__main__":
+    if "--rough-forces" in sys.argv[1:]:
+        rough_force_figures()
+        sys.exit(0)
     if "--forces" in sys.argv[1:]:
         force_figures()
         sys.exit(0)
