@@ -202,7 +202,8 @@ def targets(par, geo, legs, flags, plane, cmd, row, stance, t, row_prev, sensord
     """The planner's hip-frame row (3 n,) at time t with the heights and offsets of uneven ground, into out.
 
     Per leg: a planned stance goes on at its height z; a planned lift-off starts a swing from the
-    lift-off height toward the stance plane under the landing point (smoothstep) plus the planner's
+    lift-off height toward the stance plane under the landing point, or the terrain map's ground there (MAP_Z),
+    (smoothstep) plus the planner's
     lift, the lift-off offset fading out over the first half; a touch in the second half of a swing
     (sensed) ends it early, the target then ground-fixed at the command's stance velocity, unless the target is
     within EARLY_BAND of the swing's end height (NEAR: a soft foot's first contact, which the swing goes on
@@ -245,7 +246,7 @@ def targets(par, geo, legs, flags, plane, cmd, row, stance, t, row_prev, sensord
             under = legs[i, MAP_Z]  # the terrain map's ground under the landing point, else the stance plane's
             if math.isnan(under):
                 under = plane[0] + plane[1] * legs[i, LANDING] + plane[2] * legs[i, LANDING + 1]
-            base = z_lift + (under - z_lift) * u  # toward the stance plane under the landing point
+            base = z_lift + (under - z_lift) * u  # toward the landing height
             z = base + row[j + 2] - geo[i, NEUTRAL_Z]  # + the planner's lift
             if s < 0.5:
                 fade = 1.0 - 2.0 * s

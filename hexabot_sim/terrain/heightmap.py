@@ -19,7 +19,7 @@ CELL: float = 0.01  # [m] the map's grid spacing: half the rough patch's (height
 MAX_POINTS: int = 4_000_000  # a larger area gets coarser cells (32 MB of float64 at most)
 
 
-@dataclasses.dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True, eq=False)  # eq=False: an array field (compared by identity)
 class HeightMap:
     """Heights (ny, nx) [m] at x0 + i cell, y0 + j cell (world frame); outside the grid the map knows nothing (NaN)."""
 
