@@ -118,7 +118,10 @@ def geometric_jacobian(
         if is_prismatic:
             jac[:3, j] = z
         else:
-            jac[:3, j] = np.cross(z, p - o)
+            # z × (p − o), written out: np.cross on 3-vectors cost a third of rrp-velocity's 20,001-row run
+            z0, z1, z2 = z.tolist()
+            r0, r1, r2 = (p - o).tolist()
+            jac[:3, j] = (z1 * r2 - z2 * r1, z2 * r0 - z0 * r2, z0 * r1 - z1 * r0)
             jac[3:, j] = z
     return jac
 
