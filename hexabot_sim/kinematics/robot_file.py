@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copyreg
 import dataclasses
 import math
 import os
@@ -94,6 +95,8 @@ class RobotSpec:
         source: The file it was read from, or None for a spec written in Python.
         builtin: One of the package's robots (their closed-form IK and singular sets apply).
         file_id: The file's (device, inode), or None: `export` refuses to write over it.
+        text: The file's text as read, or None: what a pickled spec is made again from (`build` is a closure), so a
+            run's parameters travel to a sweep's worker with the version of the file that was checked.
     """
 
     name: str
@@ -106,6 +109,12 @@ class RobotSpec:
     source: str | None = None
     builtin: bool = False
     file_id: tuple[int, int] | None = None  # (st_dev, st_ino) of the file read: exports never write over it
+    text: str | None = dataclasses.field(default=None, repr=False)
+
+    def __reduce__(self):
+        if self.text is None:  # a spec written in Python: its own fields (a closure in `build` cannot be pickled)
+            return copyreg.__newobj__, (type(self),), dict(self.__dict__)
+        return _from_text, (self.text, self.source or "<robot file>", self.builtin, self.file_id)
 
     def values(self, overrides: Mapping[str, float] | None = None) -> dict[str, float]:
         """Every length by name in [m]: the defaults replaced by `overrides` (validated)."""
@@ -146,8 +155,12 @@ def read(path: str | os.PathLike[str], *, builtin: bool = False) -> RobotSpec:
     """
     shown = printable(os.fspath(path))
     text, status = read_text(path, "a DH table")
-    spec = parse(text, shown, builtin=builtin)
-    return dataclasses.replace(spec, file_id=(status.st_dev, status.st_ino))
+    return _from_text(text, shown, builtin, (status.st_dev, status.st_ino))
+
+
+def _from_text(text: str, source: str, builtin: bool, file_id: tuple[int, int] | None) -> RobotSpec:
+    """The robot of a file's text as `read` made it (and a pickled spec is made again)."""
+    return dataclasses.replace(parse(text, source, builtin=builtin), file_id=file_id, text=text)
 
 
 def read_text(path: str | os.PathLike[str], what: str) -> tuple[str, os.stat_result]:

@@ -59,7 +59,21 @@ class ArmTrackParams:
         1.0, "1/s", "pull toward the reference pose in a redundant arm's null space", ge=0.0, le=100.0
     )
 
+    @property
+    def SPEC(self):
+        """The arm (kinematics.robot_file.RobotSpec), read once when the parameters were made: a robot file changed or
+        removed since changes nothing (the run used to read it again)."""
+        spec = self.__dict__.get("_spec")
+        return spec if spec is not None else robots.resolve(self.robot)
+
+    @property
+    def PLAN(self) -> Plan:
+        """The run's plan (plan_for), made when the parameters were made."""
+        made = self.__dict__.get("_plan")
+        return made if made is not None else plan_for(self)
+
     def __post_init__(self) -> None:
+        object.__setattr__(self, "_spec", robots.resolve(self.robot))  # the file's version checked here
         if self.task_gain * self.timestep > 1:
             product, limit = apart(self.task_gain * self.timestep, 1.0, "down")
             raise ValueError(f"parameters 'task_gain' * 'timestep' must be <= {limit}; got {product}")
@@ -82,6 +96,7 @@ class ArmTrackParams:
         check_duration(self.duration, self.timestep)
         n = step_count(self.duration, self.timestep)
         check_run_cost(n, n + 1, 60, *RUN_COST, "raise 'timestep' or lower 'duration'")
+        object.__setattr__(self, "_plan", run_plan)
 
 
 def _file_key(robot: str) -> tuple:

@@ -18,11 +18,10 @@ import numpy as np
 
 from hexabot_sim.budget import step_count
 from hexabot_sim.control.arm_rate import ArmRateController, ArmRateGains, rotation_error
-from hexabot_sim.kinematics import robots
 from hexabot_sim.kinematics.numeric_ik import batch_pose_and_jacobian, pose_and_jacobian
 from hexabot_sim.result import Live, Marker, Metric, Progress, ScenarioResult
 from hexabot_sim.robots.arm import scene
-from hexabot_sim.robots.arm.parameters import ArmTrackParams, plan_for
+from hexabot_sim.robots.arm.parameters import ArmTrackParams
 from hexabot_sim.robots.arm.path import RAMP_TIME, Plan
 from hexabot_sim.simulate import Controller, simulate, site_trajectory
 
@@ -53,9 +52,9 @@ class ArmLoop:
 
 def prepare(p: ArmTrackParams) -> ArmLoop:
     """Builds the scene, puts the arm at the start pose and wires the resolved-rate controller to its servos."""
-    spec = robots.resolve(p.robot)
+    spec = p.SPEC
     chain = spec.chain()
-    run_plan = plan_for(p)
+    run_plan = p.PLAN
     frames = np.concatenate(
         [np.stack(chain.frames(run_plan.q), axis=1)[..., :3, 3].reshape(-1, 3), run_plan.path.at(run_plan.t)[0]]
     )
@@ -166,12 +165,12 @@ def _result(name: str, p: ArmTrackParams, loop: ArmLoop, traj) -> ScenarioResult
     rec = loop.record
     # sigma_min and the Jacobian check at the last state (the loop measures before each step).
     sigma, jac_diff = rec["sigma"].copy(), rec["jac_diff"].copy()
-    sigma[-1], jac_diff[-1] = _final_check(loop, traj.qpos[-1], robots.resolve(p.robot).chain())
+    sigma[-1], jac_diff[-1] = _final_check(loop, traj.qpos[-1], p.SPEC.chain())
     near = sigma < p.sigma_threshold
     worst = int(np.argmin(sigma))
     hits = rec["limits"] > 0
     dt = p.timestep
-    poses, _ = batch_pose_and_jacobian(robots.resolve(p.robot).chain(), traj.qpos[:, loop.qadr])
+    poses, _ = batch_pose_and_jacobian(p.SPEC.chain(), traj.qpos[:, loop.qadr])
     fk_diff = float(np.abs(poses[:, :3, 3] - tool.pos).max())  # our FK of MuJoCo's qpos against its site: qpos = q
     orient = None
     if run_plan.rot_hold is not None:
@@ -239,7 +238,7 @@ def _result(name: str, p: ArmTrackParams, loop: ArmLoop, traj) -> ScenarioResult
         trail=tool.pos,
         overlay=[lambda i: f"error = {err[i] * 1000:7.3f} mm   σmin = {sigma[i]:.3g}{near_text[int(near[i])]}"],
         extras={
-            "robot": robots.resolve(p.robot).name,
+            "robot": p.SPEC.name,
             "ranges": (run_plan.lower, run_plan.upper),
             "units": loop.units,
             "worst": worst,

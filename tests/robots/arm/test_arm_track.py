@@ -1,6 +1,7 @@
 """arm-track: any arm tracks a path in MuJoCo; the tracking error is measured from MuJoCo's own tool site."""
 
 import math
+import pickle
 from pathlib import Path
 
 import mujoco
@@ -9,7 +10,7 @@ import pytest
 from helpers import cli
 
 import hexabot_sim as hs
-from hexabot_sim import models, params
+from hexabot_sim import api, models, params
 from hexabot_sim.errors import UsageError
 from hexabot_sim.robots.arm import track
 from hexabot_sim.robots.arm.path import RAMP_TIME
@@ -100,6 +101,22 @@ def test_the_jacobian_check_catches_a_wrong_jacobian(monkeypatch):
     monkeypatch.setattr(track, "pose_and_jacobian", wrong)
     p = params.resolve(track.ArmTrackParams, {}, {"robot": "elbow", "duration": 0.05})
     assert track.run("arm-track", p).metrics["jacobian_max_diff"].value == pytest.approx(1e-6, rel=1e-6)
+
+
+def test_the_robot_file_is_read_once_when_the_parameters_are_made(tmp_path):
+    """A run uses the version of its robot file that was checked: removed (or edited) after its parameters were made,
+    the run goes on as checked (it used to read the file again at run time: a FileNotFoundError from os.stat)."""
+    path = robot_file(tmp_path)
+    prepared = api.prepare("arm-track", {"robot": str(path), "duration": 1.5})
+    path.unlink()
+    result = prepared.run()
+    assert result.metrics["joints"].value == 7
+    assert result.metrics["tracking_error_rms"].value < TARGET_RMS
+    path.write_text(path.name)  # now not a robot file at all
+    assert prepared.run().metrics["tracking_error_rms"].value == result.metrics["tracking_error_rms"].value
+    # Pickled (a sweep's worker gets its parameters so), the checked version travels with them.
+    again = api.Prepared(prepared.entry, pickle.loads(pickle.dumps(prepared.params)))
+    assert again.run().metrics["tracking_error_rms"].value == result.metrics["tracking_error_rms"].value
 
 
 def test_gravity_acts_and_the_feedforward_is_the_gravity_torque():
