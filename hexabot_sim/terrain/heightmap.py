@@ -16,7 +16,13 @@ import math
 import numpy as np
 
 CELL: float = 0.01  # [m] the map's grid spacing: half the rough patch's (heightfield.CELL), so its facets are resolved
-MAX_POINTS: int = 4_000_000  # a larger area gets coarser cells (32 MB of float64 at most)
+MAX_POINTS: int = 4_000_000  # 32 MB of float64: a walk whose area needs more is refused (walking.ground)
+
+
+def grid_size(extent: tuple[float, float, float, float]) -> tuple[int, int]:
+    """(nx, ny): the map's grid points over extent = (x_min, x_max, y_min, y_max) [m] at CELL."""
+    x_min, x_max, y_min, y_max = extent
+    return max(2, math.ceil((x_max - x_min) / CELL) + 1), max(2, math.ceil((y_max - y_min) / CELL) + 1)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)  # eq=False: an array field (compared by identity)
@@ -32,10 +38,10 @@ class HeightMap:
     def sample(cls, ground, extent: tuple[float, float, float, float], error: float = 0.0, seed: int = 0) -> HeightMap:
         """The map of `ground` (terrain.Ground) over extent = (x_min, x_max, y_min, y_max) [m], each height off by
         N(0, error) [m] (seeded by `seed`)."""
-        x_min, x_max, y_min, y_max = extent
-        cell = max(CELL, math.sqrt((x_max - x_min) * (y_max - y_min) / MAX_POINTS))
-        nx = max(2, math.ceil((x_max - x_min) / cell) + 1)
-        ny = max(2, math.ceil((y_max - y_min) / cell) + 1)
+        x_min, y_min, cell = extent[0], extent[2], CELL
+        nx, ny = grid_size(extent)
+        if nx * ny > MAX_POINTS:
+            raise ValueError(f"a terrain map of {nx} x {ny} points: more than {MAX_POINTS}")
         x = x_min + cell * np.arange(nx)
         y = y_min + cell * np.arange(ny)
         heights = np.asarray(ground.height(*np.meshgrid(x, y)), dtype=float)

@@ -16,7 +16,7 @@ from hexabot_sim.control.gait import Command, GaitPlanner
 from hexabot_sim.kinematics import leg as leg_kin
 from hexabot_sim.kinematics import legged
 from hexabot_sim.params import apart
-from hexabot_sim.terrain import Ground, Kerb, Limits, RoughPatch, Slope, Stairs
+from hexabot_sim.terrain import Ground, Kerb, Limits, RoughPatch, Slope, Stairs, heightmap
 from hexabot_sim.terrain.heightfield import CELL as HFIELD_CELL
 from hexabot_sim.terrain.heightfield import MARGIN as HFIELD_MARGIN
 from hexabot_sim.terrain.heightfield import MAX_POINTS as HFIELD_MAX_POINTS
@@ -146,6 +146,17 @@ def _map_problem(p: WalkParams) -> str:
         )
     if p.map_error and p.terrain_map != "on":
         return "parameter 'map_error' is the terrain map's error: it needs terrain_map=on (and touchdown=sensed)"
+    if p.terrain_map == "on":
+        course = commands.path(p, SETTLE_TIME) if p.schedule or p.waypoints else None
+        extent = _walk_area(p, course)[0]
+        nx, ny = heightmap.grid_size(extent)
+        if nx * ny > heightmap.MAX_POINTS:
+            return (
+                f"the terrain map of this walk's area ({extent[1] - extent[0]:.3g} m x {extent[3] - extent[2]:.3g} m) "
+                f"needs {nx * ny:,} points at its {heightmap.CELL * 100:g} cm grid, more than "
+                f"{heightmap.MAX_POINTS:,}: "
+                + ("bring the waypoints closer together" if p.waypoints else "shorten 'duration' or lower the speed")
+            )
     return ""
 
 
