@@ -25,7 +25,6 @@ from hexabot_sim.control import kernels as K
 # Scalars `mpar`: the map grid's origin and spacing [m] (HeightMap.params), the foot's radius [m] and the time
 # constant [s] the swing's landing height follows the map's with.
 X0, Y0, CELL, FOOT_RADIUS, FILTER = range(5)
-NMPAR = 5
 
 
 @K.jit

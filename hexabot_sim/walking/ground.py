@@ -133,8 +133,13 @@ def terrain_map(p: WalkParams) -> HeightMap | None:
     """The robot's map of the run's ground over the walk's area (terrain_map=on, with its map_error), else None."""
     if p.terrain_map != "on":
         return None
+    return HeightMap.sample(terrain(p), _map_extent(p), p.map_error, p.seed)
+
+
+def _map_extent(p: WalkParams) -> tuple[float, float, float, float]:
+    """The world box the terrain map covers: the walk's area (its planned course, with a schedule or waypoints)."""
     course = commands.path(p, SETTLE_TIME) if p.schedule or p.waypoints else None
-    return HeightMap.sample(terrain(p), _walk_area(p, course)[0], p.map_error, p.seed)
+    return _walk_area(p, course)[0]
 
 
 def _map_problem(p: WalkParams) -> str:
@@ -147,8 +152,7 @@ def _map_problem(p: WalkParams) -> str:
     if p.map_error and p.terrain_map != "on":
         return "parameter 'map_error' is the terrain map's error: it needs terrain_map=on (and touchdown=sensed)"
     if p.terrain_map == "on":
-        course = commands.path(p, SETTLE_TIME) if p.schedule or p.waypoints else None
-        extent = _walk_area(p, course)[0]
+        extent = _map_extent(p)
         nx, ny = heightmap.grid_size(extent)
         if nx * ny > heightmap.MAX_POINTS:
             return (
