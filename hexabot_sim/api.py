@@ -12,7 +12,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from hexabot_sim import folders, registry
+from hexabot_sim import folders, registry, unused
 from hexabot_sim import params as params_mod
 from hexabot_sim import video as video_options
 from hexabot_sim.errors import HexabotError, OutputError, UsageError
@@ -183,7 +183,9 @@ def prepare(scenario: str, *layers: Mapping[str, Any]) -> Prepared:
     command line uses it to refuse a run (its video cost, its --out) before the simulation starts.
     """
     entry = registry.get(scenario)
-    return Prepared(entry, params_mod.resolve(entry.params_type, entry.defaults, *layers))
+    p = params_mod.resolve(entry.params_type, entry.defaults, *layers)
+    unused.check([p], entry.defaults, {name for layer in layers for name in layer})
+    return Prepared(entry, p)
 
 
 def _check_path(name: str, value: Any, optional: bool = True) -> None:

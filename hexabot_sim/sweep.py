@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from hexabot_sim import budget, pool, registry
+from hexabot_sim import budget, pool, registry, unused
 from hexabot_sim import params as params_mod
 from hexabot_sim.errors import UsageError, encodable
 from hexabot_sim.pool import WALL_CLOCK_METRICS, CellJob, CellResult
@@ -155,6 +155,7 @@ def plan(
             "split the study into several sweeps"
         )
     cells, costs = _check_cells(cls, fixed, axes, progress)
+    unused.check(cells, scenario.defaults, {*config, *sets, *(a.name for a in axes)})  # ignored by every cell
     try:
         base = params_mod.build(cls, fixed)
     except UsageError:  # the fixed values fail only with the swept ones' defaults: no cell has those

@@ -350,6 +350,28 @@ class WalkParams:
         """The run uses the ground-finding controller (sensed touchdown or a levelled body)."""
         return self.touchdown == "sensed" or self.level_body == "on"
 
+    def ignored(self) -> dict[str, str]:
+        """The parameters this walk makes no use of, each with why and what would use it (hexabot_sim.unused refuses
+        one the user set)."""
+        out = {}
+        if not self.stairs_rise:
+            out |= dict.fromkeys(("stairs_run", "stairs_count", "stairs_distance"), "without stairs: set stairs_rise")
+        if not self.kerb_height:
+            out["kerb_distance"] = "without a kerb: set kerb_height"
+        if not self.slope_deg:
+            out["slope_heading"] = "on level ground: set slope_deg"
+        if self.touchdown != "sensed":
+            out["reflex"] = "with planned touchdown (the reflex reads the touch sensors): set touchdown=sensed"
+        if not self.schedule:
+            out["schedule_scale"] = "without a schedule: give one"
+        if not self.waypoints:
+            out |= dict.fromkeys(("path_speed", "path_yaw_rate"), "without waypoints: give them")
+        if self.schedule or self.waypoints:
+            who = "the schedule's rows" if self.schedule else "the path follower (path_speed, path_yaw_rate)"
+            out |= dict.fromkeys(("vx", "vy", "yaw_rate"), f"with {'a schedule' if self.schedule else 'waypoints'}: "
+                                 f"{who} give the commands; set them there")  # fmt: skip
+        return out
+
 
 # _cycle_problem's answers by what the cycle depends on: a sweep checks each gait for each of its other values.
 _CYCLE_PROBLEMS: dict[tuple[Any, ...], str] = {}
