@@ -190,7 +190,7 @@ def test_settling_time_is_not_reported_before_the_motion_settles():
 
 
 def test_settled_for_good_uses_the_energy_barrier():
-    from hexabot_sim.robots.pendulum.pendulum import settled_for_good
+    from hexabot_sim.robots.pendulum.closed_forms import settled_for_good
 
     def potential(theta):  # m g c = 1 J
         return 1 - math.cos(theta)

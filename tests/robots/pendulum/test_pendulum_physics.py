@@ -13,7 +13,7 @@ from pendulum_reference import (
 )
 
 from hexabot_sim import params, registry
-from hexabot_sim.robots.pendulum import pendulum
+from hexabot_sim.robots.pendulum import closed_forms
 
 
 def run(name, **overrides):
@@ -137,7 +137,7 @@ def test_spring_without_gravity_rests_at_target():
     ("k", "mgc", "target"), [(0.5, 0.14715, 0.5), (2.0, 1.0, -1.0), (0.05, 1.0, 0.3), (1.0, 0.0, 0.7)]
 )
 def test_equilibria_solve_the_balance_and_are_stable(k, mgc, target):
-    stable = pendulum.equilibria(k, mgc, target)
+    stable = closed_forms.equilibria(k, mgc, target)
     assert stable
     for r in stable:
         assert abs(k * (r - target) + mgc * math.sin(r)) < 1e-12
@@ -148,5 +148,5 @@ def test_equilibria_solve_the_balance_and_are_stable(k, mgc, target):
 
 def test_weak_spring_has_several_stable_rest_angles():
     """k < m g c: the spring cannot hold the link up everywhere; gravity wells near 2 pi n appear."""
-    stable = pendulum.equilibria(0.05, 1.0, 0.3)
+    stable = closed_forms.equilibria(0.05, 1.0, 0.3)
     assert len(stable) >= 2
