@@ -184,7 +184,7 @@ def prepare(scenario: str, *layers: Mapping[str, Any]) -> Prepared:
     """
     entry = registry.get(scenario)
     p = params_mod.resolve(entry.params_type, entry.defaults, *layers)
-    unused.check([p], entry.defaults, {name for layer in layers for name in layer})
+    unused.check([p], entry.defaults, unused.given(entry.params_type, layers))
     return Prepared(entry, p)
 
 

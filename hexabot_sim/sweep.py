@@ -155,7 +155,8 @@ def plan(
             "split the study into several sweeps"
         )
     cells, costs = _check_cells(cls, fixed, axes, progress)
-    unused.check(cells, scenario.defaults, {*config, *sets, *(a.name for a in axes)})  # ignored by every cell
+    given = unused.given(cls, [config, sets]) | {a.name for a in axes}
+    unused.check(cells, scenario.defaults, given)  # ignored by every cell
     try:
         base = params_mod.build(cls, fixed)
     except UsageError:  # the fixed values fail only with the swept ones' defaults: no cell has those

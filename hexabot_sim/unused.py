@@ -3,8 +3,10 @@
 A parameter class may define `ignored(self) -> dict[str, str]`: the parameters it makes no use of with its other
 values, each with why and what would use it ("without stairs (stairs_rise = 0): set stairs_rise"). A parameter
 is refused only when the user gave it (a config file, --set, a keyword of `api.run`, a sweep's axis) a value
-other than the scenario's default and no run uses it (in a sweep: no cell). So a run repeated from its run.json's
-parameters, which hold every value, is never refused, and a sweep whose cells with stairs use stairs_run is not.
+other than the scenario's default and no run uses it (in a sweep: no cell), and a sweep whose cells with stairs use
+stairs_run is not. A layer that gives every parameter (a run.json's "params", `Result.params`, a TOML written from
+them) repeats a run: its values are not the user's choice, so a sweep's cell without stairs, which records the
+sweep's stairs_count, or a run from before this check, repeats as it ran (only the other layers' are checked).
 """
 
 from __future__ import annotations
@@ -15,6 +17,13 @@ from typing import Any
 
 from hexabot_sim import params
 from hexabot_sim.errors import UsageError
+
+
+def given(cls: type, layers: Sequence[Mapping[str, Any]]) -> set[str]:
+    """The names of the parameters the user set in `layers`, less those of a layer that gives every parameter of
+    `cls` (a repeat of a run from its recorded parameters)."""
+    every = set(params.infos(cls))
+    return {name for layer in layers if not every <= set(layer) for name in layer}
 
 
 def check(runs: Sequence[Any], defaults: Mapping[str, Any], given: Collection[str]) -> None:

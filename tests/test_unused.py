@@ -79,3 +79,19 @@ def test_a_sweep_refuses_a_parameter_no_cell_uses():
     # A swept parameter is given by the user too.
     with pytest.raises(UsageError, match=re.escape("'kerb_distance' = 0.4 has no effect without a kerb")):
         sweep.plan("hexabot-walk", ["kerb_distance=0.4,0.6"], {}, SHORT)
+
+
+def test_a_sweep_cell_repeats_from_its_recorded_parameters(tmp_path):
+    """A cell without stairs of a sweep over stairs_rise records the sweep's stairs_count: its run.json's parameters
+    (every one, in one layer) repeat it, through the API and a config file; a --set over them is still checked."""
+    plan = sweep.plan("hexabot-walk", ["stairs_rise=0,0.02"], {}, {**SHORT, "stairs_count": 2, "touchdown": "sensed"})
+    flat = params.as_dict(plan.cells[0])
+    assert flat["stairs_rise"] == 0 and flat["stairs_count"] == 2
+    assert api.prepare("hexabot-walk", flat).params == plan.cells[0]
+    config = tmp_path / "cell.toml"
+    config.write_text("".join(f"{k} = {v!r}\n".replace("'", '"').replace("()", "[]") for k, v in flat.items()))
+    assert api.prepare("hexabot-walk", params.read_config(config), {}).params == plan.cells[0]
+    with pytest.raises(UsageError, match=re.escape("'kerb_distance' = 0.7 has no effect without a kerb")):
+        api.prepare("hexabot-walk", flat, {"kerb_distance": 0.7})
+    # A sweep from the same parameters as its config file: the cells at stairs_rise = 0 use nothing new.
+    sweep.plan("hexabot-walk", ["seed=0,1"], flat, {})
