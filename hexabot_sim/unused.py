@@ -45,5 +45,7 @@ def check(runs: Sequence[Any], defaults: Mapping[str, Any], given: Collection[st
         for p in runs:
             value = getattr(p, name)
             if value != default[name]:
-                shown = f"{value:g}" if isinstance(value, float) else str(value)
+                shown = str(value)
+                if isinstance(value, float):  # exactly: 0.5000001 shown as 0.5, the default, was refused "= 0.5"
+                    shown = f"{value:g}" if float(f"{value:g}") == value else repr(value)
                 raise UsageError(f"parameter {name!r} = {shown} has no effect {p.ignored()[name]}, or leave it out")

@@ -95,3 +95,11 @@ def test_a_sweep_cell_repeats_from_its_recorded_parameters(tmp_path):
         api.prepare("hexabot-walk", flat, {"kerb_distance": 0.7})
     # A sweep from the same parameters as its config file: the cells at stairs_rise = 0 use nothing new.
     sweep.plan("hexabot-walk", ["seed=0,1"], flat, {})
+
+
+def test_a_refused_value_is_shown_exactly():
+    """Not rounded to the default it is not: vx = 0.3 / 3 under a schedule was refused as "'vx' = 0.1"."""
+    with pytest.raises(UsageError, match=re.escape("'kerb_distance' = 0.5000001 has no effect")):
+        api.prepare("hexabot-walk", SHORT, {"kerb_distance": 0.5000001})
+    with pytest.raises(UsageError, match=re.escape("'vx' = 0.09999999999999999 has no effect with a schedule")):
+        api.prepare("hexabot-walk", SHORT, {"schedule": SCHEDULE, "vx": 0.3 / 3})
