@@ -353,7 +353,7 @@ class WalkParams:
     def ignored(self) -> dict[str, str]:
         """The parameters this walk makes no use of, each with why and what would use it (hexabot_sim.unused refuses
         one the user set)."""
-        out = {}
+        out: dict[str, str] = {}
         if not self.stairs_rise:
             out |= dict.fromkeys(("stairs_run", "stairs_count", "stairs_distance"), "without stairs: set stairs_rise")
         if not self.kerb_height:
@@ -367,9 +367,12 @@ class WalkParams:
         if not self.waypoints:
             out |= dict.fromkeys(("path_speed", "path_yaw_rate"), "without waypoints: give them")
         if self.schedule or self.waypoints:
-            who = "the schedule's rows" if self.schedule else "the path follower (path_speed, path_yaw_rate)"
-            out |= dict.fromkeys(("vx", "vy", "yaw_rate"), f"with {'a schedule' if self.schedule else 'waypoints'}: "
-                                 f"{who} give the commands; set them there")  # fmt: skip
+            why = (
+                "with a schedule: its rows give the commands; set them there"
+                if self.schedule
+                else "with waypoints: the path follower gives the commands; set path_speed and path_yaw_rate"
+            )
+            out |= dict.fromkeys(("vx", "vy", "yaw_rate"), why)
         return out
 
 
