@@ -14,7 +14,7 @@ from hexabot_sim.control.commands import Segment
 from hexabot_sim.control.gait import Command
 from hexabot_sim.control.walker import WalkingController
 from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward, unknown_keywords
-from hexabot_sim.envs.scene import MAX_SLOPE_DEG, STAIRS, _number, check_range, check_stairs, robot_params
+from hexabot_sim.envs.scene import MAX_SLOPE_DEG, _number, check_range, check_stairs, robot_params, terrain_keywords
 from hexabot_sim.walking.constants import SETTLE_TIME
 from hexabot_sim.walking.parameters import WalkParams
 from hexabot_sim.walking.scene import acceleration_limit, make_controller
@@ -148,9 +148,9 @@ class LeggedCommandEnv(LeggedEnv):
         robot: str = "hexabot",
         frame_skip: int = 50,
         terrain: str = "flat",
-        slope_deg: float = 10.0,
-        roughness: float = 0.01,
-        stairs: tuple[float, float, int] = STAIRS,
+        slope_deg: float | None = None,
+        roughness: float | None = None,
+        stairs: tuple[float, float, int] | None = None,
         command_range=COMMAND_RANGE,
         twist_range=None,
         step_height_range=None,
@@ -165,6 +165,7 @@ class LeggedCommandEnv(LeggedEnv):
         **kwargs,
     ) -> None:
         unknown_keywords(type(self), kwargs)  # a misspelt keyword: a ValueError naming the known ones, not a TypeError
+        slope_deg, roughness, stairs = terrain_keywords(terrain, slope_deg, roughness, stairs)
         try:
             rows = [tuple(r) for r in (TWIST_RANGE if twist_range is None else twist_range)]
         except TypeError:

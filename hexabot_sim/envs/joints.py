@@ -7,7 +7,7 @@ import numpy as np
 from gymnasium import spaces
 
 from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward, unknown_keywords
-from hexabot_sim.envs.scene import STAIRS, robot_params
+from hexabot_sim.envs.scene import robot_params, terrain_keywords
 
 SETTLE_TIME: float = 0.25  # [s] at a reset the robot stands on its servos' home targets this long (it lands)
 
@@ -44,10 +44,11 @@ class LeggedJointsEnv(LeggedEnv):
         terrain: "flat", "slope" (uphill along +x, `slope_deg`), "rough" (`roughness`: a fresh seeded patch of
             ~5 cm bumps at every reset, drawn from the environment's RNG, the level floor beyond it) or "stairs"
             (`stairs`: steps up along +x, the first edge 0.5 m ahead of the start, then a landing).
-        slope_deg: The slope's angle [deg], 0 < slope_deg <= 30.
-        roughness: The bumps' peak height [m], 0 < roughness <= 0.03.
+        slope_deg: The slope's angle [deg], 0 < slope_deg <= 30; default 10.
+        roughness: The bumps' peak height [m], 0 < roughness <= 0.03; default 0.01.
         stairs: (rise [m], run [m], count) of the staircase: 0 < rise <= 0.1, 0.05 <= run <= 2, 1 <= count <= 50
             (as hexabot-walk's stairs_*); default (0.04, 0.25, 3).
+            Each of these three only with its terrain: given with another, a ValueError (it would have no effect).
         command_range: (low, high) of vx [m/s], vy [m/s] and the yaw rate [rad/s].
         reward: A Reward, or a dict of its fields to change.
         randomize_friction, randomize_mass, randomize_servo_gain: (low, high) ranges of factors drawn at every
@@ -62,9 +63,9 @@ class LeggedJointsEnv(LeggedEnv):
         robot: str = "hexabot",
         frame_skip: int = 10,
         terrain: str = "flat",
-        slope_deg: float = 10.0,
-        roughness: float = 0.01,
-        stairs: tuple[float, float, int] = STAIRS,
+        slope_deg: float | None = None,
+        roughness: float | None = None,
+        stairs: tuple[float, float, int] | None = None,
         command_range=COMMAND_RANGE,
         reward: Reward | dict | None = None,
         randomize_friction: tuple[float, float] | None = None,
@@ -78,6 +79,7 @@ class LeggedJointsEnv(LeggedEnv):
         **kwargs,
     ) -> None:
         unknown_keywords(type(self), kwargs)  # a misspelt keyword: a ValueError naming the known ones, not a TypeError
+        slope_deg, roughness, stairs = terrain_keywords(terrain, slope_deg, roughness, stairs)
         number = isinstance(reset_noise_scale, int | float) and not isinstance(reset_noise_scale, bool)
         if not (number and 0.0 <= reset_noise_scale <= 0.5):
             raise ValueError(f"reset_noise_scale must be a number from 0 to 0.5 rad; got {reset_noise_scale!r}")

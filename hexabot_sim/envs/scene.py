@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -101,6 +102,31 @@ def _file_params(path: str, robots: dict[str, tuple[type[WalkParams], dict]], ov
         raise ValueError(f"robot: robot file {path}: {n} legs; the environments walk robot files with {legs} legs")
     cls, defaults = takes[n]
     return params.resolve(cls, defaults, {**overrides, "robot": path})
+
+
+SLOPE_DEG: float = 10.0  # [deg] the slope's angle where terrain="slope" and slope_deg is not given
+ROUGHNESS: float = 0.01  # [m] the bumps' peak height where terrain="rough" and roughness is not given
+_TERRAIN_KEYWORDS: dict[str, tuple[str, object]] = {
+    "slope_deg": ("slope", SLOPE_DEG), "roughness": ("rough", ROUGHNESS), "stairs": ("stairs", STAIRS),
+}  # fmt: skip
+
+
+def terrain_keywords(terrain: object, slope_deg: object, roughness: object, stairs: object) -> tuple[Any, Any, Any]:
+    """(slope_deg, roughness, stairs): each terrain's keyword, its default where not given (None). A keyword given
+    for another terrain is a ValueError: it would have no effect (terrain="flat", slope_deg=20 walked on the flat),
+    as a walk parameter the run makes no use of is refused (hexabot_sim.unused)."""
+    if not isinstance(terrain, str) or terrain not in TERRAINS:
+        raise ValueError(f"unknown terrain {terrain!r}; known: {', '.join(TERRAINS)}")
+    given = {"slope_deg": slope_deg, "roughness": roughness, "stairs": stairs}
+    for name, value in given.items():
+        own = _TERRAIN_KEYWORDS[name][0]
+        if value is not None and terrain != own:
+            raise ValueError(
+                f"{name} is the {own} terrain's: it has no effect on terrain={terrain!r}; choose terrain={own!r} or "
+                f"leave {name} out"
+            )
+    slope_deg, roughness, stairs = (_TERRAIN_KEYWORDS[k][1] if v is None else v for k, v in given.items())
+    return slope_deg, roughness, stairs
 
 
 def check_stairs(stairs) -> tuple[float, float, int]:

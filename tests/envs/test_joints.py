@@ -131,7 +131,7 @@ def test_target_mapping_reaches_the_servo_ranges():
         # an infinite reward, not a ValueError naming what is allowed:
         ({"terrain": "slope", "slope_deg": "10"}, "slope_deg must be > 0 and <= 30 deg (a number); got '10'"),
         ({"terrain": "slope", "slope_deg": True}, "slope_deg must be > 0 and <= 30 deg (a number); got True"),
-        ({"terrain": "rough", "roughness": None}, "roughness must be > 0 and <= 0.03 m (a number); got None"),
+        ({"terrain": "rough", "roughness": [0.01]}, "roughness must be > 0 and <= 0.03 m (a number); got [0.01]"),
         ({"reward": {"slipp": 1.0}}, "unknown reward field 'slipp'; known: velocity, yaw, velocity_sigma"),
         ({"reward": "slip"}, "reward must be a Reward, a dict of its fields or None; got str"),
         ({"reward": {"slip": "1"}}, "reward slip must be a number from 0 to 1e+06; got '1'"),

@@ -8,7 +8,9 @@ import pytest
 
 pytest.importorskip("gymnasium", reason="the Gymnasium environments need gymnasium (the rl extra)")
 
+from hexabot_sim.envs.command import LeggedCommandEnv
 from hexabot_sim.envs.joints import LeggedJointsEnv
+from hexabot_sim.envs.scene import ROUGHNESS, SLOPE_DEG, STAIRS, terrain_keywords
 
 
 def ray_heights(env, x, y):
@@ -98,12 +100,25 @@ def test_bad_stairs_are_refused_naming_what_is_allowed(stairs, words):
 
 @pytest.mark.parametrize(
     ("kwargs", "words"),
-    [({"terrain": "flat", "stairs": "junk"}, "stairs must be"), ({"terrain": "rough", "slope_deg": -5}, "slope_deg"),
-     ({"terrain": "slope", "roughness": float("nan")}, "roughness")],
+    [({"terrain": "flat", "stairs": "junk"}, "stairs is the stairs terrain's: it has no effect on terrain='flat'"),
+     ({"terrain": "rough", "slope_deg": -5}, "slope_deg is the slope terrain's: it has no effect on terrain='rough'"),
+     ({"terrain": "slope", "roughness": 0.02}, "roughness is the rough terrain's: it has no effect on terrain='slope'"),
+     ({"terrain": "flat", "slope_deg": 10.0}, "choose terrain='slope' or leave slope_deg out"),  # even its default
+     ({"terrain": "hills", "slope_deg": 10.0}, "unknown terrain 'hills'; known: flat, slope, rough, stairs")],
 )  # fmt: skip
-def test_a_terrain_keyword_is_checked_where_its_terrain_is_not_chosen(kwargs, words):
-    with pytest.raises(ValueError, match=words):
-        LeggedJointsEnv(**kwargs)
+def test_a_terrain_keyword_given_with_another_terrain_is_refused(kwargs, words):
+    """terrain="flat", slope_deg=20 used to walk on the flat without a word: each terrain's keyword is refused with
+    another terrain (both environments), as a walk parameter the run makes no use of is."""
+    for env in (LeggedJointsEnv, LeggedCommandEnv):
+        with pytest.raises(ValueError, match=re.escape(words)) as e:
+            env(**kwargs)
+        assert "\n" not in str(e.value)
+
+
+def test_a_terrain_keyword_not_given_takes_its_default():
+    assert terrain_keywords("slope", None, None, None) == (SLOPE_DEG, ROUGHNESS, STAIRS)
+    assert terrain_keywords("stairs", None, None, (0.05, 0.3, 4)) == (SLOPE_DEG, ROUGHNESS, (0.05, 0.3, 4))
+    assert LeggedJointsEnv(terrain="slope").scene.slope.slope_deg == SLOPE_DEG
 
 
 def test_rough_ground_for_fast_commands_is_refused_at_make_with_the_speed_that_fits(monkeypatch):
