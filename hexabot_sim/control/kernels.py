@@ -55,9 +55,9 @@ feed = jit(resolved_rate.feed)
 # Swing state machine, per leg. NEAR: touched within EARLY_BAND of the swing's end height, which it goes on to.
 STANCE, SWING, EARLY, SEEKING, NEAR = 0, 1, 2, 3, 4
 # Columns of `legs`.
-Z, Z_LIFT, T_LIFT, OFFSET, OFFSET_LIFT, LANDING, NEXT_LANDING, T_REFLEX, HOLD, Z_STEP, MAP_Z = (
-    0, 1, 2, 3, 5, 7, 9, 11, 12, 14, 15)  # fmt: skip
-NLEG = 16
+Z, Z_LIFT, T_LIFT, OFFSET, OFFSET_LIFT, LANDING, NEXT_LANDING, T_REFLEX, HOLD, Z_STEP, MAP_Z, SHIFT = (
+    0, 1, 2, 3, 5, 7, 9, 11, 12, 14, 15, 16)  # fmt: skip
+NLEG = 18
 # Columns of `flags`.
 MODE, WAS_STANCE, GROUNDED = 0, 1, 2
 # Per-leg constants `geo` (n, NGEO): cos and sin of the hip yaw, hip position (x, y) in the body frame, the
@@ -203,11 +203,11 @@ def targets(par, geo, legs, flags, plane, cmd, row, stance, t, row_prev, sensord
 
     Per leg: a planned stance goes on at its height z; a planned lift-off starts a swing from the
     lift-off height toward the stance plane under the landing point, or the terrain map's ground there (MAP_Z),
-    (smoothstep) plus the planner's
-    lift, the lift-off offset fading out over the first half; a touch in the second half of a swing
-    (sensed) ends it early, the target then ground-fixed at the command's stance velocity, unless the target is
-    within EARLY_BAND of the swing's end height (NEAR: a soft foot's first contact, which the swing goes on
-    through to its planned end, as with planned touchdown); a swing
+    (smoothstep) plus the planner's lift, the lift-off offset fading out over the first half and the map's shift
+    of the landing point off an edge (SHIFT, map_kernels.landing_heights) moving in over the second, kept through
+    the stance; a touch in the second half of a swing (sensed) ends it early, the target then ground-fixed at the
+    command's stance velocity, unless the target is within EARLY_BAND of the swing's end height (NEAR: a soft
+    foot's first contact, which the swing goes on through to its planned end, as with planned touchdown); a swing
     that reaches its planned touchdown untouched keeps descending (SEEKING) until it touches or
     leaves the workspace (no ground). Swings that ended are written to events as (leg, planned
     touchdown time, touch time or NaN); returns how many.
@@ -253,8 +253,11 @@ def targets(par, geo, legs, flags, plane, cmd, row, stance, t, row_prev, sensord
                 fade = fade * fade * (3 - 2 * fade)
                 legs[i, OFFSET] = legs[i, OFFSET_LIFT] * fade
                 legs[i, OFFSET + 1] = legs[i, OFFSET_LIFT + 1] * fade
-            else:
-                legs[i, OFFSET] = legs[i, OFFSET + 1] = 0.0
+            else:  # the terrain map's shift of the landing point off an edge (body frame), moved in over the rest
+                w = _smoothstep(2.0 * s - 1.0)
+                c, s_ = geo[i, COS], geo[i, SIN]
+                sx, sy = legs[i, SHIFT] * w, legs[i, SHIFT + 1] * w
+                legs[i, OFFSET], legs[i, OFFSET + 1] = c * sx + s_ * sy, -s_ * sx + c * sy  # body -> hip frame
             # Elevator reflex: a touch before REFLEX_UNTIL of the swing is an obstacle in the way, not the ground.
             blocked = sensed and touching and mode == SWING and REFLEX_FROM < s < par[REFLEX_UNTIL]
             blocked = blocked and par[REFLEX_LIFT] > 0.0

@@ -10,6 +10,16 @@ the legs' MAP_Z column, where the swing ends instead of the stance plane (kernel
 20 ms time constant: read every step through the body's pose, it would carry the body's bobbing into the swing feet.
 The touch sensors still end a swing the map got wrong (sensed touchdown).
 
+A landing point on a step's edge is moved off it (legs' SHIFT column, body frame; kernels.targets moves the foot
+there over the swing's second half and the stance keeps it): a foot whose centre lands within a foot radius of a
+riser's foot stops against the riser's face at a height between the steps (the map's bilinear reading across the
+riser's 1 cm cell), slides down into the corner when loaded, and at its next lift-off its swing drives it into the
+face: on hexabot-stairs with waypoints turning onto the landing, two rear feet did so (x = 0.492 and 0.742, the
+risers at 0.5 and 0.75), each pitching the body 10.8 deg nose up and raising it 7.6 cm (22-28 N on the face, at the
+friction cone's limit); roll / pitch peak to peak 12.6 / 15.4 deg. A spot counts as level if the map's ground within
+a foot radius and CLEAR of it, and AHEAD on along the way the next swing goes, varies by at most EDGE; an edge found
+in the swing's first half is moved off to the nearest level spot along the body's x or y.
+
 The body's pose comes from the free joint: a perfect state estimate (a real robot's estimator and map errors are
 the map's `error`, terrain/heightmap.py).
 """
@@ -25,6 +35,16 @@ from hexabot_sim.control import kernels as K
 # Scalars `mpar`: the map grid's origin and spacing [m] (HeightMap.params), the foot's radius [m] and the time
 # constant [s] the swing's landing height follows the map's with.
 X0, Y0, CELL, FOOT_RADIUS, FILTER = range(5)
+# A landing spot whose ground varies by more than EDGE [m] within CLEAR [m] of the foot's rim is on an edge (a step's
+# riser): the landing point is moved along the body's x or y, SHIFT_STEP at a time, up to MAX_SHIFT, to the nearest spot
+# clear of it (1 cm rough ground varies by at most 6 mm over such a disc: never an edge).
+EDGE: float = 0.015
+CLEAR: float = 0.004
+SHIFT_STEP: float = 0.0025
+MAX_SHIFT: float = 0.04
+RIM = 16  # points on the disc's rim
+AHEAD: float = 0.02  # [m] and along the way the foot will swing next: a foot at a riser's foot catches it at lift-off
+LANE = 4  # points along it
 
 
 @K.jit
@@ -45,6 +65,29 @@ def map_height(mpar, hmap, x, y):
 
 
 @K.jit
+def level_spot(mpar, hmap, x, y, ux, uy):
+    """True if the map's ground within a foot radius and CLEAR of (x, y), and on to AHEAD further along the unit
+    vector (ux, uy) (the way the foot will next swing: (0, 0) for none), varies by at most EDGE (or the map does not
+    reach there: nothing to avoid)."""
+    rho = mpar[FOOT_RADIUS] + CLEAR
+    h = map_height(mpar, hmap, x, y)
+    if math.isnan(h):
+        return True
+    low = high = h
+    for k in range(RIM + LANE):
+        if k < RIM:
+            a = 2.0 * math.pi * k / RIM
+            h = map_height(mpar, hmap, x + rho * math.cos(a), y + rho * math.sin(a))
+        else:
+            d = rho + AHEAD * (k - RIM + 1) / LANE
+            h = map_height(mpar, hmap, x + d * ux, y + d * uy)
+        if math.isnan(h):
+            return True
+        low, high = min(low, h), max(high, h)
+    return high - low <= EDGE
+
+
+@K.jit
 def landing_heights(par, mpar, hmap, legs, flags, plane, qpos, cmd, t):
     """Sets legs[:, MAP_Z] of the swinging legs: the height [m] along the body's z, below its origin, of the map's
     ground under each landing point (the foot's centre a radius above it), followed with the time constant
@@ -61,6 +104,7 @@ def landing_heights(par, mpar, hmap, legs, flags, plane, qpos, cmd, t):
         mode = flags[i, K.MODE]
         if mode != K.SWING and mode != K.NEAR:
             legs[i, K.MAP_Z] = np.nan
+            legs[i, K.SHIFT] = legs[i, K.SHIFT + 1] = 0.0
             continue
         tau = max(legs[i, K.T_LIFT] + par[K.SWING_TIME] - t, 0.0)  # [s] to the planned touchdown
         lx, ly = legs[i, K.LANDING], legs[i, K.LANDING + 1]
@@ -72,6 +116,37 @@ def landing_heights(par, mpar, hmap, legs, flags, plane, qpos, cmd, t):
         bz = plane[0] + plane[1] * lx + plane[2] * ly
         px = qpos[0] + r00 * bx + r01 * by + r02 * bz
         py = qpos[1] + r10 * bx + r11 * by + r12 * bz
+        # Off an edge: the shift (body frame at the touchdown) kept while its spot stays level, else the nearest level
+        # spot, chosen in the swing's first half (kernels.targets moves the foot to it in the second).
+        if legs[i, K.T_LIFT] + 0.5 * par[K.SWING_TIME] > t:
+            sx, sy = legs[i, K.SHIFT], legs[i, K.SHIFT + 1]
+            ex, ey = r00 * c + r01 * s, r10 * c + r11 * s  # the landing frame's x and y in the world's plane
+            fx, fy = -r00 * s + r01 * c, -r10 * s + r11 * c
+            speed = math.hypot(vx, vy)
+            ux = (ex * vx + fx * vy) / speed if speed > 1e-6 else 0.0  # the way the next swing goes
+            uy = (ey * vx + fy * vy) / speed if speed > 1e-6 else 0.0
+            if not level_spot(mpar, hmap, px + ex * sx + fx * sy, py + ey * sx + fy * sy, ux, uy):
+                sx = sy = 0.0
+                n_steps = int(MAX_SHIFT / SHIFT_STEP + 0.5)
+                for k in range(n_steps + 1):
+                    found = False
+                    for d in range(4 if k > 0 else 1):
+                        dx = k * SHIFT_STEP * (1.0 if d == 0 else -1.0 if d == 1 else 0.0)
+                        dy = k * SHIFT_STEP * (1.0 if d == 2 else -1.0 if d == 3 else 0.0)
+                        if level_spot(mpar, hmap, px + ex * dx + fx * dy, py + ey * dx + fy * dy, ux, uy):
+                            sx, sy, found = dx, dy, True
+                            break
+                    if found:
+                        break
+            legs[i, K.SHIFT], legs[i, K.SHIFT + 1] = sx, sy
+        sx, sy = legs[i, K.SHIFT], legs[i, K.SHIFT + 1]
+        if sx != 0.0 or sy != 0.0:  # the shifted landing point
+            lx, ly = lx + sx, ly + sy
+            bx = c * lx - s * ly + vx * tau
+            by = s * lx + c * ly + vy * tau
+            bz = plane[0] + plane[1] * lx + plane[2] * ly
+            px = qpos[0] + r00 * bx + r01 * by + r02 * bz
+            py = qpos[1] + r10 * bx + r11 * by + r12 * bz
         pz = qpos[2] + r20 * bx + r21 * by + r22 * bz
         # The foot's centre on the map's ground: the plane's point moved along the world's vertical by the gap, in
         # the body frame (its z component: r22 per metre of the vertical).
@@ -93,4 +168,4 @@ def compile_all() -> None:
     landing_heights(par, mpar, np.zeros((2, 2)), legs, flags, np.zeros(3), qpos, np.zeros(3), 0.0)
 
 
-KERNELS = (map_height, landing_heights)
+KERNELS = (map_height, level_spot, landing_heights)
