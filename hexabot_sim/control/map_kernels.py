@@ -17,8 +17,9 @@ riser's 1 cm cell), slides down into the corner when loaded, and at its next lif
 face: on hexabot-stairs with waypoints turning onto the landing, two rear feet did so (x = 0.492 and 0.742, the
 risers at 0.5 and 0.75), each pitching the body 10.8 deg nose up and raising it 7.6 cm (22-28 N on the face, at the
 friction cone's limit); roll / pitch peak to peak 12.6 / 15.4 deg. A spot counts as level if the map's ground within
-a foot radius and CLEAR of it, and AHEAD on along the way the next swing goes, varies by at most EDGE; an edge found
-in the swing's first half is moved off to the nearest level spot along the body's x or y.
+a foot radius and CLEAR of it, and AHEAD on along the way the next swing goes, varies by at most EDGE (more on a
+map with an error: its noise is no edge); an edge found in the swing's first half is moved off to the nearest level
+spot along the body's x or y.
 
 The body's pose comes from the free joint: a perfect state estimate (a real robot's estimator and map errors are
 the map's `error`, terrain/heightmap.py).
@@ -32,13 +33,16 @@ import numpy as np
 
 from hexabot_sim.control import kernels as K
 
-# Scalars `mpar`: the map grid's origin and spacing [m] (HeightMap.params), the foot's radius [m] and the time
-# constant [s] the swing's landing height follows the map's with.
-X0, Y0, CELL, FOOT_RADIUS, FILTER = range(5)
-# A landing spot whose ground varies by more than EDGE [m] within CLEAR [m] of the foot's rim is on an edge (a step's
-# riser): the landing point is moved along the body's x or y, SHIFT_STEP at a time, up to MAX_SHIFT, to the nearest spot
-# clear of it (1 cm rough ground varies by at most 6 mm over such a disc: never an edge).
+# Scalars `mpar`: the map grid's origin and spacing [m] (HeightMap.params), the foot's radius [m], the time
+# constant [s] the swing's landing height follows the map's with, and the height range [m] that makes an edge
+# (edge_range).
+X0, Y0, CELL, FOOT_RADIUS, FILTER, EDGE_RANGE = range(6)
+# A landing spot whose ground varies by more than EDGE [m] (plus EDGE_NOISE times the map's error) within CLEAR [m] of
+# the foot's rim is on an edge (a step's riser): the landing point is moved along the body's x or y, SHIFT_STEP at a
+# time, up to MAX_SHIFT, to the nearest spot clear of it (1 cm rough ground varies by at most 1.1 cm over such an area:
+# never an edge; the noise of a map with an error spans ~4 errors over its 21 points, rarely 6).
 EDGE: float = 0.015
+EDGE_NOISE: float = 6.0
 CLEAR: float = 0.004
 SHIFT_STEP: float = 0.0025
 MAX_SHIFT: float = 0.04
@@ -64,10 +68,16 @@ def map_height(mpar, hmap, x, y):
     return (1 - v) * low + v * high
 
 
+def edge_range(error: float) -> float:
+    """The height range [m] over a landing spot that makes it an edge, on a map with this error [m]."""
+    return EDGE + EDGE_NOISE * error
+
+
 @K.jit
 def level_spot(mpar, hmap, x, y, ux, uy):
     """True if the map's ground within a foot radius and CLEAR of (x, y), and on to AHEAD further along the unit
-    vector (ux, uy) (the way the foot will next swing: (0, 0) for none), varies by at most EDGE (or the map does not
+    vector (ux, uy) (the way the foot will next swing: (0, 0) for none), varies by at most mpar[EDGE_RANGE] (or the
+    map does not
     reach there: nothing to avoid)."""
     rho = mpar[FOOT_RADIUS] + CLEAR
     h = map_height(mpar, hmap, x, y)
@@ -84,7 +94,7 @@ def level_spot(mpar, hmap, x, y, ux, uy):
         if math.isnan(h):
             return True
         low, high = min(low, h), max(high, h)
-    return high - low <= EDGE
+    return high - low <= mpar[EDGE_RANGE]
 
 
 @K.jit
@@ -161,7 +171,7 @@ def landing_heights(par, mpar, hmap, legs, flags, plane, qpos, cmd, t):
 def compile_all() -> None:
     """Calls each kernel once on arrays of the types the controller passes."""
     n = 6
-    par, mpar = np.zeros(K.NPAR), np.array([0.0, 0.0, 0.01, 0.008, 0.02])
+    par, mpar = np.zeros(K.NPAR), np.array([0.0, 0.0, 0.01, 0.008, 0.02, EDGE])
     legs, flags = np.zeros((n, K.NLEG)), np.zeros((n, 3), dtype=np.int64)
     qpos = np.zeros(7 + 3 * n)
     qpos[3] = 1.0

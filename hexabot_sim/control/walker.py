@@ -346,7 +346,8 @@ class GroundController(WalkingController):
             from hexabot_sim.control import map_kernels  # compiled by kernels("map")
 
             kernels("map")
-            mpar = np.array([*ground.terrain_map.params(), layout.foot_radius, MAP_FILTER])
+            edge = map_kernels.edge_range(ground.terrain_map.error)
+            mpar = np.array([*ground.terrain_map.params(), layout.foot_radius, MAP_FILTER, edge])
             self._map = (map_kernels, mpar, ground.terrain_map.heights)
 
     def _stance_force(self, model, layout, gains, planner) -> StanceForce:

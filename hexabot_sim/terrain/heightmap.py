@@ -33,6 +33,7 @@ class HeightMap:
     y0: float
     cell: float
     heights: np.ndarray
+    error: float = 0.0  # [m] the standard deviation of the noise on its heights
 
     @classmethod
     def sample(cls, ground, extent: tuple[float, float, float, float], error: float = 0.0, seed: int = 0) -> HeightMap:
@@ -47,7 +48,7 @@ class HeightMap:
         heights = np.asarray(ground.height(*np.meshgrid(x, y)), dtype=float)
         if error > 0:
             heights = heights + np.random.default_rng([seed, 0x6D6170]).normal(0.0, error, heights.shape)
-        return cls(float(x_min), float(y_min), float(cell), np.ascontiguousarray(heights))
+        return cls(float(x_min), float(y_min), float(cell), np.ascontiguousarray(heights), float(error))
 
     def params(self) -> np.ndarray:
         """(x0, y0, cell) as the compiled controller reads them."""
