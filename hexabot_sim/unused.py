@@ -1,7 +1,7 @@
 """Parameters a user gave that the run makes no use of (a kerb's distance with no kerb): refused in one line.
 
 A parameter class may define `ignored(self) -> dict[str, str]`: the parameters it makes no use of with its other
-values, each with why and what would use it ("without stairs (stairs_rise = 0): set stairs_rise"). A parameter
+values, each with why and what would use it ("without stairs: set stairs_rise"). A parameter
 is refused only when the user gave it (a config file, --set, a keyword of `api.run`, a sweep's axis) a value
 other than the scenario's default and no run uses it (in a sweep: no cell), and a sweep whose cells with stairs use
 stairs_run is not. A layer that gives every parameter (a run.json's "params", `Result.params`, a TOML written from
