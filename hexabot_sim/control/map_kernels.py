@@ -98,6 +98,21 @@ def level_spot(mpar, hmap, x, y, ux, uy):
 
 
 @K.jit
+def _landing_point(qpos, rot, plane, c, s, vx, vy, tau, lx, ly):
+    """The landing point (lx, ly): its height bz in today's body frame and where it is in the world (px, py, pz).
+    The frame is where the body will be at the touchdown (the command's twist held: turned by the angle whose cos and
+    sin are c, s; moved by v tau), the point planned in it at the stance plane's height. rot: the body's rotation
+    matrix, row by row."""
+    bx = c * lx - s * ly + vx * tau
+    by = s * lx + c * ly + vy * tau
+    bz = plane[0] + plane[1] * lx + plane[2] * ly
+    px = qpos[0] + rot[0] * bx + rot[1] * by + rot[2] * bz
+    py = qpos[1] + rot[3] * bx + rot[4] * by + rot[5] * bz
+    pz = qpos[2] + rot[6] * bx + rot[7] * by + rot[8] * bz
+    return bz, px, py, pz
+
+
+@K.jit
 def landing_heights(par, mpar, hmap, legs, flags, plane, qpos, cmd, t):
     """Sets legs[:, MAP_Z] of the swinging legs: the height [m] along the body's z, below its origin, of the map's
     ground under each landing point (the foot's centre a radius above it), followed with the time constant
@@ -107,6 +122,7 @@ def landing_heights(par, mpar, hmap, legs, flags, plane, qpos, cmd, t):
     r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)
     r10, r11, r12 = 2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)
     r20, r21, r22 = 2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)
+    rot = (r00, r01, r02, r10, r11, r12, r20, r21, r22)
     f = K.ramp(par, t)
     vx, vy, wz = f * cmd[0], f * cmd[1], f * cmd[2]
     share = min(1.0, par[K.DT] / mpar[FILTER]) if mpar[FILTER] > 0 else 1.0
@@ -118,14 +134,8 @@ def landing_heights(par, mpar, hmap, legs, flags, plane, qpos, cmd, t):
             continue
         tau = max(legs[i, K.T_LIFT] + par[K.SWING_TIME] - t, 0.0)  # [s] to the planned touchdown
         lx, ly = legs[i, K.LANDING], legs[i, K.LANDING + 1]
-        # The landing point in today's body frame: where the body will be at the touchdown (the command's twist
-        # held: turned by wz tau, moved by v tau), the point planned in that frame, at the stance plane's height.
-        c, s = math.cos(wz * tau), math.sin(wz * tau)
-        bx = c * lx - s * ly + vx * tau
-        by = s * lx + c * ly + vy * tau
-        bz = plane[0] + plane[1] * lx + plane[2] * ly
-        px = qpos[0] + r00 * bx + r01 * by + r02 * bz
-        py = qpos[1] + r10 * bx + r11 * by + r12 * bz
+        c, s = math.cos(wz * tau), math.sin(wz * tau)  # the body's turn until the touchdown
+        bz, px, py, pz = _landing_point(qpos, rot, plane, c, s, vx, vy, tau, lx, ly)
         # Off an edge: the shift (body frame at the touchdown) kept while its spot stays level, else the nearest level
         # spot, chosen in the swing's first half (kernels.targets moves the foot to it in the second).
         if legs[i, K.T_LIFT] + 0.5 * par[K.SWING_TIME] > t:
@@ -151,13 +161,7 @@ def landing_heights(par, mpar, hmap, legs, flags, plane, qpos, cmd, t):
             legs[i, K.SHIFT], legs[i, K.SHIFT + 1] = sx, sy
         sx, sy = legs[i, K.SHIFT], legs[i, K.SHIFT + 1]
         if sx != 0.0 or sy != 0.0:  # the shifted landing point
-            lx, ly = lx + sx, ly + sy
-            bx = c * lx - s * ly + vx * tau
-            by = s * lx + c * ly + vy * tau
-            bz = plane[0] + plane[1] * lx + plane[2] * ly
-            px = qpos[0] + r00 * bx + r01 * by + r02 * bz
-            py = qpos[1] + r10 * bx + r11 * by + r12 * bz
-        pz = qpos[2] + r20 * bx + r21 * by + r22 * bz
+            bz, px, py, pz = _landing_point(qpos, rot, plane, c, s, vx, vy, tau, lx + sx, ly + sy)
         # The foot's centre on the map's ground: the plane's point moved along the world's vertical by the gap, in
         # the body frame (its z component: r22 per metre of the vertical).
         landing = bz + (map_height(mpar, hmap, px, py) + mpar[FOOT_RADIUS] - pz) * r22
@@ -178,4 +182,4 @@ def compile_all() -> None:
     landing_heights(par, mpar, np.zeros((2, 2)), legs, flags, np.zeros(3), qpos, np.zeros(3), 0.0)
 
 
-KERNELS = (map_height, level_spot, landing_heights)
+KERNELS = (map_height, level_spot, _landing_point, landing_heights)
