@@ -204,7 +204,7 @@ class EnvScene:
     ) -> None:
         if not isinstance(terrain, str) or terrain not in TERRAINS:
             raise ValueError(f"unknown terrain {terrain!r}; known: {', '.join(TERRAINS)}")
-        # Each terrain's keywords are checked whatever the terrain (a bad one is a mistake even where unused).
+        # The values terrain_keywords gave: the chosen terrain's as given, the others' their defaults; each checked.
         if not (_number(slope_deg) and 0.0 < slope_deg <= MAX_SLOPE_DEG):
             raise ValueError(f"slope_deg must be > 0 and <= {MAX_SLOPE_DEG:g} deg (a number); got {slope_deg!r}")
         if not (_number(roughness) and 0.0 < roughness <= MAX_ROUGHNESS):
