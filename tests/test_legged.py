@@ -142,6 +142,38 @@ def test_the_crawl_keeps_the_body_over_its_three_feet():
         assert _crawl_margin(tuple(offsets), 0.75) < best - 0.004, order
 
 
+def _hand_over_margin(gait: Gait, speed: float) -> float:
+    """Smallest support margin [m] at the hand-overs of a straight hexabot walk (1 s period) at `speed`: where a
+    foot lands as another lifts, over the feet down on both sides of that step (the landing foot not yet loaded,
+    the lifting one unloaded), over the second and third cycles."""
+    planner = GaitPlanner(gait, 1.0, 0.03, hx.DEFAULT_LAYOUT.neutral_feet_body(), 0.002)
+    margins = []
+    for _ in range(3):  # 1 s chunks
+        rows = planner.plan(Command(speed), 500)
+        stance = planner.in_stance(planner.time - 0.002 * np.arange(500, -1, -1))
+        for k in range(1, 501):
+            if planner.time > 1.5 and (stance[k] != stance[k - 1]).any():
+                margins.append(_support_margin(rows[k, stance[k] & stance[k - 1], :2]))
+    return min(margins)
+
+
+@pytest.mark.parametrize("name, speed", [("ripple", 0.1), ("wave", 0.05)])
+def test_the_ripple_and_wave_run_rear_to_front(name, speed):
+    """Walking forward, the ripple and the wave swing each side's legs rear to front (forward waves): at every
+    hand-over the body's centre stays inside the feet that stay down. The same gait in the other direction (front
+    to rear: the backward wave, these gaits until 2026-11-27; its offsets 2 duty - offset) leaves it outside."""
+    gait = GAITS[name]
+    lift = {leg: (gait.duty - o) % 1.0 for leg, o in zip(hx.DEFAULT_LAYOUT.legs, gait.offsets, strict=True)}
+    for side in "lr":  # each side: the rear leg lifts, then the middle, then the front, a swing apart
+        rear, middle, front = (lift[side + row] for row in "rmf")
+        assert (middle - rear) % 1.0 == pytest.approx((front - middle) % 1.0) == pytest.approx(1 - gait.duty)
+    forward = _hand_over_margin(gait, speed)
+    backward = _hand_over_margin(Gait(name, tuple((2 * gait.duty - o) % 1.0 for o in gait.offsets), gait.duty, ""),
+                                 speed)  # fmt: skip
+    assert forward > 0.004, forward
+    assert backward < -0.004, backward
+
+
 @pytest.mark.parametrize("ground", [False, True], ids=["planned", "ground-finding"])
 def test_a_four_legged_robot_trots(ground):
     """A 4-leg layout with the trot: the controllers step it, it stands, lifts its feet and walks forward,

@@ -63,17 +63,23 @@ class Gait:
 # then the right row (kinematics/legged.Layout).
 HEXAPOD_GAITS: tuple[Gait, ...] = (  # lf, lm, lr, rf, rm, rr
     Gait("tripod", (0.0, 0.5, 0.0, 0.5, 0.0, 0.5), 0.5, "two alternating tripods (lf, rm, lr) and (rf, lm, rr)"),
+    # The ripple and the wave are forward waves: on each side the swings run rear to front (the wave gait of
+    # McGhee and Frank, and of walking insects), the sides half a cycle apart. A foot lands as the next lifts, so at
+    # each hand-over the body stands for a moment on the feet down on both sides of it; walking forward, a wave that
+    # runs rear to front keeps the body's centre inside them (wave 4.9 mm, ripple 4.7 mm at the speeds),
+    # front to rear (the backward wave, these gaits until 2026-11-27) left it outside (-4.8, -5.0 mm), and the
+    # feet's loads jumped at every hand-over (tests/test_legged.py, docs/hexabot.md).
     Gait(
         "ripple",
-        (2 / 3, 1 / 3, 0.0, 1 / 6, 5 / 6, 0.5),
+        (4 / 6, 0.0, 2 / 6, 1 / 6, 3 / 6, 5 / 6),
         2 / 3,
-        "a wave front to rear on each side, the sides half a cycle apart: four feet down",
+        "a wave rear to front on each side, the sides half a cycle apart: four feet down",
     ),
     Gait(
         "wave",
-        (2 / 6, 1 / 6, 0.0, 5 / 6, 4 / 6, 3 / 6),
+        (2 / 6, 3 / 6, 4 / 6, 5 / 6, 0.0, 1 / 6),
         5 / 6,
-        "one leg at a time, front to rear, right then left: five feet down",
+        "one leg at a time, rear to front, left then right: five feet down",
     ),
 )
 QUADRUPED_GAITS: tuple[Gait, ...] = (  # lf, lr, rf, rr
