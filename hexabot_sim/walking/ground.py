@@ -38,15 +38,17 @@ def neutral(p: WalkParams) -> np.ndarray:
 
 def plan_steady(p: WalkParams, cmd: Command, samples: int = 240) -> tuple[np.ndarray, np.ndarray, float]:
     """The plan of two steady gait cycles at this command: foot targets (n, legs, 3) in the body frame, the planned
-    stance (n, legs) and their time step (the first cycle, the start-up from neutral, dropped)."""
+    stance (n, legs) and their time step. The first two cycles, the start-up from neutral, are dropped: a leg's first
+    swing starts from wherever its first stance (from neutral, up to a cycle long) left it and can end in the second
+    cycle (the ripple gait's last first swing ends at 7/6 of a cycle, 47 % faster than a steady one at 0.17 m/s)."""
     dt = p.period / samples
     planner = GaitPlanner(p.the_gait(), p.period, p.step_height, neutral(p), dt, profile=p.swing)
     chunks = [planner.plan(cmd, planner.max_chunk)]
-    while planner.time < 3 * p.period - 1e-9:
+    while planner.time < 4 * p.period - 1e-9:
         chunks.append(planner.plan(cmd, planner.max_chunk)[1:])
     body = np.concatenate(chunks)
     stance = planner.in_stance(np.arange(len(body)) * dt)
-    return body[samples:], stance[samples:], dt
+    return body[2 * samples :], stance[2 * samples :], dt
 
 
 def _plan_cycle(p: WalkParams, cmd: Command, samples: int = 240) -> tuple[np.ndarray, float]:
