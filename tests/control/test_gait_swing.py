@@ -57,7 +57,7 @@ def test_the_quintic_swing_is_checked_with_its_own_peak_speed():
     from hexabot_sim.errors import UsageError
     from hexabot_sim.robots.hexabot.walk import HexabotParams
 
-    params.resolve(HexabotParams, {}, {"gait": "ripple", "vx": 0.2})
-    with pytest.raises(UsageError, match=r"the largest feasible in this direction is vx = 0\.16"):
-        params.resolve(HexabotParams, {}, {"gait": "ripple", "vx": 0.2, "swing": "quintic"})
-    params.resolve(HexabotParams, {}, {"gait": "ripple", "vx": 0.2})
+    params.resolve(HexabotParams, {}, {"gait": "ripple", "vx": 0.23})
+    with pytest.raises(UsageError, match=r"the largest feasible in this direction is vx = 0\.21"):
+        params.resolve(HexabotParams, {}, {"gait": "ripple", "vx": 0.23, "swing": "quintic"})
+    params.resolve(HexabotParams, {}, {"gait": "ripple", "vx": 0.23})

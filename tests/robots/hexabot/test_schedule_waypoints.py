@@ -36,8 +36,8 @@ BAD_SCHEDULES = {
     ),
     "t,speed\n0,1\n": "unknown column 'speed'; it needs columns t, vx, vy, yaw_rate",
     "t,vx,vy,yaw_rate\n": "has a header but no rows",
-    "t,vx,vy,yaw_rate,gait\n0,0.1,0,0,tripod\n5,0.15,0,0,ripple\n11,0.25,0,0,tripod\n": (
-        "schedule: at t = 11.8 s (after the switch to the tripod gait at 11 s) foot rr would leave its reachable"
+    "t,vx,vy,yaw_rate,gait\n0,0.1,0,0,tripod\n5,0.15,0,0,ripple\n11,0.35,0,0,tripod\n": (
+        "schedule: at t = 12.4 s (after the switch to the tripod gait at 11 s) foot lr would leave its reachable"
     ),
     "t,vx,vy,yaw_rate\n0,0.1,0\n": "line 2: 3 values for the 4 columns",
     # numpy.savetxt(..., header=...) writes '# ' before the header: not "the header '0,0.05,0,0' has unknown column"
