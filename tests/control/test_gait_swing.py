@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from hexabot_sim.control.gait import GAITS, Command, GaitPlanner
 from hexabot_sim.control.plan_kernels import quintic
@@ -61,3 +62,22 @@ def test_the_quintic_swing_is_checked_with_its_own_peak_speed():
     with pytest.raises(UsageError, match=r"the largest feasible in this direction is vx = 0\.21"):
         params.resolve(HexabotParams, {}, {"gait": "ripple", "vx": 0.23, "swing": "quintic"})
     params.resolve(HexabotParams, {}, {"gait": "ripple", "vx": 0.23})
+
+
+@pytest.mark.parametrize("robot, gaits", [("hexabot", ("tripod", "ripple", "wave")), ("quadbot", ("crawl", "trot"))])
+def test_the_feasibility_check_plans_steady_cycles(robot, gaits):
+    """plan_steady (what the reach and joint-speed checks plan) returns two cycles of the steady walk: the second
+    repeats the first, in every gait. A cycle that still held a start-up swing (a leg's first, from wherever its
+    first stance from neutral left it) understated the ripple gait's reach: 0.215 m/s where 0.247 walks."""
+    import importlib
+
+    from hexabot_sim.walking.ground import plan_steady
+
+    params_class = {"hexabot": "HexabotParams", "quadbot": "QuadbotParams"}[robot]
+    module = importlib.import_module(f"hexabot_sim.robots.{robot}.parameters")
+    for gait in gaits:
+        p = getattr(module, params_class)(gait=gait, vx=0.05)
+        feet, down, _ = plan_steady(p, Command(0.1, 0.02, 0.1), samples=120)
+        assert feet.shape[0] == down.shape[0] == 2 * 120 + 1, gait
+        np.testing.assert_allclose(feet[120:], feet[:121], atol=1e-9, err_msg=gait)
+        assert (down[120:240] == down[:120]).all(), gait  # (the last row lies on an event: its flag rounds)
