@@ -3,7 +3,6 @@
 import json
 import os
 import shutil
-import subprocess
 from html.parser import HTMLParser
 from pathlib import Path
 
@@ -140,33 +139,33 @@ def chromium() -> str:
     pytest.skip("headless Chromium not found (Debian: apt-get install chromium); the report's browser test needs it")
 
 
-def _chromium(binary: str, *args: str) -> subprocess.CompletedProcess:
-    flags = ["--headless=new", "--disable-gpu", "--no-sandbox", "--hide-scrollbars", "--no-first-run",
-             "--disable-extensions", "--mute-audio"]  # fmt: skip
-    env = dict(os.environ, HOME=os.environ.get("HOME", "/tmp"))
-    return subprocess.run([binary, *flags, *args], capture_output=True, text=True, timeout=120, env=env)
+@pytest.fixture(scope="module")
+def browser(chromium):
+    """One headless Chromium for the module's pages, each opened in a new tab (tests/browser.py)."""
+    from browser import Browser
+
+    running = Browser(chromium)
+    yield running
+    running.close()
 
 
-def browser_check(binary: str, folder: Path) -> dict:
+def browser_check(browser, folder: Path) -> dict:
     """Opens the page (with the check script injected into a copy next to it) and returns what loaded."""
     page = (folder / "report.html").read_text()
     probe = folder / "_browser_check.html"
     probe.write_text(page.replace("</body>", f"<script>{CHECK_SCRIPT}</script></body>"))
     try:
-        proc = _chromium(binary, "--virtual-time-budget=20000", "--dump-dom", probe.as_uri())
+        with browser.tab(probe.as_uri()) as tab:
+            body = tab.wait_for('document.getElementById("hexabot-check")?.textContent ?? null', timeout=30)
     finally:
         probe.unlink()
-    start = proc.stdout.find('<pre id="hexabot-check">')
-    assert start >= 0, f"the check did not run: {proc.stderr[-2000:]}"
-    body = proc.stdout[start + len('<pre id="hexabot-check">') :].split("</pre>", 1)[0]
-    return json.loads(body.replace("&quot;", '"').replace("&amp;", "&"))
+    return json.loads(body)
 
 
-def screenshot(binary: str, folder: Path, width: int, height: int, out: Path) -> np.ndarray:
-    proc = _chromium(
-        binary, f"--window-size={width},{height}", f"--screenshot={out}", (folder / "report.html").as_uri()
-    )
-    assert out.is_file(), proc.stderr[-2000:]
+def screenshot(browser, folder: Path, width: int, height: int, out: Path) -> np.ndarray:
+    with browser.tab((folder / "report.html").as_uri(), width, height) as tab:
+        tab.screenshot(out)
+    assert out.is_file()
     from PIL import Image
 
     image = np.asarray(Image.open(out).convert("RGB"))
@@ -190,11 +189,11 @@ def browser_runs(tmp_path_factory, gl_backend):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["pendulum", "hexabot-walk", "leg-sweep"])
-def test_report_in_headless_chromium(browser_runs, chromium, name, tmp_path):
+def test_report_in_headless_chromium(browser_runs, browser, name, tmp_path):
     folder = browser_runs[name]
     check_page(folder)
     record = json.loads((folder / "run.json").read_text())
-    loaded = browser_check(chromium, folder)
+    loaded = browser_check(browser, folder)
     pngs = [f for f in record["files"] if f.endswith(".png")]
     assert [image["src"] for image in loaded["images"]] == pngs and len(pngs) >= 2
     assert all(image["ok"] for image in loaded["images"]), loaded["images"]
@@ -208,15 +207,15 @@ def test_report_in_headless_chromium(browser_runs, chromium, name, tmp_path):
 
     # Laptop and phone: the page fills the width without sideways scrolling and the figures are drawn.
     for width, height in ((1200, 2400), (400, 2400)):
-        image = screenshot(chromium, folder, width, height, tmp_path / f"{width}.png")
+        image = screenshot(browser, folder, width, height, tmp_path / f"{width}.png")
         assert image.std() > 20, "blank page"
         right_edge = image[:, -8:].reshape(-1, 3)
         assert (right_edge.min(axis=1) > 200).mean() > 0.95, "something sticks out on the right"
 
 
-def test_browser_check_sees_a_broken_image(browser_runs, chromium, tmp_path):
+def test_browser_check_sees_a_broken_image(browser_runs, browser, tmp_path):
     folder = tmp_path / "broken"
     shutil.copytree(browser_runs["leg-sweep"], folder)
     (folder / "sweep.png").write_bytes(b"not a png")
-    loaded = browser_check(chromium, folder)
+    loaded = browser_check(browser, folder)
     assert {image["src"]: image["ok"] for image in loaded["images"]} == {"sweep.png": False, "workspace.png": True}
