@@ -8,6 +8,7 @@ import base64
 import json
 import os
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -21,18 +22,19 @@ class Browser:
     """A running headless Chromium; `tab()` opens a page in a new tab of it."""
 
     def __init__(self, binary: str) -> None:
-        commands_read, self._commands = os.pipe()  # the browser reads commands on its fd 3
-        self._answers, answers_write = os.pipe()  # and writes answers and events on its fd 4
-
-        def as_fd_3_and_4() -> None:  # in the child, before exec: the pipe ends as fds 3 and 4 (inheritable)
-            os.dup2(commands_read, 3)
-            os.dup2(answers_write, 4)
-
+        # The browser reads commands on its fd 3 and writes answers and events on its fd 4: a small Python program
+        # moves the pipe ends there and execs it (no preexec_fn, which can deadlock a child forked from a process
+        # with threads, as an xdist worker is; dash's redirections take one-digit fds only).
+        commands_read, self._commands = os.pipe()
+        self._answers, answers_write = os.pipe()
         env = dict(os.environ, HOME=os.environ.get("HOME", "/tmp"))
         self._log = tempfile.TemporaryFile()  # the browser's stderr, for the messages (a pipe could fill and block it)
+        shim = "import os, sys; a = sys.argv; os.dup2(int(a[1]), 3); os.dup2(int(a[2]), 4); os.execv(a[3], a[3:])"
         self.proc = subprocess.Popen(
-            [binary, *FLAGS, "--remote-debugging-pipe", "about:blank"], env=env, close_fds=False,
-            preexec_fn=as_fd_3_and_4, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=self._log,
+            [sys.executable, "-S", "-c", shim, str(commands_read), str(answers_write),
+             binary, *FLAGS, "--remote-debugging-pipe", "about:blank"],
+            env=env, pass_fds=(commands_read, answers_write), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+            stderr=self._log,
         )  # fmt: skip
         os.close(commands_read)
         os.close(answers_write)
