@@ -115,15 +115,22 @@ def _support_margin(feet_xy: np.ndarray) -> float:
     return float(np.min(np.sum(normals * p, axis=1)))
 
 
+def _straight_plan(gait: Gait, feet: np.ndarray, period: float, speed: float, seconds: int, skip: float):
+    """The planned feet (n, legs, 3) and stance flags (n + 1, legs; row 0 the step before) of a straight walk at
+    `speed` [m/s], 2 ms steps, planned in 1 s chunks for `seconds`, the first `skip` seconds dropped."""
+    planner = GaitPlanner(gait, period, 0.03, feet, 0.002)
+    rows, stance = [], []
+    for _ in range(seconds):
+        rows.append(planner.plan(Command(speed), 500)[1:])
+        stance.append(planner.in_stance(planner.time - 0.002 * np.arange(500, -1, -1))[1 if stance else 0 :])
+    first = round(skip / 0.002)
+    return np.concatenate(rows)[first:], np.concatenate(stance)[first:]
+
+
 def _crawl_margin(offsets: tuple[float, ...], duty: float) -> float:
     """Smallest support margin [m] over the second and third cycles of a straight crawl at 0.05 m/s."""
-    planner = GaitPlanner(Gait("crawl", offsets, duty, ""), 2.0, 0.03, QUAD.neutral_feet_body(), 0.002)
-    margins = []
-    for _ in range(6):  # 1 s chunks
-        rows = planner.plan(Command(0.05), 500)
-        stance = planner.in_stance(planner.time - 0.002 * np.arange(500, -1, -1))
-        margins += [_support_margin(rows[k, stance[k], :2]) for k in range(1, 501)]
-    return min(margins[1000:])
+    rows, stance = _straight_plan(Gait("crawl", offsets, duty, ""), QUAD.neutral_feet_body(), 2.0, 0.05, 6, 2.0)
+    return min(_support_margin(rows[k, stance[k + 1], :2]) for k in range(len(rows)))
 
 
 def test_the_crawl_keeps_the_body_over_its_three_feet():
@@ -146,15 +153,10 @@ def _hand_over_margin(gait: Gait, speed: float) -> float:
     """Smallest support margin [m] at the hand-overs of a straight hexabot walk (1 s period) at `speed`: where a
     foot lands as another lifts, over the feet down on both sides of that step (the landing foot not yet loaded,
     the lifting one unloaded), over the second and third cycles."""
-    planner = GaitPlanner(gait, 1.0, 0.03, hx.DEFAULT_LAYOUT.neutral_feet_body(), 0.002)
-    margins = []
-    for _ in range(3):  # 1 s chunks
-        rows = planner.plan(Command(speed), 500)
-        stance = planner.in_stance(planner.time - 0.002 * np.arange(500, -1, -1))
-        for k in range(1, 501):
-            if planner.time > 1.5 and (stance[k] != stance[k - 1]).any():
-                margins.append(_support_margin(rows[k, stance[k] & stance[k - 1], :2]))
-    return min(margins)
+    rows, stance = _straight_plan(gait, hx.DEFAULT_LAYOUT.neutral_feet_body(), 1.0, speed, 3, 1.0)
+    both = stance[1:] & stance[:-1]  # down on both sides of each step
+    changes = np.flatnonzero((stance[1:] != stance[:-1]).any(axis=1))
+    return min(_support_margin(rows[k, both[k], :2]) for k in changes)
 
 
 @pytest.mark.parametrize("name, speed", [("ripple", 0.1), ("wave", 0.05)])
