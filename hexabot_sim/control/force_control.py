@@ -23,7 +23,7 @@ force (a virtual model controller with a force distribution, as legged robots wi
   commanded one (the foot pushes down with f_i); the position command's height follows the measured foot's and
   the velocity command loses its vertical part, so vertically the servos keep only their damping. A leg blends
   into force mode over `blend_in` from its touchdown (planned, sensed by the ground controller, or its touch
-  sensor firing `early_after` after it was last down), and back to position control over `blend_out` after
+  sensor firing after it was off the ground for `early_after`), and back to position control over `blend_out` after
   lift-off; the swing starts from where the foot is (a height offset that returns to the plan over
   `return_time`).
 
@@ -60,8 +60,9 @@ class ForceSettings:
         return_time: In swing the target's height offset returns to the plan with this time constant [s].
         soft: The moments' softness r in the distribution [m^2] (0: exact; see force_kernels.distribute).
         touch_threshold: A swing foot whose touch sensor reads more than this [N] ...
-        early_after: ... this long [s] after it was last down is down (the planned controller; the ground
-            controller's sensed touchdown says so itself).
+        early_after: ... after it was off the ground (neither down nor touching) this long [s] is down (the
+            planned controller; the ground controller's sensed touchdown says so itself). A foot that has not
+            left the ground yet (a slow lift-off still on the pad) is not landing.
         smooth: The weights' ramps are smoothstep 3 x^2 - 2 x^3 instead of linear (force_kernels.ramp).
         from_plan: A foot down before its planned (or, with the ground controller, sensed) touchdown keeps the
             least weight until then; its ramp starts there.

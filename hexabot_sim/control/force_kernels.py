@@ -18,8 +18,9 @@ NPAR = 32
 COS, SIN, HIP_X, HIP_Y, TOUCH_ADR = range(5)
 # Per-leg state `state` (n, NSTATE): force-mode blend s, time down, the target's vertical offset and its rate,
 # the commanded ground force [N], the weight in the distribution, the foot's body-frame position (x, y, z).
-# A foot that touches late in its swing is down before the plan says (EARLY latched until its stance; UP: time
-# since the foot was last down [s]).
+# A foot that touches in its swing after its touch sensor was quiet for EARLY_AFTER is down before the plan says
+# (EARLY latched until its stance; UP: time since the foot was last down or touching [s]: a slow lift-off whose
+# foot stays on the pad for a while is not a landing).
 S, SINCE, DZ, VZ, FORCE, W, X, Y, Z, EARLY, UP, TOUCH = range(12)
 NSTATE = 12
 # The body's state `body` (NBODY,): the errors (height, two slopes) and their integrals, whether the errors have
@@ -160,8 +161,8 @@ def force_pre(par, geo, state, body, qpos, trims, sensordata, row, down, until, 
             xs[m], ys[m], zs[m], zp[m], ws[m] = state[i, X], state[i, Y], hz, z_before, state[i, W]
             idx[m] = i
             m += 1
-        else:
-            state[i, UP] += dt
+        else:  # UP: time since the foot was last down or touching (a foot still on the ground lands nowhere)
+            state[i, UP] = 0.0 if touching else state[i, UP] + dt
             state[i, SINCE] = 0.0
             state[i, S] = max(0.0, state[i, S] - dt / par[S_OUT])
             state[i, W] = 0.0

@@ -120,6 +120,21 @@ def test_force_mode_walks_and_is_a_choice_of_load_sharing():
     assert m["foot_bounces"].value == 0
 
 
+def test_force_mode_lifts_every_foot_of_a_slow_tripod():
+    """At a 3 s period the quintic swing lifts so slowly that a foot stays on the pad for more than the early-touch
+    window after its lift-off; it used to be taken for an early touchdown, so two feet of each tripod pushed on
+    the floor through their swing (940 bounces, worst foot loaded 51 % of its stance, 92 mm slip per stance)."""
+    import hexabot_sim as hs
+
+    r = hs.run("hexabot-walk", load_sharing="force", feet="pad", swing="quintic", duration=12, gait="tripod",
+               period=3, vx=0.1)  # fmt: skip
+    m = r.metrics
+    assert m["foot_bounces"].value == 0
+    assert m["stance_loaded_fraction_min"].value > 0.99
+    assert m["slip_per_stance"].value < 3.0  # [mm]; the pad alone at this period: 1.4
+    assert m["stance_force_ripple"].value < 0.03
+
+
 @pytest.mark.parametrize("touchdown", ["planned", "sensed"])
 def test_force_mode_follows_a_schedules_stand_height(touchdown):
     """The force control kept the stand height it started with: a schedule raising it 0.09 -> 0.12 m walked

@@ -126,6 +126,27 @@ def test_an_early_touch_waits_at_the_least_weight_until_its_planned_touchdown():
             assert during[-1] > 0.5
 
 
+def test_a_foot_still_on_the_ground_after_its_lift_off_is_not_an_early_touch():
+    """A slow lift-off (a 1.5 s swing) leaves the foot on the pad, its sensor firing, for longer than early_after:
+    that is not a landing, so the leg stays in position mode (no force, not down) however long it lasts; once the
+    sensor has been quiet for early_after, a touch is an early touchdown (down, force mode). Before this was so,
+    a period-3 tripod walk with load_sharing=force kept two of its swing feet pushing on the floor."""
+    par, geo = _par(0.05), _geo()
+    state, body = np.zeros((6, fk.NSTATE)), np.zeros(fk.NBODY)
+    qpos = np.zeros(25)
+    qpos[7:] = np.tile([0.0, 0.5, 1.2], 6)
+    touch, out = np.zeros(6), np.zeros(18)
+    quiet = round(0.06 / DT)
+    for k in range(300):
+        down = np.ones(6, dtype=np.bool_)
+        down[0] = k < 10  # leg 0 lifts at step 10 and is not planned down again
+        touch[0] = 1.0 if k < 150 or k >= 150 + quiet + 1 else 0.0  # on the pad 280 ms after lift-off, then clear
+        fk.force_pre(par, geo, state, body, qpos, np.zeros(18), touch, out, down, np.full(6, 1e9), out)
+        if 10 <= k < 150 + quiet + 1:
+            assert state[0, fk.EARLY] == 0.0 and state[0, fk.FORCE] == 0.0, k
+    assert state[0, fk.EARLY] == 1.0 and state[0, fk.FORCE] > 0.0
+
+
 def test_a_swing_targets_the_landing_lift_above_the_plan():
     """In swing the target's height offset goes from where the stance left it to `landing_lift` above the plan as
     h + (dz0 - h) (1 - dt / return_time)^k after k steps, and the feed correction is task_gain dz + its rate."""
