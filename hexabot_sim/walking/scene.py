@@ -8,7 +8,7 @@ import numpy as np
 from hexabot_sim import models
 from hexabot_sim.control.commands import CommandSource
 from hexabot_sim.control.compliance import AdmittanceSettings
-from hexabot_sim.control.force_control import for_overlap
+from hexabot_sim.control.force_control import for_walk
 from hexabot_sim.control.gait import Command, GaitPlanner
 from hexabot_sim.control.resolved_rate import ResolvedRateGains
 from hexabot_sim.control.walk_settings import GroundSettings, WalkSettings
@@ -163,11 +163,12 @@ def make_controller(
         gait, p.period, p.step_height, neutral(p), p.timestep, start_time=SETTLE_TIME, profile=p.swing
     )
     source = commands.source(p, SETTLE_TIME) if source is None else source
+    overlap = (gait.duty - p.gaits()[gait.name].duty) * p.period  # a duty above the gait's own [s]
     settings = WalkSettings(
         p.command(), settle_time=SETTLE_TIME, ramp_time=p.period if source is None else 0.0,
         heading_hold=p.heading_hold == "on", trims=tuple(trims.tolist()),
         admittance=AdmittanceSettings() if p.load_sharing == "admittance" else None,
-        force=for_overlap((gait.duty - p.gaits()[gait.name].duty) * p.period) if p.load_sharing == "force" else None,
+        force=for_walk(p.period, overlap) if p.load_sharing == "force" else None,
     )  # fmt: skip
     gains = ResolvedRateGains(p.task_gain, 0.01, 0.01, p.max_joint_speed, acceleration_limit(p))
     q0 = model.key("home").qpos[7:].reshape(-1, 3)

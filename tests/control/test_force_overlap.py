@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from hexabot_sim.control import force_kernels as fk
-from hexabot_sim.control.force_control import ForceSettings, for_overlap
+from hexabot_sim.control.force_control import ForceSettings, for_overlap, for_walk
 
 W = 1.78 * 9.81
 DT = 0.002
@@ -204,3 +204,22 @@ def test_a_duty_above_the_gaits_own_selects_the_overlap_settings():
         model, data = at_home(build_xml(p))
         settings = make_controller(p, model, data).force.settings
         assert dataclasses.astuple(settings) == pytest.approx(dataclasses.astuple(for_overlap(overlap)), rel=1e-12)
+
+
+def test_the_height_error_is_drawn_over_a_share_of_the_period():
+    """for_walk: the overlap's settings with the height filter at 5 % of the period, 50 ms (the settings' default)
+    at the default 1 s; the walk's scene passes its period (3 s: 0.15 s), with or without an overlap."""
+    assert for_walk(1.0, 0.0) == ForceSettings()
+    assert for_walk(3.0, 0.0) == dataclasses.replace(ForceSettings(), filter_time=0.05 * 3.0)
+    assert for_walk(3.0, 0.3) == dataclasses.replace(for_overlap(0.3), filter_time=0.05 * 3.0)
+    from hexabot_sim.result import at_home
+    from hexabot_sim.robots.hexabot.walk import HexabotParams
+    from hexabot_sim.walking.scene import build_xml, make_controller
+
+    for period, duty in ((3.0, 0.0), (2.0, 0.6)):
+        p = HexabotParams(load_sharing="force", feet="pad", swing="quintic", gait="tripod", duty=duty, period=period,
+                          vx=0.05)  # fmt: skip
+        model, data = at_home(build_xml(p))
+        settings = make_controller(p, model, data).force.settings
+        assert settings == for_walk(period, (max(duty, 0.5) - 0.5) * period)
+        assert abs(settings.filter_time - 0.05 * period) < 1e-12
