@@ -99,12 +99,14 @@ HEIGHT_FILTER_SHARE = 0.05  # the height error's filter time over the gait perio
 
 def for_walk(period: float, overlap: float) -> ForceSettings:
     """The settings of a walk with gait period `period` [s] whose hand-overs overlap by `overlap` [s]
-    (`for_overlap`): the height error is drawn to the stance plane over 5 % of the period (50 ms at the default
-    1 s). On uneven ground the plane steps by a millimetre or more when a tripod hands over, and the body then
+    (`for_overlap`): the height error is drawn to the stance plane over 5 % of the period, at least 50 ms (the
+    default; below it a landing foot's pad compressing reads as the body rising, and the sag grows). On uneven
+    ground the plane steps by a millimetre or more when a tripod hands over, and the body then
     moves to its new height within a few filter times; over a fixed 50 ms that move is as sudden at a 3 s period
     as at 1 s (the 3 s tripod's force ripple on 1 cm rough ground 2.6-3.1 %, half of it in the 50-200 ms after a
     touchdown), over 5 % of the cycle it is as gentle a share of the stance (2.4-2.7 %)."""
-    return dataclasses.replace(for_overlap(overlap), filter_time=HEIGHT_FILTER_SHARE * period)
+    settings = for_overlap(overlap)
+    return dataclasses.replace(settings, filter_time=max(settings.filter_time, HEIGHT_FILTER_SHARE * period))
 
 
 def for_overlap(overlap: float) -> ForceSettings:

@@ -207,9 +207,10 @@ def test_a_duty_above_the_gaits_own_selects_the_overlap_settings():
 
 
 def test_the_height_error_is_drawn_over_a_share_of_the_period():
-    """for_walk: the overlap's settings with the height filter at 5 % of the period, 50 ms (the settings' default)
-    at the default 1 s; the walk's scene passes its period (3 s: 0.15 s), with or without an overlap."""
-    assert for_walk(1.0, 0.0) == ForceSettings()
+    """for_walk: the overlap's settings with the height filter at 5 % of the period, at least 50 ms (the settings'
+    default, also at the default 1 s and the quadbot trot's 0.3 s); the walk's scene passes its period (3 s:
+    0.15 s), with or without an overlap."""
+    assert for_walk(1.0, 0.0) == ForceSettings() and for_walk(0.3, 0.0) == ForceSettings()
     assert for_walk(3.0, 0.0) == dataclasses.replace(ForceSettings(), filter_time=0.05 * 3.0)
     assert for_walk(3.0, 0.3) == dataclasses.replace(for_overlap(0.3), filter_time=0.05 * 3.0)
     from hexabot_sim.result import at_home
