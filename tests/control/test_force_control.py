@@ -120,19 +120,36 @@ def test_force_mode_walks_and_is_a_choice_of_load_sharing():
     assert m["foot_bounces"].value == 0
 
 
-def test_force_mode_lifts_every_foot_of_a_slow_tripod():
-    """At a 3 s period the quintic swing lifts so slowly that a foot stays on the pad for more than the early-touch
-    window after its lift-off; it used to be taken for an early touchdown, so two feet of each tripod pushed on
-    the floor through their swing (940 bounces, worst foot loaded 51 % of its stance, 92 mm slip per stance)."""
+SLOW = dict(load_sharing="force", feet="pad", swing="quintic", period=3, duration=14)  # issue 19's targets met
+
+
+@pytest.mark.parametrize(
+    "scenario, gait, seed, extra",
+    [
+        ("hexabot-walk", "tripod", 0, {}),
+        ("hexabot-walk", "ripple", 0, {}),
+        ("hexabot-walk", "wave", 0, {}),
+        ("hexabot-rough", "tripod", 0, {"terrain_map": "on"}),
+        ("hexabot-rough", "wave", 1, {"terrain_map": "on"}),
+    ],
+)
+def test_a_slow_force_controlled_walk_meets_the_foot_force_targets(scenario, gait, seed, extra):
+    """Issue 19's targets (no foot bounce, force ripple <= 3 % of W/6, touchdown impact <= 1.6, every stance foot
+    loaded >= 95 % of its stance) at its speeds with the force control, the pad, the quintic swing and a 3 s
+    period, flat and 1 cm rough ground (with the terrain map; the two worst of the 15 rough walks, measured by
+    scripts/force_targets.py: tripod seed 0 2.7 %, wave seed 1 2.9 %). Two defects were found this way: the
+    tripod's feet still on the pad 60 ms after a slow lift-off were taken for early touchdowns and pushed on the
+    floor through their swing (940 bounces, worst foot loaded 51 %), and a new tripod's plane on rough ground was
+    reached over 50 ms at any period (tripod seed 0 3.13 %)."""
     import hexabot_sim as hs
 
-    r = hs.run("hexabot-walk", load_sharing="force", feet="pad", swing="quintic", duration=12, gait="tripod",
-               period=3, vx=0.1)  # fmt: skip
-    m = r.metrics
+    speed = 0.05 if gait == "wave" else 0.1
+    m = hs.run(scenario, gait=gait, vx=speed, seed=seed, **SLOW, **extra).metrics
+    assert not m["fell"].value
     assert m["foot_bounces"].value == 0
-    assert m["stance_loaded_fraction_min"].value > 0.99
-    assert m["slip_per_stance"].value < 3.0  # [mm]; the pad alone at this period: 1.4
-    assert m["stance_force_ripple"].value < 0.03
+    assert m["stance_force_ripple"].value <= 0.03
+    assert m["touchdown_impact_ratio"].value <= 1.6
+    assert m["stance_loaded_fraction_min"].value >= 0.95
 
 
 @pytest.mark.parametrize("touchdown", ["planned", "sensed"])

@@ -206,13 +206,18 @@ def test_a_duty_above_the_gaits_own_selects_the_overlap_settings():
         assert dataclasses.astuple(settings) == pytest.approx(dataclasses.astuple(for_overlap(overlap)), rel=1e-12)
 
 
-def test_the_height_error_is_drawn_over_a_share_of_the_period():
-    """for_walk: the overlap's settings with the height filter at 5 % of the period, at least 50 ms (the settings'
-    default, also at the default 1 s and the quadbot trot's 0.3 s); the walk's scene passes its period (3 s:
-    0.15 s), with or without an overlap."""
+def test_the_filter_and_ramps_scale_with_the_period():
+    """for_walk: the height filter at 5 % of the period, at least 50 ms, and the weights' ramps at 1 % of it, at
+    least 10 ms (the settings' defaults, also at the default 1 s and the quadbot trot's 0.3 s); an overlap longer
+    than the ramp takes for_overlap's settings (ramps over the whole overlap) with the scaled filter; the walk's
+    scene passes its period and overlap."""
     assert for_walk(1.0, 0.0) == ForceSettings() and for_walk(0.3, 0.0) == ForceSettings()
-    assert for_walk(3.0, 0.0) == dataclasses.replace(ForceSettings(), filter_time=0.05 * 3.0)
-    assert for_walk(3.0, 0.3) == dataclasses.replace(for_overlap(0.3), filter_time=0.05 * 3.0)
+    three = for_walk(3.0, 0.0)
+    assert three == dataclasses.replace(ForceSettings(), filter_time=three.filter_time, ramp_in=0.03, ramp_out=0.03)
+    assert abs(three.filter_time - 0.15) < 1e-12
+    assert for_walk(3.0, 0.02) == three  # an overlap within the ramp: the ramp
+    assert for_walk(3.0, 0.3) == dataclasses.replace(for_overlap(0.3), filter_time=three.filter_time)
+    assert for_walk(1.0, 0.1) == for_overlap(0.1)
     from hexabot_sim.result import at_home
     from hexabot_sim.robots.hexabot.walk import HexabotParams
     from hexabot_sim.walking.scene import build_xml, make_controller
