@@ -1,8 +1,9 @@
 """Regenerates the figures and the video frame shown in README.md and the pages in docs/ (docs/*.png).
 
-Usage: python scripts/make_docs_figures.py [--hexabot | --terrain | --forces | --rough-forces | --commands]
+Usage: python scripts/make_docs_figures.py [--hexabot | --terrain | --forces | --rough-forces | --slow-forces |
+                                           --commands]
        (only the walking hexabot's / the terrain's / the foot forces' (flat and rough) / the rough ground's foot forces'
-       / the changing commands' figures)
+       / the foot forces' at a 3 s period / the changing commands' figures)
 """
 
 from __future__ import annotations
@@ -122,6 +123,7 @@ def force_figures(modes: tuple[str, ...] = tuple(FORCE_MODES), stairs: bool = Tr
             folder = run("hexabot-walk", "--set", f"gait={gait}", "--set", f"vx={vx}", "--set", "duration=8", *sets)
             (DOCS / f"forces_{gait}_{mode}.png").write_bytes((folder / "foot_forces.png").read_bytes())
     rough_force_figures()
+    slow_force_figures()
     if not stairs:
         return
     folder = run("hexabot-stairs", "--video")
@@ -140,7 +142,23 @@ def rough_force_figures() -> None:
             (DOCS / f"forces_rough_{gait}_{name}.png").write_bytes((folder / "foot_forces.png").read_bytes())
 
 
+def slow_force_figures() -> None:
+    """The feet's forces at a 3 s period with the stance force control on the pad (issue 19's targets met): each gait
+    on the flat and on 1 cm rough ground (seed 0, with the terrain map), 20 s walks."""
+    sets = [word for value in (*FORCE_MODES["force"], "period=3", "duration=20") for word in ("--set", value)]
+    for gait, vx in (("tripod", "0.1"), ("ripple", "0.1"), ("wave", "0.05")):
+        for scenario, stem, extra in (
+            ("hexabot-walk", "forces", ()),
+            ("hexabot-rough", "forces_rough", ("--set", "terrain_map=on")),
+        ):
+            folder = run(scenario, "--set", f"gait={gait}", "--set", f"vx={vx}", *sets, *extra)
+            (DOCS / f"{stem}_{gait}_slow.png").write_bytes((folder / "foot_forces.png").read_bytes())
+
+
 if __name__ == "__main__":
+    if "--slow-forces" in sys.argv[1:]:
+        slow_force_figures()
+        sys.exit(0)
     if "--rough-forces" in sys.argv[1:]:
         rough_force_figures()
         sys.exit(0)
