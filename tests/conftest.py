@@ -55,7 +55,7 @@ SLOWEST_MODULES = [
     "tests/cli/test_run_signals.py",  # 18
     "tests/test_sweep_cluster.py",  # 16
     "tests/walking/test_terrain_map.py",  # 16
-    "tests/control/test_force_control.py",  # 16 (five 20 s walks at period=3)
+    "tests/control/test_force_control.py",  # 12 (five walks of 14-20 s at period=3)
     "tests/robots/hexabot/test_schedule_waypoints.py",  # 16
     "tests/envs/test_ars_example.py",  # 16
     "tests/envs/test_command.py",  # 15

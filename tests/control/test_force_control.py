@@ -137,11 +137,11 @@ def test_a_slow_force_controlled_walk_meets_the_foot_force_targets(scenario, gai
     """Issue 19's targets (no foot bounce, force ripple <= 3 % of W/6, touchdown impact <= 1.6, every stance foot
     loaded >= 95 % of its stance) at its speeds with the force control, the pad, the quintic swing and a 3 s
     period, flat (14 s) and 1 cm rough ground (20 s, with the terrain map; of the 15 rough walks of
-    scripts/force_targets.py, 20 s as here, the wave's seed 1 has the most force ripple, 2.8 %, and the tripod's seed 0 2.1 %; the tripod is
-    the gait whose margin is thinnest: 2 and 3 lift-off bounces on seeds 5 and 7). Two defects were found this way: the
-    tripod's feet still on the pad 60 ms after a slow lift-off were taken for early touchdowns and pushed on the
-    floor through their swing (940 bounces, worst foot loaded 51 %), and a new tripod's plane on rough ground was
-    reached over 50 ms at any period (tripod seed 0 3.13 %)."""
+    scripts/force_targets.py, 20 s as here, the wave's seed 1 has the most force ripple, 2.8 %, and the tripod's
+    seed 0 2.1 %; the tripod is the gait whose margin is thinnest: 2 and 3 lift-off bounces on seeds 5 and 7).
+    Two defects were found this way: the tripod's feet still on the pad 60 ms after a slow lift-off were taken for
+    early touchdowns and pushed on the floor through their swing (940 bounces, worst foot loaded 51 %), and a new
+    tripod's plane on rough ground was reached over 50 ms at any period (tripod seed 0 3.13 %)."""
     import hexabot_sim as hs
 
     speed = 0.05 if gait == "wave" else 0.1
