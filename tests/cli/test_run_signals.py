@@ -17,6 +17,21 @@ from hexabot_sim import folders
 FAST = ["--set", "duration=0.05", "--no-plots"]
 
 
+@pytest.fixture(autouse=True)
+def _children_get_default_stop_signals():
+    """The runs started here must see Ctrl-C, SIGTERM and SIGHUP as a terminal would deliver them, however the test
+    run itself was started: a signal this process ignores (SIGHUP under `nohup`, SIGINT in a background job) stays
+    ignored in its children, and the command line rightly keeps going through an ignored signal (tested below).
+    A handler that does nothing is reset to the default in a child (exec), and leaves this process as it was."""
+    before = {}
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        if signal.getsignal(sig) is signal.SIG_IGN:
+            before[sig] = signal.signal(sig, lambda signum, frame: None)
+    yield
+    for sig, handler in before.items():
+        signal.signal(sig, handler)
+
+
 def _start(tmp_path, *argv):
     return subprocess.Popen(
         [sys.executable, "-m", "hexabot_sim", *argv],
@@ -329,6 +344,20 @@ def test_a_stop_signal_while_loading_ends_in_one_line(tmp_path, sig):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 128 + sig and not out.exists(), (proc.returncode, err)
     assert err.decode().strip() == f"hexabot-sim: stopped by {sig.name}; nothing written", err
+
+
+def test_a_run_started_with_sighup_ignored_keeps_going_through_it(tmp_path):
+    """Under `nohup` (SIGHUP ignored) a hangup does not stop a run: it publishes its folder and exits 0."""
+    before = signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    try:
+        proc = _start(tmp_path, "run", "pendulum", "--set", "duration=60", "--no-plots", "--out", "out")  # ~2 s
+    finally:
+        signal.signal(signal.SIGHUP, before)
+    _wait_for_staging(tmp_path, proc)
+    proc.send_signal(signal.SIGHUP)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    assert (tmp_path / "out" / "run.json").is_file() and staging_left(tmp_path) == []
 
 
 def test_staging_left_by_a_killed_run_is_ignored_and_cleaned(tmp_path, capsys):
