@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 from hexabot_sim import folders, registry, unused
 from hexabot_sim import params as params_mod
 from hexabot_sim import video as video_options
-from hexabot_sim.errors import HexabotError, OutputError, UsageError
+from hexabot_sim.errors import HexabotError, OutputError, UsageError, printable
 from hexabot_sim.exporting import export
 from hexabot_sim.scenario import Scenario
 
@@ -342,7 +342,7 @@ class Result:
 
     def write_folder(
         self,
-        path: Path,
+        path: str | os.PathLike[str],
         *,
         plots: bool = True,
         video: video_options.VideoSettings | None = None,
@@ -351,9 +351,23 @@ class Result:
         video_progress: Callable[[int, int], None] | None = None,
     ) -> output.Written:
         """Writes the run's files into `path`, an empty folder made for them (`save` and the command line give
-        it their staging folder, which they publish); `backend` is the working OpenGL backend for `video`."""
+        it their staging folder, which they publish); `backend` is the working OpenGL backend for `video`.
+
+        Raises:
+            hexabot_sim.errors.UsageError: `path` is not an existing empty folder (its files would be written over;
+                `save` makes, fills and publishes a run folder).
+        """
         from hexabot_sim import output
 
+        _check_path("path", path, optional=False)
+        path = Path(path)
+        try:
+            empty = path.is_dir() and not any(path.iterdir())
+        except OSError:  # unreadable
+            empty = False
+        if not empty:
+            where = printable(str(path))
+            raise UsageError(f"'path' must be an existing empty folder; {where} is not (Result.save writes a new one)")
         return output.write_run(
             path,
             self._scenario,
