@@ -354,20 +354,21 @@ class Result:
         it their staging folder, which they publish); `backend` is the working OpenGL backend for `video`.
 
         Raises:
-            hexabot_sim.errors.UsageError: `path` is not an existing empty folder (its files would be written over;
-                `save` makes, fills and publishes a run folder).
+            hexabot_sim.errors.UsageError: `path` is a file or a folder that holds some (they would be written over;
+                `save` makes, fills and publishes a run folder). A folder that is missing (moved or removed during
+                the run) is the writing's OSError, as the command line reports it.
         """
         from hexabot_sim import output
 
         _check_path("path", path, optional=False)
         path = Path(path)
         try:
-            empty = path.is_dir() and not any(path.iterdir())
+            taken = path.exists() and (not path.is_dir() or any(path.iterdir()))
         except OSError:  # unreadable
-            empty = False
-        if not empty:
+            taken = True
+        if taken:
             where = printable(str(path))
-            raise UsageError(f"'path' must be an existing empty folder; {where} is not (Result.save writes a new one)")
+            raise UsageError(f"'path' must be an empty folder; {where} is not (Result.save writes a new one)")
         return output.write_run(
             path,
             self._scenario,
