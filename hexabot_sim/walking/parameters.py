@@ -467,10 +467,10 @@ def feasibility(p: WalkParams) -> str:
         faster = [name for name, g in sorted(p.gaits().items(), key=lambda item: -item[1].duty) if g.duty < own]
         fixes = [f"a lower 'duty' (the gait's own: {own:.3g})"] * (p.duty > own)
         fixes += ["a gait with less stance"] * bool(faster)
-        slowest = f"no gait has less stance than the {p.gait}: lower the command (or raise 'max_joint_speed')"
+        slowest = f"no gait has less stance than the {p.gait}: lower the command or raise 'max_joint_speed'"
         advice = (
-            f"the {p.gait} gait's swing moves the foot over the ground {duty / (1 - duty):.2g}x as fast as the body at "
-            "any period (a longer one only slows the lift): "
+            f"the {p.gait} gait's swing moves the foot over the ground {duty / (1 - duty):.2g}x as fast as the body "
+            "whatever the period: "
             + (f"{' or '.join(fixes)} is faster" if fixes else slowest)
             + (f" ({', '.join(faster)})" if faster else "")
         )
