@@ -60,6 +60,7 @@ SHORT: dict[str, list[str]] = {
     "hexabot-walk": ["duration=2"],
     "hexabot-turn": ["duration=2"],
     "hexabot-crab": ["duration=2"],
+    "hexabot-force": ["duration=3.6"],  # the shortest its 3 s period allows
     "hexabot-slope": ["duration=2"],
     "hexabot-rough": ["duration=2"],
     "hexabot-kerb": ["duration=6"],

@@ -31,6 +31,24 @@ SCENARIOS = (
         params_module="hexabot_sim.robots.hexabot.parameters",
     ),
     Scenario(
+        "hexabot-force",
+        "the hexabot's feet share the load (issue 19): force-controlled stance legs, padded feet, quintic swings, a "
+        "3 s cycle, swings landing on a terrain map (sensed touchdown); --set roughness=0.01 for rough ground",
+        "hexabot_sim.robots.hexabot.walk",
+        "HexabotParams",
+        defaults={
+            "load_sharing": "force",
+            "feet": "pad",
+            "swing": "quintic",
+            "period": 3.0,
+            "touchdown": "sensed",
+            "terrain_map": "on",
+            "duration": 20.0,
+        },
+        smoke={"duration": 3.6},
+        params_module="hexabot_sim.robots.hexabot.parameters",
+    ),
+    Scenario(
         "hexabot-slope",
         "the hexabot walks up a 10 deg slope at 0.1 m/s, its body kept level from the IMU (sensed touchdown)",
         "hexabot_sim.robots.hexabot.walk",
