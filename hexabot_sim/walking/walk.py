@@ -11,7 +11,7 @@ import mujoco
 import numpy as np
 
 from hexabot_sim.budget import step_count
-from hexabot_sim.control.commands import Steering
+from hexabot_sim.control.commands import Steering, steering_acceleration
 from hexabot_sim.kinematics import legged
 from hexabot_sim.result import Live, Metric, Progress, ScenarioResult, at_home
 from hexabot_sim.simulate import simulate
@@ -165,7 +165,8 @@ def live(p: WalkParams) -> Live:
     model, data = at_home(build_xml(p))
     keys = None
     if not (p.schedule or p.waypoints):
-        steering = Steering(p.command(), p.gait, p.step_height, p.stand_height, start=SETTLE_TIME)
+        steering = Steering(p.command(), p.gait, p.step_height, p.stand_height, start=SETTLE_TIME,
+                            acceleration=steering_acceleration(p.period))  # fmt: skip
         keys = KeySteering(p, steering, feasibility)
     # The same controller a run uses (terrain, levelling), its command from the keys.
     controller = make_controller(p, model, data, source=None if keys is None else keys.steering)
