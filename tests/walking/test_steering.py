@@ -15,9 +15,8 @@ def test_the_steering_rate_falls_with_the_square_of_a_long_period():
     assert steering_acceleration(0.5) == steering_acceleration(1.0) == STEERING_ACCELERATION
     assert steering_acceleration(3.0) == pytest.approx(STEERING_ACCELERATION / 9, rel=1e-12)
     live = walk.live(api.prepare("hexabot-force", {}).params)
-    assert live.keys is not None
-    source = next(c.cell_contents for c in live.step.__closure__ if hasattr(c.cell_contents, "source")).source
-    assert source.acceleration == steering_acceleration(3.0)
+    keys = live.keys.__self__  # the viewer's key handler: steering.KeySteering
+    assert isinstance(keys, steering.KeySteering) and keys.steering.acceleration == steering_acceleration(3.0)
 
 
 def test_keys_that_reverse_a_3_s_walk_neither_throw_nor_sink_its_body():
