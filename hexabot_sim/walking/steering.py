@@ -49,6 +49,9 @@ class KeySteering:
         self.p, self.steering, self.check = p, steering, check
         self.gait_keys = dict(zip((KEY_KP_1, KEY_KP_2, KEY_KP_3), p.gaits(), strict=False))
         self.note = ""  # why the last key was refused
+        # The duty the controller walks: the walk's own `duty` (0: the gait's) until a key changes the gait, the new
+        # gait's own after (the controller switches to the gait as the robot's gaits define it).
+        self.duty = p.duty
 
     def key(self, code: int, shift: bool) -> bool:
         """Applies a key press; False if it is not a steering key (the viewer's own then)."""
@@ -70,7 +73,7 @@ class KeySteering:
         elif code in self.gait_keys:
             gait = self.gait_keys[code]
             now = s.now  # the gait changes at once: it must carry the twist in force too
-            problem = self._problem(float(now[0]), float(now[1]), float(now[2]), s.stand_height, gait)
+            problem = self._problem(float(now[0]), float(now[1]), float(now[2]), s.stand_height, gait, self._duty(gait))
             if problem:
                 self.note = f"{gait} refused at the speed in force (slow down first): {problem.split(';')[0]}"
                 return True
@@ -79,10 +82,11 @@ class KeySteering:
         else:
             return False
         vx, vy, w, stand = (round(v, 6) + 0.0 for v in (vx, vy, w, stand))
-        problem = self._problem(vx, vy, w, stand, gait)
+        problem = self._problem(vx, vy, w, stand, gait, self._duty(gait))
         if problem:
             self.note = f"refused: {problem.split(';')[0]}"
             return True
+        self.duty = self._duty(gait)
         s.target, s.gait, s.stand_height = Command(vx, vy, w), gait, stand
         self.note = ""
         return True
@@ -93,9 +97,13 @@ class KeySteering:
         digits = " ".join(str(k - KEY_KP_0) for k in self.gait_keys)
         return (*HELP, (f"keypad {digits} 0", f"{' / '.join(self.gait_keys.values())}, stop"))
 
-    def _problem(self, vx: float, vy: float, w: float, stand: float, gait: str) -> str:
+    def _duty(self, gait: str) -> float:
+        """The duty the controller will walk `gait` at: the one in force, or a new gait's own (0)."""
+        return self.duty if gait == self.steering.gait else 0.0
+
+    def _problem(self, vx: float, vy: float, w: float, stand: float, gait: str, duty: float) -> str:
         try:
-            q = dataclasses.replace(self.p, vx=vx, vy=vy, yaw_rate=w, gait=gait, stand_height=stand, duty=0.0)
+            q = dataclasses.replace(self.p, vx=vx, vy=vy, yaw_rate=w, gait=gait, stand_height=stand, duty=duty)
         except ValueError as e:
             return str(e)
         return self.check(q)

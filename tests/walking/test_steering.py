@@ -8,6 +8,7 @@ import pytest
 
 from hexabot_sim import api
 from hexabot_sim.control.commands import STEERING_ACCELERATION, steering_acceleration
+from hexabot_sim.errors import UsageError
 from hexabot_sim.walking import steering, walk
 
 
@@ -39,3 +40,18 @@ def test_keys_that_reverse_a_3_s_walk_neither_throw_nor_sink_its_body():
     assert airborne == 0
     assert z.max() - z.min() < 0.002, (z.min(), z.max())  # 0.4 mm measured
     assert data.qvel[0] < -0.05  # walking backward by the end
+
+
+def test_the_keys_are_checked_at_the_duty_the_walk_walks():
+    """The keys were checked at the gait's own duty: with `duty=0.8` the tripod took Up to 0.13 m/s, which a run at
+    that duty refuses (the largest 0.0958), and the live walk was thrown 69 mm up (found by fuzzing). After a key
+    changes the gait, the controller walks the new gait's own duty, and the keys are checked at it."""
+    p = api.prepare("hexabot-force", {"duty": 0.8, "vx": 0.05}).params
+    live = walk.live(p)
+    keys = live.keys.__self__
+    for _ in range(6):
+        assert live.keys(steering.KEY_UP, False)
+    assert keys.steering.target.vx == pytest.approx(0.09) and keys.note.startswith("refused: the legs cannot")
+    with pytest.raises(UsageError, match="the legs cannot deliver"):
+        api.prepare("hexabot-force", {"duty": 0.8, "vx": 0.11})
+    assert live.keys(steering.KEY_KP_2, False) and keys.steering.gait == "ripple" and keys.duty == 0.0
