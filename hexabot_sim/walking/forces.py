@@ -115,7 +115,9 @@ def force_metrics(
     shares = load_shares(force, loaded, planned)
     bearing = (loaded & planned).sum(axis=0)
     stance_rows = planned.sum(axis=0)
-    fraction = bearing / np.maximum(stance_rows, 1)
+    # NaN (None in the metrics) for a foot the plan never has down in these rows (a short walk's window at a long
+    # period): it read 0, as if the foot had never carried load.
+    fraction = np.where(stance_rows > 0, bearing / np.maximum(stance_rows, 1), np.nan)
     all_impacts = np.concatenate(impacts)
     loaded_any = loaded.any(axis=0)
     # The walk's ripple: the RMS over every foot's loaded rows, each foot weighted by its loaded time.
@@ -147,12 +149,14 @@ def force_metrics(
             "(1: an equal share)",
         ),
         "stance_loaded_fraction": Metric(
-            float(bearing.sum() / max(stance_rows.sum(), 1)),
+            float(bearing.sum() / stance_rows.sum()) if stance_rows.sum() else None,
             "1",
             "share of the planned stance time in which the feet carry load, all feet",
         ),
         "stance_loaded_fraction_min": Metric(
-            float(fraction.min()), "1", "stance_loaded_fraction of the foot that carries load least often"
+            float(np.nanmin(fraction)) if np.isfinite(fraction).any() else None,
+            "1",
+            "stance_loaded_fraction of the foot that carries load least often",
         ),
     }
     for i, leg in enumerate(legs):
@@ -165,6 +169,8 @@ def force_metrics(
             f"load_share_{leg}": Metric(
                 float(shares[i]) if np.isfinite(shares[i]) else None, "1", f"mean load share of foot {leg}"
             ),
-            f"stance_loaded_fraction_{leg}": Metric(float(fraction[i]), "1", f"stance_loaded_fraction of foot {leg}"),
+            f"stance_loaded_fraction_{leg}": Metric(
+                float(fraction[i]) if np.isfinite(fraction[i]) else None, "1", f"stance_loaded_fraction of foot {leg}"
+            ),
         }
     return out

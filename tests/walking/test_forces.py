@@ -64,6 +64,18 @@ def test_load_shares_relative_to_an_equal_share_while_every_planned_foot_is_down
     assert math.isnan(shares[3])  # never in planned stance
 
 
+def test_a_foot_the_plan_never_has_down_has_no_loaded_fraction():
+    """A short walk at a long period can measure rows in which the plan has a foot only in swing: its loaded fraction
+    read 0 (stance_loaded_fraction_min 0 with every stance foot loaded; found by fuzzing, period 10 s)."""
+    force = np.stack([_trace([(0.5, 4)]), _trace([(0.5, 0)])], axis=1)
+    planned = np.stack([np.ones(len(force), bool), np.zeros(len(force), bool)], axis=1)
+    m = forces.force_metrics(force, force > 1, planned, DT, weight=8.0, legs=("a", "b"))
+    assert m["stance_loaded_fraction_a"].value == 1.0 and m["stance_loaded_fraction_b"].value is None
+    assert m["stance_loaded_fraction_min"].value == 1.0 and m["stance_loaded_fraction"].value == 1.0
+    none = forces.force_metrics(force, force > 1, np.zeros_like(planned), DT, weight=8.0, legs=("a", "b"))
+    assert none["stance_loaded_fraction"].value is None and none["stance_loaded_fraction_min"].value is None
+
+
 def test_force_metrics_per_walk_and_per_foot():
     legs = ("a", "b")
     f0 = _trace([(0.1, 0), (0.3, 4), (0.03, 0), (0.3, 4), (0.1, 0)])
