@@ -17,11 +17,11 @@ from hexabot_sim.robots.hexabot.walk import HexabotParams
         ({"vx": 0.6}, "workspace or joint ranges; the largest feasible in this direction is vx = 0.399 m/s; a shorter"),
         ({"gait": "wave", "vx": 0.25}, "the largest feasible in this direction is vx = "),
         # The swing's speed limit does not depend on the period: the advice is another gait, not a shorter period.
-        ({"gait": "ripple", "vx": 0.25}, "swing moves the foot over the ground 2x as fast as the body whatever the period"),
+        ({"gait": "ripple", "vx": 0.25}, "swing moves the foot over the ground 2x as fast as the body whatever the"),
         # A duty of one's own is named as the fix (a tripod at duty 0.8 was told only of gaits with less stance).
         ({"vx": 0.2, "duty": 0.8}, "whatever the period: a lower 'duty' (the gait's own: 0.5)"),
         # The tripod has no gait with less stance (it was told to take one).
-        ({"vx": 0.1, "step_height": 0.1}, "period: no gait has less stance than the tripod: lower the command or raise"),
+        ({"vx": 0.1, "step_height": 0.1}, "period: no gait has less stance than the tripod: lower the command or"),
         # A duty equal to the gait's own is not told to be lowered (the range starts there).
         (
             {"gait": "wave", "duty": 5 / 6, "period": 0.5, "vx": 0},
