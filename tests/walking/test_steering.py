@@ -1,5 +1,5 @@
-"""The viewer's live steering (walking/steering.py, control/commands.Steering) at a long gait period: the keys' twist
-changes slowly enough that the stance feet stay in their workspace."""
+"""The viewer's live steering (walking/steering.py, control/commands.Steering): at a long gait period the keys' twist
+changes slowly enough that the stance feet stay in their workspace, and each key is checked at the walk's duty."""
 
 from __future__ import annotations
 
