@@ -457,7 +457,9 @@ def feasibility(p: WalkParams) -> str:
     named = (("vx", best.vx, "m/s"), ("vy", best.vy, "m/s"), ("yaw_rate", best.yaw_rate, "rad/s"))
     parts = [f"{name} = {allowed(value, 'zero')} {unit}" for name, value, unit in named if value]
     duty = p.the_gait().duty
-    stride = math.hypot(p.vx, p.vy) * duty * p.period
+    # The longest stride: the foot whose ground velocity (the body's, plus the turn's at its neutral point) is fastest.
+    feet = neutral(p)
+    stride = float(np.max(np.hypot(p.vx - p.yaw_rate * feet[:, 1], p.vy + p.yaw_rate * feet[:, 0]))) * duty * p.period
     if problem.startswith("joints would turn"):
         # The swing covers the stance's stride in (1 - duty) / duty of its time, whatever the period.
         # A duty of one's own: lowering it is the first fix (a tripod at duty 0.8 was told of other gaits only); the
@@ -475,7 +477,7 @@ def feasibility(p: WalkParams) -> str:
             + (f" ({', '.join(faster)})" if faster else "")
         )
     else:
-        advice = "a shorter 'period' shortens the stride"
+        advice = "a shorter 'period' shortens the stride" + (" (the turn's arc)" if p.yaw_rate else "")
     return (
         f"the legs cannot deliver this command at period {p.period:g} s (stride {stride:.3g} m): {problem}; "
         f"the largest feasible in this direction is {', '.join(parts) or 'standing still'}; {advice}"

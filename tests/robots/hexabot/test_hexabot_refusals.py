@@ -29,6 +29,9 @@ from hexabot_sim.robots.hexabot.walk import HexabotParams
             "max_joint_speed; lengthen 'period' or lower 'step_height'",
         ),
         ({"duty": 0.5, "vx": 0.1, "step_height": 0.1}, "no gait has less stance than the tripod"),
+        # A pure turn's stride is its feet's arc (it printed "stride 0 m").
+        ({"vx": 0, "yaw_rate": 3}, "(stride 0.391 m): foot rr would leave"),
+        ({"vx": 0, "yaw_rate": 3}, "a shorter 'period' shortens the stride (the turn's arc)"),
         ({"vx": 100}, "did you mean 100 mm/s = 0.1 m/s"),
         ({"seed": "abc"}, "must be a number with 0 <= seed <= 4294967295; got 'abc'"),  # not 4.29497e+09
         ({"gait": "wave", "period": 0.5}, "even stepping in place is infeasible"),
