@@ -38,7 +38,8 @@ def check_out(out: str | os.PathLike[str], force: bool = False) -> None:
 
     Raises:
         UsageError: for a symbolic link, '.', '..' or a path ending in them, the working folder or one
-            of its parents, a file, a non-empty folder without `force`, or a parent that cannot be written.
+            of its parents, a file, a non-empty folder without `force`, a read-only (or immutable) folder, or a
+            parent that cannot be written.
     """
     text = os.fspath(out)
     out = Path(out)
@@ -106,6 +107,10 @@ def _check_existing(out: Path, text: str, force: bool) -> None:
         raise UsageError(f"output folder {text!r} cannot be read: {e.strerror or e}") from None
     if nonempty and not force:
         raise UsageError(f"output folder {text!r} is not empty; choose another --out or add --force to replace it")
+    if out.is_dir() and (not out.stat().st_mode & 0o222 or not os.access(out, os.W_OK | os.X_OK)):
+        # A run replaces --out by a rename, which needs no write permission on it (and root needs none at all):
+        # a folder made read-only (or immutable) was replaced by a writable one, or found unwritable after the run.
+        raise UsageError(f"output folder {text!r} is read-only; make it writable or choose another --out")
     ancestor = out.parent
     while not ancestor.exists():
         if ancestor.is_symlink():  # a dangling link in the parents
@@ -113,7 +118,7 @@ def _check_existing(out: Path, text: str, force: bool) -> None:
         ancestor = ancestor.parent
     if not ancestor.is_dir():
         raise UsageError(f"output folder {text!r}: {str(ancestor)!r} is not a folder")
-    if not os.access(ancestor, os.W_OK | os.X_OK):
+    if not ancestor.stat().st_mode & 0o222 or not os.access(ancestor, os.W_OK | os.X_OK):  # (root: the mode bits)
         raise UsageError(f"output folder {text!r} cannot be written: no write permission in {str(ancestor)!r}")
 
 

@@ -2,6 +2,7 @@
 
 import errno
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -147,6 +148,52 @@ def test_unwritable_parent(capsys):
     code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", "/proc/hexabot-sim-test/run")
     assert code == 2
     assert "cannot be written" in one_line_error(err)
+
+
+@pytest.mark.parametrize("force", [False, True])
+def test_a_read_only_out_is_refused_before_the_run_and_kept(tmp_path, capsys, force):
+    """A run replaces --out by a rename, which root may do over a read-only folder: an empty read-only folder
+    became a writable one holding the run (found by fuzzing). Refused up front, the folder and its mode kept."""
+    out = tmp_path / "kept"
+    out.mkdir()
+    if force:
+        (out / "mine.txt").write_text("mine")
+    out.chmod(0o555)
+    try:
+        code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", str(out), *["--force"] * force)
+        assert code == 2 and one_line_error(err).endswith("is read-only; make it writable or choose another --out")
+        assert out.stat().st_mode & 0o777 == 0o555
+        assert [p.name for p in out.iterdir()] == (["mine.txt"] if force else [])
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["kept"]
+    finally:
+        out.chmod(0o755)
+
+
+def test_a_read_only_parent_is_refused_before_the_run(tmp_path, capsys):
+    """Root may create a folder in a read-only one: the mode says not to (a non-root user is refused by the OS)."""
+    parent = tmp_path / "shelf"
+    parent.mkdir()
+    parent.chmod(0o555)
+    try:
+        code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", str(parent / "new" / "run"))
+        assert code == 2 and "cannot be written: no write permission in" in one_line_error(err)
+        assert list(parent.iterdir()) == []
+    finally:
+        parent.chmod(0o755)
+
+
+def test_an_immutable_out_is_refused_before_the_run(tmp_path, capsys):
+    """An immutable (chattr +i) empty --out was found unwritable only after the run had been computed."""
+    out = tmp_path / "frozen"
+    out.mkdir()
+    if shutil.which("chattr") is None or subprocess.run(["chattr", "+i", str(out)], capture_output=True).returncode:
+        pytest.skip("chattr +i is not available here (needs root and a file system with the flag)")
+    try:
+        code, _, err = cli(capsys, "run", "pendulum", *FAST, "--out", str(out))
+        assert code == 2 and "is read-only" in one_line_error(err)
+    finally:
+        subprocess.run(["chattr", "-i", str(out)], check=True)
+    assert list(out.iterdir()) == []
 
 
 def test_full_disk_leaves_nothing_and_removes_created_parents(tmp_path, monkeypatch, capsys):
