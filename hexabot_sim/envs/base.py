@@ -12,7 +12,15 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
-from hexabot_sim.envs.scene import EPISODE_SECONDS, PLATE_SITE, EnvScene, Randomization, check_range, walk_reach
+from hexabot_sim.envs.scene import (
+    EPISODE_SECONDS,
+    PLATE_SITE,
+    EnvScene,
+    Randomization,
+    check_range,
+    real_number,
+    walk_reach,
+)
 from hexabot_sim.kinematics import legged
 from hexabot_sim.walking.constants import FALL_TILT_DEG
 from hexabot_sim.walking.parameters import WalkParams
@@ -88,8 +96,7 @@ class Reward:
             # A sigma below SIGMA_MIN squares to 0 (a ZeroDivisionError at the first step); a weight above WEIGHT_MAX
             # times a power or a speed overflows the reward to -inf.
             low, high = (SIGMA_MIN, WEIGHT_MAX) if field.name.endswith("sigma") else (0.0, WEIGHT_MAX)
-            number = not isinstance(value, bool) and isinstance(value, int | float | np.floating | np.integer)
-            if not (number and math.isfinite(value) and low <= value <= high):
+            if not (real_number(value) and math.isfinite(value) and low <= value <= high):
                 raise ValueError(f"reward {field.name} must be a number from {low:g} to {high:g}; got {value!r}")
 
     @classmethod
@@ -219,7 +226,10 @@ class LeggedEnv(gymnasium.Env):
             raise ValueError(f"the model must put the {self.n_joints} leg joints after the free joint")
         self._cos_fall = math.cos(math.radians(FALL_TILT_DEG))
         self._site_type = int(mujoco.mjtObj.mjOBJ_SITE)  # an int: pybind converts it ~2 us faster than the enum
-        self._bad_qacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
+        # MuJoCo's divergence warnings: a bad acceleration, or a bad position or velocity (after which it resets the
+        # data to qpos0 and time 0 and steps on: a teleported robot, not a NaN).
+        self._bad = tuple(int(w) for w in (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQPOS,
+                                           mujoco.mjtWarning.mjWARN_BADQVEL))  # fmt: skip
 
     # ------------------------------------------------------------------------------------------- episode
 
@@ -235,10 +245,15 @@ class LeggedEnv(gymnasium.Env):
                 self._frames = None
             if self._window is not None:
                 self._window.update_hfield(self.scene.hfield[0])
-        self._warning = self.data.warning[self._bad_qacc]  # a live view of MuJoCo's counter
-        self._warnings = int(self._warning.number)
+        self._warning = tuple(self.data.warning[i] for i in self._bad)  # live views of MuJoCo's counters
+        self._warnings = self._warned()
         self._command = tuple(self.command.tolist())
         self._obs[self.obs_slices["command"]] = self.command
+
+    def _warned(self) -> int:
+        """MuJoCo's divergence warnings so far."""
+        acc, pos, vel = self._warning
+        return acc.number + pos.number + vel.number
 
     def _views(self) -> None:
         """Views of MjData's arrays (its memory is allocated once) paired with the observation's slices they fill:
@@ -281,8 +296,8 @@ class LeggedEnv(gymnasium.Env):
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
         self._views()
-        if "_warnings" in state:  # reset: the live view of the copied data's counter
-            self._warning = self.data.warning[self._bad_qacc]
+        if "_warnings" in state:  # reset: the live views of the copied data's counters
+            self._warning = tuple(self.data.warning[i] for i in self._bad)
 
     def _observe(self) -> np.ndarray:
         """The observation (a new array; the buffer behind it is reused)."""
@@ -324,7 +339,7 @@ class LeggedEnv(gymnasium.Env):
         slip = float(slip)
         reward = track_v + track_w - rw.energy * power - rw.attitude * tilt2 - rw.slip * slip
         fell = -gz < self._cos_fall or d.sensordata[self._plate] > 0.0
-        diverged = self._warning.number != self._warnings or not math.isfinite(d.qpos[2])
+        diverged = self._warned() != self._warnings or not math.isfinite(d.qpos[2])
         info = {
             "x": float(d.qpos[0]), "y": float(d.qpos[1]), "vx": vx, "vy": vy, "yaw_rate": yaw_rate,
             "reward_velocity": track_v, "reward_yaw": track_w, "power": power, "tilt_sin2": tilt2, "foot_slip": slip,

@@ -14,7 +14,7 @@ from hexabot_sim.control.commands import Segment
 from hexabot_sim.control.gait import Command
 from hexabot_sim.control.walker import WalkingController
 from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward, unknown_keywords
-from hexabot_sim.envs.scene import MAX_SLOPE_DEG, _number, check_range, check_stairs, robot_params, terrain_keywords
+from hexabot_sim.envs.scene import MAX_SLOPE_DEG, check_range, check_stairs, real_number, robot_params, terrain_keywords
 from hexabot_sim.walking.constants import SETTLE_TIME
 from hexabot_sim.walking.parameters import WalkParams
 from hexabot_sim.walking.scene import acceleration_limit, make_controller
@@ -188,7 +188,7 @@ class LeggedCommandEnv(LeggedEnv):
             base = _on_stairs(robot_params(robot, **overrides), rise, run, count, float(self.ranges[3, 0]))
         else:
             base = robot_params(robot, **overrides)
-        if terrain == "slope" and _number(slope_deg) and 0.0 < slope_deg <= MAX_SLOPE_DEG:
+        if terrain == "slope" and real_number(slope_deg) and 0.0 < slope_deg <= MAX_SLOPE_DEG:
             # The walk's own check of a level body on this slope (it was an IKError from the start pose's IK).
             try:
                 dataclasses.replace(base, slope_deg=float(slope_deg))
@@ -228,7 +228,7 @@ class LeggedCommandEnv(LeggedEnv):
         for _ in range(self._settle_steps):
             controller(m, d)
             mujoco.mj_step(m, d)
-        self._warnings = int(self._warning.number)
+        self._warnings = self._warned()
         if self.render_mode == "human":
             self.render()
         return self._observe(), {"command": self.command.copy()}

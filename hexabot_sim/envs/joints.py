@@ -7,7 +7,7 @@ import numpy as np
 from gymnasium import spaces
 
 from hexabot_sim.envs.base import COMMAND_RANGE, LeggedEnv, Reward, unknown_keywords
-from hexabot_sim.envs.scene import robot_params, terrain_keywords
+from hexabot_sim.envs.scene import real_number, robot_params, terrain_keywords
 
 SETTLE_TIME: float = 0.25  # [s] at a reset the robot stands on its servos' home targets this long (it lands)
 
@@ -80,8 +80,7 @@ class LeggedJointsEnv(LeggedEnv):
     ) -> None:
         unknown_keywords(type(self), kwargs)  # a misspelt keyword: a ValueError naming the known ones, not a TypeError
         slope_deg, roughness, stairs = terrain_keywords(terrain, slope_deg, roughness, stairs)
-        number = isinstance(reset_noise_scale, int | float) and not isinstance(reset_noise_scale, bool)
-        if not (number and 0.0 <= reset_noise_scale <= 0.5):
+        if not (real_number(reset_noise_scale) and 0.0 <= reset_noise_scale <= 0.5):  # numpy's numbers too
             raise ValueError(f"reset_noise_scale must be a number from 0 to 0.5 rad; got {reset_noise_scale!r}")
         p = robot_params(robot)
         super().__init__(
@@ -106,7 +105,7 @@ class LeggedJointsEnv(LeggedEnv):
         mujoco.mj_forward(self.model, d)
         mujoco.mj_step(self.model, d, nstep=self._settle_steps)  # on the home targets: it lands on its feet
         d.time = 0.0
-        self._warnings = int(self._warning.number)
+        self._warnings = self._warned()
         self._started = True
         if self.render_mode == "human":
             self.render()

@@ -39,7 +39,7 @@ MAX_ROUGHNESS: float = 0.03  # [m] rougher patches may rise above the plate's un
 MAX_SLOPE_DEG: float = 30.0  # [deg] steeper slopes exceed the feet's friction (tan 30 deg = 0.58 < 1)
 
 
-def _number(value: object) -> bool:
+def real_number(value: object) -> bool:
     """A real number (not a bool, not a string)."""
     return not isinstance(value, bool) and isinstance(value, int | float | np.integer | np.floating)
 
@@ -141,8 +141,8 @@ def check_stairs(stairs) -> tuple[float, float, int]:
     infos = params.infos(WalkParams)
     for name, value in (("rise", rise), ("run", run), ("count", count)):
         info = infos[f"stairs_{name}"][0]
-        integer = name != "count" or (_number(value) and float(value).is_integer())
-        if not (_number(value) and math.isfinite(value) and info.contains(value) and value > 0 and integer):
+        integer = name != "count" or (real_number(value) and float(value).is_integer())
+        if not (real_number(value) and math.isfinite(value) and info.contains(value) and value > 0 and integer):
             strict = dataclasses.replace(info, gt=0.0, ge=None) if info.ge == 0 else info  # a rise of 0 is no stairs
             allowed = params.describe_range(strict, name) + (", an integer" if name == "count" else "")
             raise ValueError(f"stairs {name} must be {allowed}; got {value!r}")
@@ -156,7 +156,10 @@ def check_range(name: str, value, low: float = 0.0, high: float = math.inf) -> t
     try:
         if isinstance(value, str | bytes):  # "12" would be the pair (1.0, 2.0)
             raise TypeError(value)
-        lo, hi = (float(v) for v in value)
+        lo, hi = value
+        if not (real_number(lo) and real_number(hi)):  # "0.5" and True were read as 0.5 and 1.0
+            raise TypeError(value)
+        lo, hi = float(lo), float(hi)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a pair (low, high) or None; got {value!r}") from None
     if not (low <= lo <= hi <= high) or not (math.isfinite(lo) and math.isfinite(hi)):
@@ -205,9 +208,9 @@ class EnvScene:
         if not isinstance(terrain, str) or terrain not in TERRAINS:
             raise ValueError(f"unknown terrain {terrain!r}; known: {', '.join(TERRAINS)}")
         # The values terrain_keywords gave: the chosen terrain's as given, the others' their defaults; each checked.
-        if not (_number(slope_deg) and 0.0 < slope_deg <= MAX_SLOPE_DEG):
+        if not (real_number(slope_deg) and 0.0 < slope_deg <= MAX_SLOPE_DEG):
             raise ValueError(f"slope_deg must be > 0 and <= {MAX_SLOPE_DEG:g} deg (a number); got {slope_deg!r}")
-        if not (_number(roughness) and 0.0 < roughness <= MAX_ROUGHNESS):
+        if not (real_number(roughness) and 0.0 < roughness <= MAX_ROUGHNESS):
             raise ValueError(f"roughness must be > 0 and <= {MAX_ROUGHNESS:g} m (a number); got {roughness!r}")
         checked = check_stairs(stairs)
         self.stairs = checked if terrain == "stairs" else None

@@ -100,8 +100,12 @@ class LeggedJointsVectorEnv(VectorEnv):
         seeds: list[int | None]
         if isinstance(seed, list | tuple):
             seeds = list(seed)
+        elif seed is None:
+            seeds = [None] * self.num_envs
+        elif isinstance(seed, bool) or not isinstance(seed, int | np.integer):  # "a" + 0 was a TypeError
+            raise ValueError(f"seed must be an integer, a list of one per environment, or None; got {seed!r}")
         else:
-            seeds = [None if seed is None else seed + i for i in range(self.num_envs)]
+            seeds = [int(seed) + i for i in range(self.num_envs)]
         if len(seeds) != self.num_envs:
             raise ValueError(f"reset needs one seed per environment ({self.num_envs}); got {len(seeds)}")
         obs = np.stack([self._reset_one(i, s) for i, s in enumerate(seeds)])

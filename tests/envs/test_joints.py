@@ -2,6 +2,7 @@
 
 import math
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -147,6 +148,9 @@ def test_target_mapping_reaches_the_servo_ranges():
         ({"randomize_friction": "12"}, "randomize_friction must be a pair (low, high) or None; got '12'"),
         ({"reset_noise_scale": False}, "reset_noise_scale must be a number from 0 to 0.5 rad; got False"),
         ({"robot": ["hexabot"]}, "unknown robot ['hexabot']; known: hexabot, quadbot"),  # was: unhashable type
+        # Found by fuzzing: read as the numbers 0.5 and 1.0 (a vy command of 1 m/s).
+        ({"randomize_friction": ("0.5", 1.0)}, "randomize_friction must be a pair (low, high) or None; got ('0.5'"),
+        ({"command_range": ((0, 0.1), (True, True), (0, 0))}, "command_range"),
     ],
 )
 def test_bad_arguments_say_what_is_allowed(kwargs, words):
@@ -170,6 +174,28 @@ def test_bad_actions_say_what_is_allowed(action, words):
     with pytest.raises(ValueError, match=words) as info:
         env.step(action)
     assert "\n" not in str(info.value)
+
+
+def test_numpy_numbers_are_numbers():
+    """reset_noise_scale=np.float32(0.02) was refused as not a number (the other keywords took numpy's numbers)."""
+    env = LeggedJointsEnv(reset_noise_scale=np.float32(0.02), randomize_friction=(np.float32(0.5), np.int64(1)))
+    assert env.reset_noise_scale == pytest.approx(0.02)
+    assert env.scene.randomization.friction == (0.5, 1.0)
+
+
+def test_a_reset_by_mujoco_is_a_divergence():
+    """A bad position or velocity makes MuJoCo reset the data to qpos0 and time 0 and step on: the episode went on,
+    the robot teleported, diverged False (only the bad-acceleration warning was counted)."""
+    env = LeggedJointsEnv()
+    env.reset(seed=0)
+    env.data.qvel[:6] = 1e30
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        _, _, terminated, _, info = env.step(np.zeros(18))
+    assert terminated and info["diverged"]
+    env.reset(seed=0)
+    _, _, terminated, _, info = env.step(np.zeros(18))
+    assert not terminated and not info["diverged"]
 
 
 def test_a_negative_zero_reset_noise_resets():

@@ -95,3 +95,13 @@ def test_a_long_episode_is_not_taken_for_a_divergence():
     for _ in range(10):
         _, _, terminated, _, info = vec.step(stand)
         assert not info["diverged"].any() and not terminated.any()
+
+
+@pytest.mark.parametrize("seed", ["a", 1.5, True])
+def test_a_seed_that_is_not_an_integer_says_so(seed):
+    """reset(seed="a") was a TypeError from "a" + 0."""
+    vec = LeggedJointsVectorEnv(num_envs=2, threads=1)
+    with pytest.raises(ValueError, match=r"seed must be an integer, a list of one per environment, or None; got "):
+        vec.reset(seed=seed)
+    obs, _ = vec.reset(seed=np.int64(3))
+    assert np.array_equal(obs[1], LeggedJointsEnv().reset(seed=4)[0])
