@@ -326,7 +326,8 @@ class Result:
         _check_callable("progress", progress)
         from hexabot_sim import gl
 
-        settings = video_options.settings(quality, size, fps) if video else None
+        settings = video_options.settings(quality, size, fps)  # checked with or without a video, as the CLI does
+        settings = settings if video else None
         backend, reason = None, video_options.NOT_REQUESTED
         if video:
             backend, reason = gl.video_backend()

@@ -54,6 +54,8 @@ class InstallError(HexabotError):
 
 def lookup(table: dict, name: str, what: str):
     """table[name], or a UsageError "unknown <what> '<name>'; known: ..." listing the allowed names."""
+    if not isinstance(name, str):  # a list was a TypeError (unhashable); a Path "unknown 'pendulum'; known: pendulum"
+        raise UsageError(f"{what} must be a name (a string); got {type(name).__name__} {name!r}")
     try:
         return table[name]
     except KeyError:

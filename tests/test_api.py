@@ -228,6 +228,14 @@ def test_wrong_save_and_video_arguments_are_usage_errors(tmp_path, leg):
         leg.save(tmp_path / "run", progress="yes")
     with pytest.raises(UsageError, match="'path' must be a path"):
         leg.video(b"video.mp4")
+    # Found by fuzzing: without video=True the video options went unchecked (the CLI refuses them either way).
+    for bad in ({"quality": "ultra"}, {"size": (1, 1)}, {"fps": -5}):
+        with pytest.raises(UsageError, match="video"):
+            leg.save(tmp_path / "run", **bad)
+    # ... and a scenario that is not a name was a TypeError (a list) or "unknown scenario 'pendulum'" (a Path).
+    for name in (["pendulum"], Path("pendulum")):
+        with pytest.raises(UsageError, match="scenario must be a name \\(a string\\); got "):
+            hs.run(name)
     assert list(tmp_path.iterdir()) == []
 
 
