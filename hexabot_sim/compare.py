@@ -26,6 +26,7 @@ CSV_NAME = "compare.csv"
 JSON_NAME = "compare.json"
 RUN_JSON = "run.json"
 PANELS_PER_FIGURE: int = 6  # shared columns per overlay figure (overlay.png, overlay_2.png, ...)
+LEGEND_RUNS: int = 20  # runs named in an overlay's legend; more are drawn without one
 MAX_POINTS: int = 20_000  # points drawn per line; longer columns are thinned evenly (the CSV keeps them all)
 CHUNK_ROWS: int = 1 << 18  # CSV rows parsed at a time (memory stays bounded whatever the CSV's size)
 ANNOUNCE_BYTES: int = 200 << 20  # a CSV this large (~8 s to read) is read with a line at every quarter
@@ -113,6 +114,10 @@ def load_all(folders: Sequence[str]) -> list[Run]:
     for k, run in enumerate(runs):
         if labels.count(run.label) > 1:
             run.label = f"{run.label}#{k + 1}"
+    labels = [r.label for r in runs]
+    for k, run in enumerate(runs):  # a folder named like a made label (run, run and run#2: two "run#2" columns)
+        while labels.count(run.label) > 1:
+            run.label = labels[k] = f"{run.label}#{k + 1}"
     return runs
 
 
@@ -287,7 +292,7 @@ def _read(run: Run, announce: Callable[[str], None] | None = None) -> tuple[list
                     try:
                         data = np.loadtxt(io.StringIO(text), delimiter=",", ndmin=2)  # (n, len(header))
                     except ValueError as e:  # numpy counts rows from the chunk's start
-                        why = _shift_rows(str(e), done)
+                        why = _shift_rows(str(e).split("; use `usecols`")[0], done)  # (numpy's advice, not ours)
                         raise UsageError(
                             f"{shown}: {run.csv.name} is not a numeric table ({' '.join(why.split())[:120]})"
                         ) from None
@@ -358,10 +363,12 @@ def figures(runs: Sequence[Run], announce: Callable[[str], None] | None = None) 
             unit = units.get(name, "")
             ax.set_ylabel(f"{name}\n[{unit}]" if unit and unit != "1" else name, fontsize=8)
             ax.grid(alpha=0.3)
-        plots.legend_above(axes[0, 0], ncol=min(4, len(runs)))
+        if len(runs) <= LEGEND_RUNS:  # more entries squeezed the panels to nothing (a layout warning at 300 runs)
+            plots.legend_above(axes[0, 0], ncol=min(4, len(runs)))
         x_unit = units.get(x_name, "")
         axes[-1, 0].set_xlabel(f"{x_name} [{x_unit}]" if x_unit and x_unit != "1" else x_name)
         scenarios = sorted({r.scenario for r in runs})
-        fig.suptitle(f"compare: {', '.join(scenarios)} ({len(runs)} runs)", fontsize=plots.TITLE_FONTSIZE)
+        legend = "" if len(runs) <= LEGEND_RUNS else f"; no legend above {LEGEND_RUNS}: colours C0-C9 in turn"
+        fig.suptitle(f"compare: {', '.join(scenarios)} ({len(runs)} runs{legend})", fontsize=plots.TITLE_FONTSIZE)
         out["overlay" if start == 0 else f"overlay_{start // PANELS_PER_FIGURE + 1}"] = fig
     return out

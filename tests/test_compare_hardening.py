@@ -6,6 +6,7 @@ import os
 import shutil
 import subprocess
 import sys
+import warnings
 
 import pytest
 from helpers import cli
@@ -35,6 +36,7 @@ DAMAGE = {
     "huge run.json": lambda f: (f / "run.json").write_text('{"x": "' + "y" * (17 << 20) + '"}'),
     "latin-1 run.json": lambda f: (f / "run.json").write_bytes(b'{"scenario": "\xe9"}'),
     "fifo run.json": lambda f: ((f / "run.json").unlink(), os.mkfifo(f / "run.json")),
+    "truncated csv": lambda f: (f / "timeseries.csv").write_text((f / "timeseries.csv").read_text()[:3000]),
 }
 
 
@@ -46,8 +48,45 @@ def test_a_damaged_run_folder_is_one_line(runs, tmp_path, capsys, kind):
     code, _, err = cli(capsys, "compare", str(broken), str(runs / "b"), "--out", str(tmp_path / "c"))
     assert code == 2, err
     assert len(err.strip().splitlines()) == 1 and "internal error" not in err and "Traceback" not in err
-    assert "broken" in err
+    assert "broken" in err and "usecols" not in err  # numpy's advice named an option compare does not have
     assert not (tmp_path / "c").exists()
+
+
+def test_the_default_compare_folder_is_never_made_inside_an_input(runs, tmp_path, monkeypatch, capsys):
+    """From inside a run folder, `compare . ../b` wrote runs/compare-<stamp> into the input '.'."""
+    inside = tmp_path / "a"
+    shutil.copytree(runs / "a", inside)
+    before = sorted(p.name for p in inside.iterdir())
+    monkeypatch.chdir(inside)
+    code, _, err = cli(capsys, "compare", ".", str(runs / "b"), "--no-plots")
+    assert code == 2 and "lies inside the input '.'" in err and len(err.strip().splitlines()) == 1
+    assert sorted(p.name for p in inside.iterdir()) == before
+
+
+def test_labels_stay_distinct_when_a_folder_is_named_like_a_made_label(runs, tmp_path, capsys):
+    """X/run, Y/run and a folder 'run#2' gave two 'run#2' columns."""
+    for where in ("X/run", "Y/run", "run#2"):
+        shutil.copytree(runs / "a", tmp_path / where)
+    folders = [str(tmp_path / w) for w in ("X/run", "Y/run", "run#2")]
+    code, out, _ = cli(capsys, "compare", *folders, "--no-plots", "--out", str(tmp_path / "c"))
+    assert code == 0
+    header = (tmp_path / "c" / "compare.csv").read_text().splitlines()[0].split(",")
+    labels = header[4:7]
+    assert len(set(labels)) == 3 and labels[2] == "run#2", header
+    assert "not plotted (--no-plots)" in out and "overlaid" not in out  # nothing read, nothing overlaid
+
+
+def test_many_runs_are_overlaid_without_a_legend_and_without_warnings(runs, tmp_path, capsys):
+    """A legend of 60 runs or more squeezed the panels to nothing: matplotlib's layout warning reached stderr."""
+    many = []
+    for k in range(60):
+        shutil.copytree(runs / ("a" if k % 2 else "b"), tmp_path / f"r{k}")
+        many.append(str(tmp_path / f"r{k}"))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        code, _, err = cli(capsys, "compare", *many, "--out", str(tmp_path / "c"))
+    assert code == 0 and err.strip() == "", err
+    assert [str(w.message) for w in caught] == []
 
 
 def test_relative_differences_only_against_a_reference_that_is_not_near_zero():

@@ -212,6 +212,11 @@ def cmd_clean(args: argparse.Namespace) -> int:
                 shutil.rmtree(path, onerror=_gone_is_fine)
         except OSError as e:
             raise OutputError(f"could not remove {folders.display_path(path)!r}: {e.strerror or e}") from None
+        except RecursionError:  # rmtree recurses per level (Python 3.11): a look-alike nested 1,500 deep
+            raise OutputError(
+                f"could not remove {folders.display_path(path)!r}: its folders nest deeper than Python's recursion "
+                "limit; remove it by hand (rm -r)"
+            ) from None
         removed += 1
         done = f"{removed} stale folder{'s' if removed > 1 else ''} removed before it"
         DONE_SO_FAR[:] = [f"{done}, listed above"]

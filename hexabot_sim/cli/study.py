@@ -89,8 +89,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from hexabot_sim import compare, folders, output
 
     runs = compare.load_all(args.runs)  # refuses anything that is not a run folder, before writing
+    # The default runs/compare-<stamp> too: from inside a run folder (cd r2; compare . ../r1) it was written into it.
+    folders.check_not_input(folders.default_out("compare") if args.out is None else args.out, args.runs)
     if args.out is not None:
-        folders.check_not_input(args.out, args.runs)
         folders.check_out(args.out, force=args.force)
     table = compare.rows(runs)
     shared = compare.shared_columns([compare.header(r) for r in runs])
@@ -108,6 +109,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     COMPLETED[:] = [f"the compare folder {folders.display_path(run.final)} is complete"]
     print(compare.text(runs, table), end="")
     overlaid = f"{len(shared) - 1} shared columns overlaid" if len(shared) > 1 else "no shared columns to overlay"
+    if args.no_plots:  # their CSVs were not read: nothing was overlaid
+        overlaid = f"{max(len(shared) - 1, 0)} shared columns, not plotted (--no-plots)"
     print(f"compare: {len(runs)} runs, {overlaid} -> {folders.display_path(run.final)}")
     print(f"  files: {', '.join(files)}")
     return 0

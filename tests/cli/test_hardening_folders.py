@@ -78,6 +78,20 @@ def test_clean_that_cannot_remove_says_which_folder(tmp_path, monkeypatch, capsy
     assert "could not remove" in err and "Permission denied" in err and len(err.strip().splitlines()) == 1
 
 
+def test_clean_of_a_folder_nested_too_deep_is_one_line(tmp_path, monkeypatch, capsys):
+    """A look-alike nested 1,500 deep was an internal error (rmtree's RecursionError on Python 3.11)."""
+    stale = tmp_path / f"{folders.STAGING_PREFIX}{_dead_pid()}-0a1b2c3d{folders.STAGING_SUFFIX}"
+    stale.mkdir()
+
+    def too_deep(path, *args, **kwargs):  # what rmtree raises there, without making 1,500 folders
+        raise RecursionError("maximum recursion depth exceeded")
+
+    monkeypatch.setattr(shutil, "rmtree", too_deep)
+    code, _, err = cli(capsys, "clean", str(tmp_path))
+    assert code == 1 and "internal error" not in err and len(err.strip().splitlines()) == 1
+    assert "could not remove" in err and "remove it by hand" in err and stale.is_dir()
+
+
 @pytest.fixture
 def two_runs(tmp_path, capsys):
     for name in ("a", "b"):
