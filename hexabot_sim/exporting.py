@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import os
 import secrets
 from collections.abc import Mapping
@@ -33,7 +35,8 @@ def export(
     Returns:
         The paths written. Both models are made before anything is written, and both files are written to
         temporary names in their folders, then renamed into place: an error, Ctrl-C or SIGTERM while writing leaves
-        no file half-written and neither file written.
+        no file half-written and neither file written (a first file already in place when the second fails is taken
+        back: removed, or the file it replaced put back).
 
     Raises:
         hexabot_sim.errors.UsageError: a bad robot, file or length; an existing path without force; no path; a
@@ -94,7 +97,8 @@ def export(
     # Both files are written and synced under temporary names first, then renamed into place one right after
     # the other: Ctrl-C or SIGTERM while a file is written leaves neither (and no temporary file).
     staged: dict[Path, Path] = {}
-    written = []
+    written: list[Path] = []
+    undo: list[tuple[Path, Path | None, int]] = []  # (path, a hard link to what it replaces, our file's inode)
     try:
         for path, (what, text) in texts.items():
             # The name cut short: a 250-byte file name is legal, its staging name must be too (it was ENAMETOOLONG).
@@ -107,22 +111,63 @@ def export(
                     os.fsync(f.fileno())
             except OSError as e:
                 raise OutputError(f"writing the {what} {printable(str(path))!r} failed: {e.strerror or e}") from None
-        for path, (what, _) in texts.items():
+        for path, (what, _) in texts.items():  # every file checked again before either is published
             folders.check_replace(path, force, what, "add --force (force=True)")
             if spec.file_id is not None and _is_file(path, spec.file_id):  # linked to it meanwhile
                 raise UsageError(f"{what} {printable(str(path))!r} is the robot file being exported; left alone")
-            try:
-                if force:
-                    os.replace(staged[path], path)
-                else:
-                    folders.publish_new(staged[path], path, what, "it was written")
-            except OSError as e:
-                raise OutputError(f"writing the {what} {printable(str(path))!r} failed: {e.strerror or e}") from None
-            written.append(path)
+        try:
+            for path, (what, _) in texts.items():
+                try:
+                    inode = os.stat(staged[path]).st_ino
+                    undo.append((path, _keep_previous(path) if force else None, inode))
+                    if force:
+                        os.replace(staged[path], path)
+                    else:
+                        folders.publish_new(staged[path], path, what, "it was written")
+                except OSError as e:
+                    raise OutputError(
+                        f"writing the {what} {printable(str(path))!r} failed: {e.strerror or e}"
+                    ) from None
+                written.append(path)
+        except BaseException:  # the second file failed (or a stop came): the first one is taken back
+            _take_back(undo, written)
+            raise
+        for _, previous, _ in undo:
+            if previous is not None:
+                previous.unlink(missing_ok=True)
     finally:
         for staging in staged.values():
             staging.unlink(missing_ok=True)
     return written
+
+
+def _keep_previous(path: Path) -> Path | None:
+    """A hard link to the file (or link) `path` replaces, so a failed export can put it back; None: nothing there,
+    or a file system without hard links (then a failure after it leaves the new file)."""
+    if not os.path.lexists(path):
+        return None
+    keep = path.with_name(f".{path.name[:48]}.previous-{os.getpid()}-{secrets.token_hex(4)}")
+    try:
+        os.link(path, keep, follow_symlinks=False)
+    except OSError as e:
+        if e.errno in (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EMLINK):
+            return None
+        raise
+    return keep
+
+
+def _take_back(undo: list[tuple[Path, Path | None, int]], written: list[Path]) -> None:
+    """Undoes the files published so far: each put back as it was (removed if it was new), if it is still ours."""
+    for path, previous, inode in reversed(undo):
+        with contextlib.suppress(OSError):
+            ours = path in written and os.lstat(path).st_ino == inode
+            if previous is not None:
+                if ours:
+                    os.replace(previous, path)
+                else:
+                    previous.unlink()
+            elif ours:
+                path.unlink()
 
 
 def _same_place(path: Path, other: Path) -> bool:

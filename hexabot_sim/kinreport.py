@@ -335,12 +335,8 @@ def _solve_numeric(robot: Robot, target: Sequence[float], degrees: bool) -> dict
         out.append(entry | {"sigma_min": sol.sigma_min})
         if sol.near_singular:
             warnings.append(f"IK: solution {k} is at a singular configuration (sigma_min = {sol.sigma_min:.3g})")
-    constrained = len(numeric_ik.task_rows(robot.chain))
-    if robot.chain.n > constrained:
-        warnings.append(
-            f"IK: {robot.name} has {robot.chain.n} joints for {constrained} task coordinates: its solutions form a "
-            f"family of dimension {robot.chain.n - constrained}; these {len(out)} are samples of it"
-        )
+    family = numeric_ik.family(robot.chain, robot.name, len(out))
+    warnings += [family] if family else []
     method = (
         f"numeric: Levenberg-Marquardt from {numeric_ik.SEEDS_PER_ROUND} seeds in the joint ranges, "
         f"residuals <= {numeric_ik.RESIDUAL_TOL:g}, duplicates within {numeric_ik.DEDUP_TOL:g} merged"

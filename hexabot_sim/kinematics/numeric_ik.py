@@ -47,8 +47,8 @@ class Solution:
         position_residual: |p(q) − p_target| in [m].
         orientation_residual: Angle of R(q) R_targetᵀ in [rad], or None for a position target.
         sigma_min: Smallest singular value of the task Jacobian (the rows the target constrains) at q.
-        near_singular: σmin / σmax below NEAR_SINGULAR_SOLUTION (at a singular solution, within the solver's
-            resolution).
+        near_singular: σ_r / σmax below NEAR_SINGULAR_SOLUTION, r the chain's structural rank (at a singular
+            solution, within the solver's resolution).
     """
 
     q: np.ndarray
@@ -207,7 +207,7 @@ def solve(chain: SerialChain, target: ArrayLike, where: str | None = None) -> li
             f"{where}: no solution within the joint ranges from {MAX_ROUNDS * SEEDS_PER_ROUND} seeds (closest: "
             f"{closest} away): out of reach, or every solution is outside the joint ranges"
         )
-    return _report(batch, np.array(found[:MAX_SOLUTIONS]), goal, pose)
+    return _report(batch, np.array(found[:MAX_SOLUTIONS]), goal, pose, structural_rank(chain))
 
 
 def _error(batch: _Batch, q: np.ndarray, goal: np.ndarray, pose: bool, size: float):
@@ -281,7 +281,9 @@ def _joined(
     return bool(np.all(pos <= RESIDUAL_TOL) and np.all(rot <= RESIDUAL_TOL))
 
 
-def _report(batch: _Batch, q: np.ndarray, goal: np.ndarray, pose: bool) -> list[Solution]:
+def _report(batch: _Batch, q: np.ndarray, goal: np.ndarray, pose: bool, rank: int) -> list[Solution]:
+    """The solutions with their residuals and singular values; near-singular when the task Jacobian loses rank below
+    the chain's structural `rank` (a planar arm's zero sigma_min everywhere is its family, not a singularity)."""
     frames = batch.frames(q)
     tip = frames[:, -1]
     jac = batch.jacobian(frames)  # (K, 6, n)
@@ -294,7 +296,7 @@ def _report(batch: _Batch, q: np.ndarray, goal: np.ndarray, pose: bool) -> list[
         else:
             pos, rot, task = float(np.linalg.norm(goal - tip[k, :3, 3])), None, jac[k, :3]
         sv = np.linalg.svd(task, compute_uv=False)  # (min(m, n),)
-        near = bool(sv[-1] <= NEAR_SINGULAR_SOLUTION * sv[0]) if sv[0] > 0 else True
+        near = bool(sv[max(rank, 1) - 1] <= NEAR_SINGULAR_SOLUTION * sv[0]) if sv[0] > 0 else True
         out.append(Solution(q[k].copy(), pos, rot, float(sv[-1]), near))
     out.sort(key=lambda s: tuple(np.round(s.q, 9)))  # a stable order: by q1, then q2, ...
     return out
@@ -303,6 +305,31 @@ def _report(batch: _Batch, q: np.ndarray, goal: np.ndarray, pose: bool) -> list[
 def task_rows(chain: SerialChain) -> tuple[int, ...]:
     """Rows of the geometric Jacobian a target constrains: all 6 for 6 or more joints, else the position (0, 1, 2)."""
     return (0, 1, 2, 3, 4, 5) if chain.n >= 6 else (0, 1, 2)
+
+
+def structural_rank(chain: SerialChain, samples: int = 32) -> int:
+    """The task Jacobian's rank at generic configurations: its largest over `samples` random ones in the joint ranges
+    (seeded: the same answer every time). Below the joint count, every solution lies in a family of dimension
+    n - rank (a planar arm's three revolute joints constrain x and y only: their 16 numeric solutions were listed
+    as if isolated)."""
+    lo, hi, _ = _ranges(chain, chain.name)
+    q = np.random.default_rng(0).uniform(lo, hi, (samples, chain.n))
+    _, jac = batch_pose_and_jacobian(chain, q)
+    task = jac[:, list(task_rows(chain))]
+    sv = np.linalg.svd(task, compute_uv=False)  # (samples, min(m, n))
+    ranks = (sv > NEAR_SINGULAR_SOLUTION * np.maximum(sv[:, :1], 1e-300)).sum(axis=1)
+    return int(ranks.max())
+
+
+def family(chain: SerialChain, name: str, found: int) -> str:
+    """The warning that a chain's solutions are not isolated ("" when they are): more joints than task coordinates,
+    or joints whose motions span fewer of them (structural_rank)."""
+    constrained, rank, n = len(task_rows(chain)), structural_rank(chain), chain.n
+    if n <= rank:
+        return ""
+    why = f"{n} joints for {constrained} task coordinates" if rank == constrained else (
+        f"{n} joints whose motions span only {rank} of the {constrained} task coordinates")  # fmt: skip
+    return f"IK: {name} has {why}: its solutions form a family of dimension {n - rank}; these {found} are samples of it"
 
 
 def det_or_manipulability(chain: SerialChain, q: ArrayLike) -> tuple[str, float, float]:

@@ -225,3 +225,36 @@ def test_ctrl_c_while_writing_leaves_neither_file(tmp_path, monkeypatch, stop_at
     with pytest.raises(KeyboardInterrupt):
         api.export("elbow", mjcf=tmp_path / "a.xml", urdf=tmp_path / "a.urdf")
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("force", [False, True])
+def test_a_second_file_that_fails_takes_the_first_back(tmp_path, monkeypatch, force):
+    """The URDF failing after the MJCF was in place (an I/O error, or a file made there meanwhile) left the MJCF
+    published, and with --force a new MJCF beside the old URDF (found by fuzzing, with strace's fault injection)."""
+    from hexabot_sim import exporting, folders
+
+    mjcf, urdf = tmp_path / "a.xml", tmp_path / "a.urdf"
+    if force:
+        mjcf.write_text("old mjcf")
+        urdf.write_text("old urdf")
+    real_replace, real_publish = os.replace, folders.publish_new
+
+    def fail_second(publish):
+        def wrapped(src, dst, *args, **kwargs):
+            if Path(dst) == urdf and ".partial-" in Path(src).name:
+                raise OSError(5, "Input/output error")
+            return publish(src, dst, *args, **kwargs)
+
+        return wrapped
+
+    monkeypatch.setattr(exporting.os, "replace", fail_second(real_replace))
+    monkeypatch.setattr(exporting.folders, "publish_new", fail_second(real_publish))
+    with pytest.raises(hs.errors.OutputError, match=r"writing the URDF file .* failed: Input/output error"):
+        api.export("elbow", mjcf=mjcf, urdf=urdf, force=force)
+    assert sorted(p.name for p in tmp_path.iterdir()) == (["a.urdf", "a.xml"] if force else [])
+    if force:
+        assert mjcf.read_text() == "old mjcf" and urdf.read_text() == "old urdf"
+    monkeypatch.undo()
+    assert api.export("elbow", mjcf=mjcf, urdf=urdf, force=True) == [mjcf, urdf]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.urdf", "a.xml"]  # no kept copy left behind
+    assert mjcf.read_text().startswith("<!--") and urdf.read_text().startswith("<?xml")

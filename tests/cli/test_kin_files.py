@@ -122,6 +122,39 @@ def test_a_seven_joint_file_samples_its_family_and_warns(tmp_path, capsys):
         np.testing.assert_allclose(chain.fk(np.array(s["q"])), pose, atol=1e-9)
 
 
+@pytest.mark.parametrize(
+    ("joints", "target", "span", "dimension"),
+    [
+        # Three revolute joints about parallel axes: x and y only (found by fuzzing: "16 solution(s)", each "singular").
+        ([("revolute", 0.1, "")] * 3, "0.1,0.05,0", 2, 1),
+        # Three slides along z0: z only.
+        (
+            [("prismatic", 0.0, "lower = 0.0\nupper = 1.0\n")] * 2 + [("prismatic", 0.1, "lower = 0.0\nupper = 1.0\n")],
+            "0.1,0,0.5",
+            1,
+            2,
+        ),
+    ],
+)
+def test_a_chain_whose_joints_span_fewer_task_coordinates_samples_its_family(tmp_path, capsys, joints, target, span,
+                                                                            dimension):  # fmt: skip
+    rows = "".join(
+        f'[[joints]]\nname = "j{i}"\ntype = "{kind}"\na = {a}\nalpha = 0.0\nd = 0.0\ntheta = 0.0\n{limits}'
+        for i, (kind, a, limits) in enumerate(joints, start=1)
+    )
+    path = tmp_path / "flat.toml"
+    path.write_text(f'name = "flat"\nconvention = "standard"\nangles = "deg"\n{rows}')
+    code, out, err = cli(capsys, "kin", str(path), "--json", f"--target={target}")
+    assert code == 0, err
+    family = f"flat has 3 joints whose motions span only {span} of the 3 task coordinates: its solutions form a family"
+    assert f"{family} of dimension {dimension}" in err
+    assert "singular configuration" not in err  # the family's zero singular value is not a singularity
+    chain = robots.resolve(path).chain()
+    goal = np.array([float(v) for v in target.split(",")])
+    for solution in json.loads(out)["solutions"]:
+        np.testing.assert_allclose(chain.fk(np.array(solution["q"]))[:3, 3], goal, atol=1e-9)
+
+
 @pytest.mark.skipif(importlib.util.find_spec("sympy") is None, reason="needs sympy (the 'symbolic' extra)")
 def test_symbolic_works_for_a_file_with_its_lengths_as_symbols(tmp_path, capsys):
     code, out, err = cli(capsys, "kin", str(write(tmp_path)), "--json", "--symbolic")
