@@ -184,7 +184,8 @@ class _Reader:
         table = self.table(doc, "legs", LEGS_KEYS, ("hips", "yaws"))
         w = "[legs]"
         if ("rows" in table) == ("names" in table):
-            raise self.fail(w, "give 'rows' (a mirrored left row, front to rear) or 'names' (every leg), not both")
+            both = "not both" if "rows" in table else "one of them is needed"  # (neither was told "not both")
+            raise self.fail(w, f"give 'rows' (a mirrored left row, front to rear) or 'names' (every leg), {both}")
         key = "rows" if "rows" in table else "names"
         names = table[key]
         if not isinstance(names, list) or not all(isinstance(n, str) and NAME.fullmatch(n) for n in names):

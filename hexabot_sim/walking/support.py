@@ -41,9 +41,14 @@ def support_problem(p: WalkParams) -> str:
                 )
         if margin < -1e-9:
             legs = ", ".join(layout.legs[i] for i in down)
+            where = (  # -inf: the feet in one line (it printed "at least inf mm outside them")
+                f"it is at least {-margin * 1000:.0f} mm outside them"
+                if math.isfinite(margin)
+                else "they stand in a line"
+            )
             return (
                 f"the {gait.name} gait stands on {legs} at once, and their feet do not surround the body's centre "
-                f"(it is at least {-margin * 1000:.0f} mm outside them at the neutral stance): the gaits take the "
+                f"({where} at the neutral stance): the gaits take the "
                 "legs in the robot file's order, the left row front to rear, then the right row; reorder 'names', or "
                 "move the hips or turn the yaws"
             )

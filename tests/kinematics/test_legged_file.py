@@ -104,7 +104,13 @@ BAD = [
     ("l3 = 0.12", "l3 = nan", r"\[leg\]: 'l3' must be a finite number \[m\]; got nan"),
     ("masses = [0.03, 0.05, 0.05]", "masses = [0.03, 0.05]", r"\[leg\]: 'masses' must be a list of 3 numbers"),
     ("[stance]", "[stanse]", r"unknown key 'stanse'; allowed: name, summary, leg, body, stance, legs"),
-    ('rows = ["f", "m", "r"]', 'rows = ["f", "m", "r"]\nnames = ["a"]', r"\[legs\]: give 'rows' .* or 'names'"),
+    (
+        'rows = ["f", "m", "r"]',
+        'rows = ["f", "m", "r"]\nnames = ["a"]',
+        r"\[legs\]: give 'rows' .* or 'names' .*not both",
+    ),
+    # Neither was told "not both" (found by fuzzing).
+    ('rows = ["f", "m", "r"]', "", r"\[legs\]: give 'rows' .* or 'names' \(every leg\), one of them is needed$"),
     ("[0.0, 0.10]", "[0.0, -0.10]", r"\[legs\]: with 'rows', 'hips' are the left row's: each y must be > 0"),
     # A hip 10 m from the plate was accepted: a leg standing on nothing (no bracket is drawn).
     (

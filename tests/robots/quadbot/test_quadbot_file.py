@@ -72,6 +72,8 @@ def test_other_leg_counts_and_a_crawl_that_cannot_stand_are_refused_before_the_w
     bound = _variant(tmp_path, "bound", ('rows = ["f", "r"]', 'names = ["lf", "lr", "rr", "rf"]'),
                      ("[[0.10, 0.06], [-0.10, 0.06]]", "[[0.10, 0.06], [-0.10, 0.06], [-0.10, -0.06], [0.10, -0.06]]"),
                      ("[45.0, 135.0]", "[45.0, 135.0, -135.0, -45.0]"))  # fmt: skip
+    line = _variant(tmp_path, "line", ("[[0.10, 0.06], [-0.10, 0.06]]", "[[0.0, 0.06], [0.0, 0.06]]"),
+                    ("[45.0, 135.0]", "[90.0, 90.0]"))  # fmt: skip
     cases = [
         ("quadbot-trot", HEXAPOD_FILE, "6 legs; the quadbot's scenarios walk 4-legged robots (their gaits crawl, "
          "trot are for 4"),  # it named quadbot-walk
@@ -79,6 +81,9 @@ def test_other_leg_counts_and_a_crawl_that_cannot_stand_are_refused_before_the_w
          "ripple, wave"),
         ("quadbot-walk", trapezoid, "the crawl gait stands on lr, rf, rr at once, and their feet do not surround the "
          "body's centre (it is at least 15 mm outside them at the neutral stance)"),
+        # Feet in one line through the centre: it read "at least inf mm outside them" (found by fuzzing).
+        ("quadbot-walk", line, "the crawl gait stands on lf, lr, rf at once, and their feet do not surround the "
+         "body's centre (they stand in a line at the neutral stance)"),
         ("quadbot-trot", bound, "the trot gait stands on lf and rf at once, and their feet are not on opposite sides "
          "of the body's centre (77 deg apart seen from it at the neutral stance, at least 120 needed)"),
     ]  # fmt: skip
