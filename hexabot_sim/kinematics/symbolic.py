@@ -185,8 +185,8 @@ def transforms(sc: SymbolicChain, simplify: bool = True, max_ops: int | None = N
                 frame = f"T0{i}" if i <= sc.n else "T0tool"
                 raise UsageError(
                     f"{sc.name}: the closed form grows too large to simplify in reasonable time: {frame} already has "
-                    f"{ops} operations (at most {max_ops}; twists other than multiples of 90 deg multiply the terms at "
-                    "every joint); use --q for T0n and J at a configuration"
+                    f"{ops} operations (at most {max_ops}: each joint multiplies the terms, twists other than "
+                    "multiples of 90 deg most); use --q for T0n and J at a configuration"
                 )
         sc._cache[key] = out
     return [sp.Matrix(t) for t in sc._cache[key]]
