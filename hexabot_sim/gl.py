@@ -70,6 +70,9 @@ def choose() -> tuple[str | None, str, str]:
         reason = probe(backend)
         if reason is None:
             os.environ["MUJOCO_GL"] = backend
+            # As in the probe: MuJoCo sets PyOpenGL's platform to the backend itself, and one set to another made the
+            # backend the probe found working fail in the run ("Cannot use EGL rendering platform").
+            os.environ.pop("PYOPENGL_PLATFORM", None)
             notice = (
                 f"MUJOCO_GL={wanted!r} does not work here ({reasons[0]}); rendering with {backend}" if reasons else ""
             )

@@ -84,3 +84,19 @@ def test_progress_bar_redraws_on_a_terminal_and_prints_plain_lines_elsewhere():
     # In a log: a plain line on the first call and each time a quarter is crossed, never a carriage return.
     assert pipe.getvalue().splitlines() == [f"video: {p}% ({p // 10}/10)" for p in (10, 30, 50, 80, 100)]
     assert pipe.getvalue().splitlines()[-1] == "video: 100% (10/10)"
+
+
+@pytest.mark.parametrize("platform", ["osmesa", "bogus"])
+def test_a_pyopengl_platform_set_to_another_backend_still_renders(tmp_path, gl_backend, platform):
+    """`check` said video works with PYOPENGL_PLATFORM set (its probe drops the variable), and the run then wrote
+    no video: "Cannot use EGL rendering platform. The PYOPENGL_PLATFORM environment variable is set to ..."."""
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"} | {"PYOPENGL_PLATFORM": platform}
+    out_dir = tmp_path / "r"
+    argv = ["run", "pendulum", "--video", "--no-plots", "--set", "duration=0.1", "--out", str(out_dir)]
+    proc = subprocess.run([sys.executable, "-m", "hexabot_sim", *argv], env=env, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads((out_dir / "run.json").read_text())["video"]["written"], proc.stderr
