@@ -7,16 +7,14 @@ import dataclasses
 import functools
 import itertools
 import math
-import os
-import signal
 import threading
-import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
+from hexabot_sim.encoder_watchdog import EncoderWatchdog
 from hexabot_sim.signals import RECEIVED_SIGNALS, stop_request
 from hexabot_sim.video import frame_count
 
@@ -35,67 +33,6 @@ class Marker:
 # input would otherwise hang the run for ever). The slowest frame measured here, 4K at the high preset,
 # takes 0.45 s.
 FRAME_TIMEOUT: float = 120.0
-
-
-class EncoderWatchdog:
-    """Stops this process's encoder children if one frame write blocks longer than FRAME_TIMEOUT.
-
-    The blocked write then fails (broken pipe) and the video is reported as not written, with the reason.
-    Children are found in /proc (Linux); elsewhere the watchdog only watches.
-    """
-
-    def __init__(self, exe: str) -> None:
-        self.exe = exe
-        self.fired = False
-        self._deadline = math.inf
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._watch, name="encoder-watchdog", daemon=True)
-
-    def __enter__(self) -> EncoderWatchdog:
-        self._thread.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self._stop.set()
-        self._thread.join()
-
-    def arm(self) -> None:
-        self._deadline = time.monotonic() + FRAME_TIMEOUT
-
-    def disarm(self) -> None:
-        self._deadline = math.inf
-
-    def _watch(self) -> None:
-        while not self._stop.wait(min(1.0, FRAME_TIMEOUT / 4)):
-            if time.monotonic() > self._deadline:
-                self.fired = True
-                for pid in self._children():
-                    try:
-                        os.kill(pid, signal.SIGKILL)
-                    except OSError:
-                        pass
-                return
-
-    def _children(self) -> list[int]:
-        """PIDs of this process's children started as the encoder (argv[0], or argv[1] for a script)."""
-        found = []
-        try:
-            entries = os.listdir("/proc")
-        except OSError:
-            return found
-        for entry in entries:
-            if not entry.isdigit():
-                continue
-            try:
-                with open(f"/proc/{entry}/stat", "rb") as f:
-                    ppid = int(f.read().rsplit(b")", 1)[1].split()[1])
-                with open(f"/proc/{entry}/cmdline", "rb") as f:
-                    argv = f.read().split(b"\0")[:2]
-            except (OSError, ValueError, IndexError):
-                continue
-            if ppid == os.getpid() and os.fsencode(self.exe) in argv:
-                found.append(int(entry))
-        return found
 
 
 @dataclasses.dataclass(frozen=True)
@@ -383,7 +320,7 @@ def render_video(
     )
     import imageio_ffmpeg
 
-    watchdog = EncoderWatchdog(imageio_ffmpeg.get_ffmpeg_exe())
+    watchdog = EncoderWatchdog(imageio_ffmpeg.get_ffmpeg_exe(), FRAME_TIMEOUT)
     try:
         with watchdog, mujoco.Renderer(model, height, width, max_geom=model.ngeom + TRAIL_SEGMENTS + 100) as renderer:
             if preset.shadowsize == 0:

@@ -91,18 +91,26 @@ def test_missing_ffmpeg_still_gives_csv_and_plots(tmp_path):
     assert not (tmp_path / "r" / "video.mp4").exists()
 
 
+STUCK_ENCODERS = {
+    "python": f"#!{sys.executable}\nimport sys, time\n"
+    "if sys.argv[1:] == ['-version']:\n    print('ffmpeg version 6.0 (a stuck fake)')\n    sys.exit(0)\n"
+    "time.sleep(600)\n",
+    # Found by fuzzing: an encoder that exec's something else was not recognised (argv no longer the encoder's), and
+    # a wrapper's child holding the pipe kept the run blocked after the wrapper was killed.
+    "exec": '#!/bin/sh\n[ "$1" = -version ] && { echo "ffmpeg version 6.0 (a stuck fake)"; exit 0; }\nexec sleep 613\n',
+    "wrapper": '#!/bin/sh\n[ "$1" = -version ] && { echo "ffmpeg version 6.0 (a stuck fake)"; exit 0; }\nsleep 613\n',
+}
+
+
 @pytest.mark.slow
-def test_an_encoder_that_stops_reading_does_not_hang_the_run(tmp_path, monkeypatch, capsys):
+@pytest.mark.parametrize("kind", sorted(STUCK_ENCODERS))
+def test_an_encoder_that_stops_reading_does_not_hang_the_run(tmp_path, monkeypatch, capsys, kind):
     """An 'ffmpeg' that answers -version and then never reads its frames: the stuck write is stopped after
     FRAME_TIMEOUT, the run keeps its CSV and says why there is no video, and the encoder is gone."""
     from hexabot_sim import render
 
     fake = tmp_path / "stuck-ffmpeg"
-    fake.write_text(
-        f"#!{sys.executable}\nimport sys, time\n"
-        "if sys.argv[1:] == ['-version']:\n    print('ffmpeg version 6.0 (a stuck fake)')\n    sys.exit(0)\n"
-        "time.sleep(600)\n"
-    )
+    fake.write_text(STUCK_ENCODERS[kind])
     fake.chmod(0o755)
     monkeypatch.setenv("IMAGEIO_FFMPEG_EXE", str(fake))
     monkeypatch.setattr(render, "FRAME_TIMEOUT", 1.0)
@@ -117,7 +125,10 @@ def test_an_encoder_that_stops_reading_does_not_hang_the_run(tmp_path, monkeypat
     }
     assert (tmp_path / "r" / "timeseries.csv").exists() and not (tmp_path / "r" / "video.mp4").exists()
     assert "no video: rendering failed" in capsys.readouterr().err
-    assert not [p for p in Path("/proc").glob("[0-9]*") if str(fake).encode() in _cmdline(p)]  # killed, not left
+    left = [
+        p for p in Path("/proc").glob("[0-9]*") if str(fake).encode() in _cmdline(p) or _cmdline(p) == b"sleep\0613\0"
+    ]
+    assert not left  # killed, not left
 
 
 def _cmdline(proc: Path) -> bytes:
