@@ -301,6 +301,9 @@ def run_folder(out: str | os.PathLike[str] | None, scenario: str = "run", force:
                 raise stop_request(RECEIVED_SIGNALS[-1])
             if _moved(target.parent, parent_fd):
                 raise OutputError(f"the folder {str(target.parent)!r} was moved or replaced during the run")
+            for where in (target.parent, target):  # made read-only meanwhile (root's rename would go through)
+                if where.is_dir() and not where.stat().st_mode & 0o222:
+                    raise OutputError(f"the folder {display_path(where)!r} was made read-only during the run")
             folder.final = _publish(parent_fd, staging, target, auto_name, force and not auto_name, before)
             PUBLISHED[0] = True  # a stop request from now on (even one held above) is too late: the run is complete
     except BaseException as e:

@@ -363,3 +363,24 @@ def test_publishers_in_one_folder_take_turns(tmp_path):
         os.close(first)
         os.close(second)
     assert times["b"] - times["a"] >= 0.35
+
+
+@pytest.mark.parametrize("which", ["parent", "out"])
+def test_a_folder_made_read_only_during_the_run_is_not_published_into(tmp_path, which):
+    """The refusal of a read-only --out or parent held before the run only: made read-only mid-run (a sweep), the
+    folder was published into it all the same (root's rename goes through; found by fuzzing)."""
+    parent = tmp_path / "shelf"
+    parent.mkdir()
+    out = parent / "run"
+    if which == "out":
+        out.mkdir()
+    frozen = parent if which == "parent" else out
+    try:
+        with pytest.raises(OutputError, match="was made read-only during the run"):
+            with folders.run_folder(out, "pendulum") as run:
+                (run.path / "run.json").write_text("{}")
+                frozen.chmod(0o555)
+    finally:
+        frozen.chmod(0o755)
+    assert [p.name for p in parent.iterdir()] == (["run"] if which == "out" else [])
+    assert not out.exists() or list(out.iterdir()) == []
