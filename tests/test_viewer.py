@@ -110,6 +110,9 @@ def test_view_with_a_display_that_cannot_be_opened(monkeypatch, capsys) -> None:
 def test_view_refuses_bad_targets(tmp_path, capsys) -> None:
     assert "unknown scenario 'pendulun'" in _one_line_error(capsys, ["view", "pendulun"])
     assert "does not exist" in _one_line_error(capsys, ["view", str(tmp_path / "nope") + os.sep])
+    (tmp_path / "run.json").write_text("{}")  # a file: it "did not exist" (found by fuzzing)
+    assert "is a file, not a run folder" in _one_line_error(capsys, ["view", str(tmp_path / "run.json")])
+    (tmp_path / "run.json").unlink()
     (tmp_path / "grid.csv").write_text("a\n")
     assert "leg-sweep run folder" in _one_line_error(capsys, ["view", str(tmp_path)])
     (tmp_path / "grid.csv").unlink()

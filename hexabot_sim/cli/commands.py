@@ -243,8 +243,9 @@ def cmd_view(args: argparse.Namespace) -> int:
         raise UsageError("view needs a scenario name or a run folder; got an empty one")
     folder = Path(args.target)
     replaying = folder.is_dir() or os.sep in args.target or args.target in (".", "..")
-    if replaying and not folder.is_dir():
-        raise UsageError(f"run folder {printable(args.target)!r} does not exist")
+    if replaying and not folder.is_dir():  # /etc/passwd or a run's run.json "did not exist"
+        why = "is a file, not a run folder" if os.path.lexists(folder) else "does not exist"
+        raise UsageError(f"run folder {printable(args.target)!r} {why}; give the folder a run wrote")
     if replaying and (args.sets or args.config):
         raise UsageError("--set and --config choose a scenario's parameters; a run folder replays its own")
     if gl.loaded_backend() is None:
