@@ -138,6 +138,18 @@ def test_the_cost_refusal_on_the_command_line(tmp_path, capsys, monkeypatch):
     assert "this sweep would take ~" in line and "on 1 local process)" in line
 
 
+def test_more_local_workers_than_cores_are_not_counted_as_running_at_once(tmp_path, capsys, monkeypatch):
+    """--workers 16 on 2 cores divided the estimate by 16: a ~27 h sweep passed the 24 h limit (found by fuzzing)."""
+    import os
+
+    small = sweep.plan("pendulum", ["damping=0:1:16"], {}, {"duration": "0.05", "timestep": "0.01"})  # FIXED's
+    limit = 1.5 * sum(small.costs) / 16  # above the 16-way share, below the 2-way one
+    monkeypatch.setattr(sweep, "MAX_SWEEP_SECONDS", limit, raising=False)
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    line = refused(tmp_path, capsys, "pendulum", "--grid", "damping=0:1:16", "--workers", "16", *FIXED)
+    assert "this sweep would take ~" in line and "on 16 local processes on 2 cores)" in line
+
+
 def test_the_cost_refusal_with_a_scheduler_counts_its_workers(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(sweep, "MAX_SWEEP_SECONDS", 1e-6, raising=False)
     monkeypatch.setattr(dask_cluster, "dask_executor", lambda address: contextlib.nullcontext((None, 7)))

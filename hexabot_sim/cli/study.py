@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import sys
 import time
 from typing import Any
@@ -36,7 +37,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         executors: Any = dask_cluster.dask_executor(args.scheduler)
     else:
         workers = min(args.workers or pool.workers_default(), len(plan.cells))
-        sweep.check_cost(plan, workers, f"{workers} local process{'es' if workers > 1 else ''}")
+        cores = os.cpu_count() or 1  # more processes than cores share them: they were counted as running at once
+        on = f" on {cores} core{'s' if cores > 1 else ''}" if workers > cores else ""
+        sweep.check_cost(plan, min(workers, cores), f"{workers} local process{'es' if workers > 1 else ''}{on}")
         executors = contextlib.nullcontext((pool.local_executor(workers), workers))
     started = time.perf_counter()
     with executors as (executor, workers), folders.run_folder(args.out, name, force=args.force) as run:
