@@ -113,3 +113,14 @@ def test_result_save_flags_are_bools(tmp_path, flag):
     with pytest.raises(UsageError, match="True or False"):
         hs.run("pendulum", duration=0.05).save(tmp_path / "out", **{flag: "no"})
     assert (tmp_path / "out" / "keep").read_text() == "user"
+
+
+def test_video_options_without_video_are_warned_of(tmp_path, capsys):
+    """--fps 60 --quality high without --video were ignored without a word (found by fuzzing); alone, no warning."""
+    argv = ["run", "pendulum", "--set", "duration=0.05", "--no-plots"]
+    assert main([*argv, "--fps", "60", "--quality", "high", "--out", str(tmp_path / "a")]) == 0
+    err = capsys.readouterr().err
+    assert "warning: --quality, --fps shape a video; without --video none is written" in err
+    assert not (tmp_path / "a" / "video.mp4").exists()
+    assert main([*argv, "--out", str(tmp_path / "b")]) == 0
+    assert "warning" not in capsys.readouterr().err

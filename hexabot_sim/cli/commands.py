@@ -122,7 +122,12 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     # The OpenGL backend must be chosen before MuJoCo is imported (the API and the scenarios import it).
     backend, no_video_reason = None, video.NOT_REQUESTED
-    settings = video.VideoSettings(*args.size, fps=args.fps, quality=args.quality) if args.video else None
+    given = [name for name in ("quality", "size", "fps") if getattr(args, name) is not None]
+    if given and not args.video:  # they were ignored without a word
+        eprint(f"{PROG}: warning: --{', --'.join(given)} shape{'s' if len(given) == 1 else ''} a video; without "
+               "--video none is written")  # fmt: skip
+    size, fps, quality = args.size or (640, 480), args.fps or 30, args.quality or "preview"
+    settings = video.VideoSettings(*size, fps=fps, quality=quality) if args.video else None
     if settings is not None:
         backend, no_video_reason = gl.video_backend(announce=lambda notice: eprint(f"{PROG}: {notice}"))
     from hexabot_sim import api

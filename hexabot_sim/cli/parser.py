@@ -84,11 +84,10 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--config", metavar="FILE", help="TOML file of 'name = value' parameter lines")
     _add_folder_options(run, "run folder (default: runs/<scenario>-<timestamp>)")
     run.add_argument("--video", action="store_true", help="also render video.mp4 (headless)")
-    run.add_argument(
-        "--quality", choices=("preview", "high"), default="preview", help="video preset (default: preview)"
-    )
-    run.add_argument("--size", type=_size, default=(640, 480), metavar="WxH", help="video size (default: 640x480)")
-    run.add_argument("--fps", type=_fps, default=30, help="video frame rate (default: 30)")
+    run.add_argument("--quality", choices=("preview", "high"), default=None, help="video preset (default: preview)")
+    # Their defaults are applied by cmd_run (None: not given; given without --video they are warned of).
+    run.add_argument("--size", type=_size, default=None, metavar="WxH", help="video size (default: 640x480)")
+    run.add_argument("--fps", type=_fps, default=None, help="video frame rate (default: 30)")
     run.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     sub.add_parser("check", help="MuJoCo version, working OpenGL backend, ffmpeg")
     clean = sub.add_parser("clean", help="remove staging folders left by runs that were killed (SIGKILL, power loss)")
