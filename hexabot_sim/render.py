@@ -346,6 +346,10 @@ def render_video(
                     if watchdog.fired:
                         stuck = f"the video encoder took no frame for {FRAME_TIMEOUT:g} s and was stopped"
                         raise RuntimeError(stuck) from e
+                    # imageio-ffmpeg re-raises the pipe's error as a plain OSError: it read "rendering failed: OSError:
+                    # [Errno 32] Broken pipe"
+                    if any(isinstance(x, BrokenPipeError) for x in (e, e.__cause__, e.__context__)):
+                        raise RuntimeError(f"the video encoder stopped after {n} of {len(indices)} frames") from e
                     raise
                 watchdog.disarm()
                 if RECEIVED_SIGNALS:  # a stop request whose exception some library swallowed

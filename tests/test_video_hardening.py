@@ -124,3 +124,22 @@ def test_video_options_without_video_are_warned_of(tmp_path, capsys):
     assert not (tmp_path / "a" / "video.mp4").exists()
     assert main([*argv, "--out", str(tmp_path / "b")]) == 0
     assert "warning" not in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_an_encoder_that_quits_early_is_named(tmp_path, monkeypatch, capsys, gl_backend):
+    """An encoder that read a few frames and exited: "rendering failed: OSError: [Errno 32] Broken pipe"."""
+    fake = tmp_path / "quitting-ffmpeg"
+    fake.write_text(
+        f"#!{sys.executable}\nimport sys\n"
+        "if sys.argv[1:] == ['-version']:\n    print('ffmpeg version 6.0 (a fake)')\n    sys.exit(0)\n"
+        "sys.stdin.buffer.read(100000)\nsys.exit(1)\n"
+    )
+    fake.chmod(0o755)
+    monkeypatch.setenv("IMAGEIO_FFMPEG_EXE", str(fake))
+    out = tmp_path / "r"
+    argv = ["run", "pendulum", "--set", "duration=2", "--video", "--size", "640x480", "--out", str(out), "--no-plots"]
+    assert main(argv) == 0
+    reason = json.loads((out / "run.json").read_text())["video"]["reason"]
+    assert "the video encoder stopped after" in reason and "Broken pipe" not in reason, reason
+    assert "no video" in capsys.readouterr().err and not (out / "video.mp4").exists()
