@@ -301,7 +301,8 @@ def run_folder(out: str | os.PathLike[str] | None, scenario: str = "run", force:
                 raise stop_request(RECEIVED_SIGNALS[-1])
             if _moved(target.parent, parent_fd):
                 raise OutputError(f"the folder {str(target.parent)!r} was moved or replaced during the run")
-            for where in (target.parent, target):  # made read-only meanwhile (root's rename would go through)
+            # Made read-only meanwhile (root's rename would go through); a default name taken moves on to -N.
+            for where in (target.parent,) if auto_name else (target.parent, target):
                 if where.is_dir() and not where.stat().st_mode & 0o222:
                     raise OutputError(f"the folder {display_path(where)!r} was made read-only during the run")
             folder.final = _publish(parent_fd, staging, target, auto_name, force and not auto_name, before)
