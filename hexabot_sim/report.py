@@ -12,6 +12,7 @@ from typing import Any
 from hexabot_sim.errors import encodable
 
 # What each data file holds, for the links section.
+LONG_VALUE: int = 40  # [characters] a longer value wraps in its cell (unit and meaning stay beside it)
 FILE_DOCS: dict[str, str] = {
     "timeseries.csv": "time series, one row per recorded step; first column t [s], SI units",
     "grid.csv": "one row per grid cell",
@@ -53,6 +54,7 @@ table { border-collapse: collapse; width: 100%; font-size: .95em; }
 th, td { text-align: left; vertical-align: top; padding: .35rem .6rem; border-bottom: 1px solid var(--line); }
 th { background: var(--head); white-space: nowrap; }
 td.num { white-space: nowrap; }
+td.num.long { white-space: normal; overflow-wrap: anywhere; min-width: 16rem; }
 td.doc { min-width: 14rem; color: var(--muted); }
 tr.key td:first-child { font-weight: 600; }
 footer { margin-top: 2.5rem; font-size: .85em; color: var(--muted); }
@@ -79,7 +81,8 @@ def _e(text: Any) -> str:
 
 
 def format_value(value: Any) -> str:
-    """A parameter or metric value as text: numbers to 8 significant digits, lists comma-separated."""
+    """A parameter or metric value as text: numbers to 8 significant digits, lists comma-separated, a list of rows
+    (a schedule, waypoints) one bracketed row after another, a row's empty cell "–" (a schedule's "as before")."""
     if value is None:
         return "n/a"
     if isinstance(value, bool):
@@ -87,8 +90,14 @@ def format_value(value: Any) -> str:
     if isinstance(value, float):
         return f"{value:.8g}" if math.isfinite(value) else "n/a"
     if isinstance(value, (list, tuple)):
+        if any(isinstance(v, (list, tuple)) for v in value):  # rows: they were flattened into one list
+            return "; ".join(f"[{_cells(v)}]" if isinstance(v, (list, tuple)) else format_value(v) for v in value)
         return ", ".join(format_value(v) for v in value)
     return str(value)
+
+
+def _cells(row: Sequence[Any]) -> str:
+    return ", ".join("–" if v is None else format_value(v) for v in row)
 
 
 def _unit(unit: str) -> str:
@@ -115,8 +124,10 @@ def _table(rows: Mapping[str, Any], units: Mapping[str, str], docs: Mapping[str,
     ]
     for name, value in rows.items():
         cls = ' class="key"' if name in key else ""
+        text = format_value(value)
+        wrap = " long" if len(text) > LONG_VALUE else ""  # a long path or schedule pushed unit and meaning off the page
         lines.append(
-            f'<tr{cls}><td><code>{_e(name)}</code></td><td class="num">{_e(format_value(value))}</td>'
+            f'<tr{cls}><td><code>{_e(name)}</code></td><td class="num{wrap}">{_e(text)}</td>'
             f'<td>{_e(_unit(units.get(name, "")))}</td><td class="doc">{_e(docs.get(name, ""))}</td></tr>'
         )
     lines.append("</tbody></table></div>")

@@ -219,3 +219,13 @@ def test_browser_check_sees_a_broken_image(browser_runs, browser, tmp_path):
     (folder / "sweep.png").write_bytes(b"not a png")
     loaded = browser_check(browser, folder)
     assert {image["src"]: image["ok"] for image in loaded["images"]} == {"sweep.png": False, "workspace.png": True}
+
+
+def test_a_schedule_keeps_its_rows_and_a_long_value_wraps():
+    """A schedule was flattened ("0, 0.05, 0, 0, tripod, n/a, n/a, 1, 0.1, ..."), and a long value (a schedule, an
+    absolute robot path) kept on one line pushed the unit and meaning columns off a 1280 px page (found in Chromium)."""
+    rows = [[0.0, 0.05, 0.0, 0.0, "tripod", None, None], [1.0, 0.1, 0.0, 0.0, "ripple", None, None]]
+    assert report.format_value(rows) == "[0, 0.05, 0, 0, tripod, –, –]; [1, 0.1, 0, 0, ripple, –, –]"
+    assert report.format_value([0.1, None]) == "0.1, n/a"  # a flat list as before
+    html = report._table({"schedule": rows, "vx": 0.1}, {"vx": "m/s"}, {})
+    assert '<td class="num long">[0, 0.05' in html and '<td class="num">0.1</td>' in html
