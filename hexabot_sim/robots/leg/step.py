@@ -67,11 +67,16 @@ def line_reach(start: np.ndarray, geom: leg_kin.LegGeometry = GEOMETRY) -> tuple
 
 
 def excursion(p: LegStepParams) -> tuple[float, float]:
-    """Largest travel (forward, backward) [m] the command asks for: 2A/w (sine) or A/w each way (cosine)."""
-    s = p.amplitude / p.omega
-    if p.profile == "sine":
-        return (2 * s, 0.0) if s >= 0 else (0.0, -2 * s)
-    return abs(s), abs(s)
+    """Largest travel (forward, backward) [m] the command asks for within the run's duration: up to 2A/w (sine) or
+    A/w each way (cosine), less in a run shorter than the half or three quarters of a cycle that takes (a 1 s run at
+    w = 0.52 rad/s was said to leave a workspace it stays well inside). The travel's extremes lie at multiples of
+    pi / w (sine) or odd multiples of pi / 2w (cosine), or at the end."""
+    w, first = p.omega, (0.0 if p.profile == "sine" else 0.5 * math.pi)
+    turns = first / w + (math.pi / w) * np.arange(0, max(0, math.floor((p.duration * w - first) / math.pi)) + 1)
+    t = np.concatenate([[0.0, p.duration], turns[turns <= p.duration]])
+    offsets = reference(p, np.zeros(3))
+    x = np.array([offsets(float(v))[0] for v in t])
+    return max(0.0, float(x.max())), max(0.0, float(-x.min()))
 
 
 def start_pose(p: LegStepParams, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
@@ -232,9 +237,11 @@ def _result(name, p, model, xml, traj, start, qadr, dadr) -> ScenarioResult:
         "singular_first_time": Metric(first, "s", "first time sigma_min(J) < sigma_threshold (null: never)"),
         "singular_duration": Metric(float(near.sum() * dt), "s", "time spent with sigma_min(J) < sigma_threshold"),
         "singular_family": Metric(family, "", "which singular set was approached first"),
-        "excursion_forward": Metric(exc_fwd, "m", "travel the command asks for along +x: 2A/omega (sine)"),
+        "excursion_forward": Metric(
+            exc_fwd, "m", "travel the command asks for along +x within the run: up to 2A/omega (sine)"
+        ),
         "reach_forward": Metric(reach_fwd, "m", "travel along +x before leaving the reachable workspace"),
-        "excursion_backward": Metric(exc_back, "m", "travel the command asks for along -x"),
+        "excursion_backward": Metric(exc_back, "m", "travel the command asks for along -x within the run"),
         "reach_backward": Metric(reach_back, "m", "travel along -x before leaving the workspace (coxa near 0)"),
         "predicted_to_leave_workspace": Metric(
             bool(exc_fwd > reach_fwd or exc_back > reach_back), "", "excursion exceeds reach (before running)"

@@ -288,3 +288,12 @@ def test_six_joints_that_cannot_turn_the_tool_about_every_axis_track_the_positio
     m = hs.run("arm-track", robot=str(path), duration=1.0).metrics
     assert m["joints"].value == 6 and m["orientation_error_max"].value is None
     assert m["tracking_error_rms"].value < TARGET_RMS
+
+
+@pytest.mark.parametrize(("name", "value"), [("size", "5e-324"), ("size", "1e-320"), ("speed", "1e-320")])
+def test_a_size_or_speed_whose_path_rate_underflows_is_refused(tmp_path, capsys, name, value):
+    """size=5e-324 was a ZeroDivisionError (an internal error), speed=1e-320 ran with numpy's warnings on stderr and
+    a path of NaN phases (found by fuzzing): the rate speed / (size / 2) underflows."""
+    code, _, err = cli(capsys, "run", "arm-track", "--set", f"{name}={value}", "--out", str(tmp_path / "r"))
+    assert code == 2 and err.count("\n") == 1 and f"parameter '{name}' must be a number with " in err, err
+    assert list(tmp_path.iterdir()) == []

@@ -20,6 +20,8 @@ from hexabot_sim.control.resolved_rate import (
     sigma_min,
 )
 from hexabot_sim.kinematics import leg
+from hexabot_sim.robots.leg import step
+from hexabot_sim.robots.leg.parameters import LegStepParams
 from hexabot_sim.robots.leg.step import GEOMETRY
 
 HIP = np.array([0.0, 0.0, 0.3])  # hip site in the world [m], axes aligned (tests/test_leg_model.py checks it)
@@ -276,7 +278,7 @@ def test_reach_forward_is_the_workspace_boundary_along_the_line():
 
 def test_reach_backward_respects_the_joint_ranges():
     """Going back, the femur reaches +90 deg long before the leg is stretched (HEAD 00e0da7 ignored that)."""
-    p, r = run(profile="cosine", amplitude=0.12, duration=0.01)
+    p, r = run(profile="cosine", amplitude=0.12, duration=4.75)  # the backward travel ends at 3 pi / 2 omega
     start = (p.start_x, p.start_y, p.start_z)
     backward = reach_by_bisection(start, -1, ranges=True)  # ~0.098 m: femur straight down at +90 deg
     assert backward < r.metrics["excursion_backward"].value == 0.12
@@ -480,3 +482,16 @@ def test_cli_run_writes_the_columns_and_metrics(tmp_path, capsys):
         assert np.array_equal(table[:, k], r.columns[name]), name
     for name in METRICS:
         assert record["metrics"][name] == r.metrics[name].value, name
+
+
+@pytest.mark.parametrize(("duration", "profile"), [(1.0, "sine"), (3.0, "sine"), (2.0, "cosine"), (4.0, "cosine")])
+def test_the_excursion_is_what_the_command_asks_for_within_the_run(duration, profile):
+    """A 1 s run at 0.52 rad/s was told it asks for 2A/omega = 0.38 m and leaves the workspace; its command travels
+    (A/omega)(1 - cos(omega t)) = 26 mm by its end (found by fuzzing). Independent: the command's integral sampled."""
+    p = params.resolve(LegStepParams, {}, {"duration": duration, "profile": profile, "amplitude": 0.1, "omega": 0.5236})
+    t = np.linspace(0.0, duration, 200001)
+    v = p.amplitude * (np.sin(p.omega * t) if profile == "sine" else np.cos(p.omega * t))
+    x = np.concatenate([[0.0], np.cumsum((v[1:] + v[:-1]) / 2 * np.diff(t))])
+    forward, backward = step.excursion(p)
+    assert forward == pytest.approx(max(x.max(), 0.0), abs=1e-9)
+    assert backward == pytest.approx(max(-x.min(), 0.0), abs=1e-9)
