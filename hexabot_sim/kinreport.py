@@ -326,7 +326,8 @@ def _solve_numeric(robot: Robot, target: Sequence[float], degrees: bool) -> dict
     goal = _target(robot, target, degrees)
     units = _units(robot, degrees)
     where = f"{robot.name} ({robot.spec.source}) target ({_tuple(goal[:3, 3] if goal.ndim == 2 else goal)}) m"
-    solutions = numeric_ik.solve(robot.chain, goal, where)
+    rank = numeric_ik.structural_rank(robot.chain)
+    solutions = numeric_ik.solve(robot.chain, goal, where, rank)
     out, warnings = [], []
     for k, sol in enumerate(solutions, start=1):
         entry = {"q": _show(sol.q, units), "position_residual": sol.position_residual}
@@ -335,7 +336,7 @@ def _solve_numeric(robot: Robot, target: Sequence[float], degrees: bool) -> dict
         out.append(entry | {"sigma_min": sol.sigma_min})
         if sol.near_singular:
             warnings.append(f"IK: solution {k} is at a singular configuration (sigma_min = {sol.sigma_min:.3g})")
-    family = numeric_ik.family(robot.chain, robot.name, len(out))
+    family = numeric_ik.family(robot.chain, robot.name, len(out), rank)
     warnings += [family] if family else []
     method = (
         f"numeric: Levenberg-Marquardt from {numeric_ik.SEEDS_PER_ROUND} seeds in the joint ranges, "

@@ -151,7 +151,7 @@ def _ranges(chain: SerialChain, where: str) -> tuple[np.ndarray, np.ndarray, np.
     return np.array(lo), np.array(hi), np.array(wrap)
 
 
-def solve(chain: SerialChain, target: ArrayLike, where: str | None = None) -> list[Solution]:
+def solve(chain: SerialChain, target: ArrayLike, where: str | None = None, rank: int | None = None) -> list[Solution]:
     """Every distinct joint solution found for `target`, within the joint ranges, ordered by q1, then q2, ...
 
     Levenberg–Marquardt on the geometric Jacobian from SEEDS_PER_ROUND random seeds inside the joint ranges (and
@@ -164,6 +164,7 @@ def solve(chain: SerialChain, target: ArrayLike, where: str | None = None) -> li
         chain: Any serial chain (prismatic joints need limits).
         target: A position (3,) in [m], or a pose (4, 4) for chains of 6 or more joints.
         where: Names the robot and target in messages.
+        rank: The chain's structural_rank, if the caller has it (None: computed here).
 
     Returns:
         The solutions; at most MAX_SOLUTIONS (a redundant chain has a continuum: a sample of it).
@@ -207,7 +208,8 @@ def solve(chain: SerialChain, target: ArrayLike, where: str | None = None) -> li
             f"{where}: no solution within the joint ranges from {MAX_ROUNDS * SEEDS_PER_ROUND} seeds (closest: "
             f"{closest} away): out of reach, or every solution is outside the joint ranges"
         )
-    return _report(batch, np.array(found[:MAX_SOLUTIONS]), goal, pose, structural_rank(chain))
+    rank = structural_rank(chain) if rank is None else rank  # (a caller that also reports the family passes its own)
+    return _report(batch, np.array(found[:MAX_SOLUTIONS]), goal, pose, rank)
 
 
 def _error(batch: _Batch, q: np.ndarray, goal: np.ndarray, pose: bool, size: float):
@@ -321,10 +323,10 @@ def structural_rank(chain: SerialChain, samples: int = 32) -> int:
     return int(ranks.max())
 
 
-def family(chain: SerialChain, name: str, found: int) -> str:
+def family(chain: SerialChain, name: str, found: int, rank: int) -> str:
     """The warning that a chain's solutions are not isolated ("" when they are): more joints than task coordinates,
-    or joints whose motions span fewer of them (structural_rank)."""
-    constrained, rank, n = len(task_rows(chain)), structural_rank(chain), chain.n
+    or joints whose motions span fewer of them (`rank`: structural_rank)."""
+    constrained, n = len(task_rows(chain)), chain.n
     if n <= rank:
         return ""
     why = f"{n} joints for {constrained} task coordinates" if rank == constrained else (
