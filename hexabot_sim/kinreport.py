@@ -326,7 +326,7 @@ def _solve_numeric(robot: Robot, target: Sequence[float], degrees: bool) -> dict
     goal = _target(robot, target, degrees)
     units = _units(robot, degrees)
     where = f"{robot.name} ({robot.spec.source}) target ({_tuple(goal[:3, 3] if goal.ndim == 2 else goal)}) m"
-    rank = numeric_ik.structural_rank(robot.chain)
+    rank = numeric_ik.structural_rank(robot.chain, where)
     solutions = numeric_ik.solve(robot.chain, goal, where, rank)
     out, warnings = [], []
     for k, sol in enumerate(solutions, start=1):

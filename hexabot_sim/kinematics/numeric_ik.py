@@ -208,7 +208,7 @@ def solve(chain: SerialChain, target: ArrayLike, where: str | None = None, rank:
             f"{where}: no solution within the joint ranges from {MAX_ROUNDS * SEEDS_PER_ROUND} seeds (closest: "
             f"{closest} away): out of reach, or every solution is outside the joint ranges"
         )
-    rank = structural_rank(chain) if rank is None else rank  # (a caller that also reports the family passes its own)
+    rank = structural_rank(chain, where) if rank is None else rank  # a caller that reports the family passes it
     return _report(batch, np.array(found[:MAX_SOLUTIONS]), goal, pose, rank)
 
 
@@ -309,12 +309,12 @@ def task_rows(chain: SerialChain) -> tuple[int, ...]:
     return (0, 1, 2, 3, 4, 5) if chain.n >= 6 else (0, 1, 2)
 
 
-def structural_rank(chain: SerialChain, samples: int = 32) -> int:
+def structural_rank(chain: SerialChain, where: str | None = None, samples: int = 32) -> int:
     """The task Jacobian's rank at generic configurations: its largest over `samples` random ones in the joint ranges
     (seeded: the same answer every time). Below the joint count, every solution lies in a family of dimension
     n - rank (a planar arm's three revolute joints constrain x and y only: their 16 numeric solutions were listed
     as if isolated)."""
-    lo, hi, _ = _ranges(chain, chain.name)
+    lo, hi, _ = _ranges(chain, where or chain.name)  # (a slide without limits refused naming `where`, as solve's)
     q = np.random.default_rng(0).uniform(lo, hi, (samples, chain.n))
     _, jac = batch_pose_and_jacobian(chain, q)
     task = jac[:, list(task_rows(chain))]
