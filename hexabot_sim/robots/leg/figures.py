@@ -183,7 +183,7 @@ def workspace_figure(result: ScenarioResult) -> Figure:
     forward, backward = excursion(p) if hasattr(p, "amplitude") else (line_reach(start, geom)[0], 0.0)
     ax.plot(
         [(start[0] - backward) * 1000, (start[0] + forward) * 1000], [start[2] * 1000] * 2, color="tab:orange", lw=2.5,
-        label="commanded line x0 .. x0 + 2A/ω" if hasattr(p, "amplitude") else "reachable part of the line",
+        label="the command's travel in the run (≤ 2A/ω)" if hasattr(p, "amplitude") else "reachable part of the line",
     )  # fmt: skip
     ax.plot(start[0] * 1000, start[2] * 1000, "o", color="tab:orange", markeredgecolor="black", label="start")
     ax.plot(0, 0, "s", color="black", label="hip (coxa axis)")
