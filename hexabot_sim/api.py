@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 from hexabot_sim import folders, registry, unused
 from hexabot_sim import params as params_mod
 from hexabot_sim import video as video_options
-from hexabot_sim.errors import HexabotError, OutputError, UsageError, printable
+from hexabot_sim.errors import HexabotError, OutputError, RunWarning, UsageError, printable
 from hexabot_sim.exporting import export
 from hexabot_sim.scenario import Scenario
 
@@ -147,6 +147,10 @@ def run(
         hexabot_sim.errors.UsageError: (a ValueError) an unknown scenario or parameter, a value out of
             its range, a run too large; the message names what is allowed.
         hexabot_sim.errors.SimulationError: the simulation went unstable (names the time and likely cause).
+
+    Warns:
+        hexabot_sim.errors.RunWarning: for each of `Result.warnings` (a run that finished but whose figures say
+            something is physically off: an undamped pendulum that lost its energy, a walk that fell).
     """
     registry.get(scenario)
     _check_path("config", config)
@@ -154,7 +158,10 @@ def run(
     layers = [params_mod.read_config(Path(config), registry.get(scenario).params_type)] if config is not None else []
     prepared = prepare(scenario, *layers, {name: _plain(value) for name, value in params.items()})
     with _mujoco_warnings():
-        return prepared.run(progress)
+        result = prepared.run(progress)
+    for text in result.warnings:
+        warnings.warn(text, RunWarning, stacklevel=2)
+    return result
 
 
 @dataclasses.dataclass(frozen=True)
@@ -229,6 +236,9 @@ class Result:
         columns: Column name -> numpy array (the CSV's columns), with `.columns.units`.
         raw: The scenario's ScenarioResult (the compiled MjModel, the trajectory, ...).
         wall_time: Wall time of the simulation [s].
+        warnings: What the run's figures say against its physics, one line each (empty for most runs): an
+            undamped pendulum that lost its energy to a coarse timestep, a walk that fell or whose servos
+            saturated. `run()` also issues each as a RunWarning; the CLI prints them, run.json keeps them.
     """
 
     def __init__(self, scenario: Scenario, params: Any, raw: Any, wall_time: float) -> None:
@@ -242,6 +252,7 @@ class Result:
         self.param_units: dict[str, str] = params_mod.units(type(params))
         self.metrics: dict[str, Metric] = dict(raw.metrics)
         self.summary: list[str] = list(raw.summary)
+        self.warnings: list[str] = list(raw.warnings)
         self.columns = Columns(raw.columns, raw.column_units)
 
     def __repr__(self) -> str:

@@ -19,6 +19,10 @@ def printable(text: str) -> str:
     return encodable(text).translate(_CONTROLS)
 
 
+class RunWarning(UserWarning):
+    """A run that finished but whose figures say something is physically off (`Result.warnings` holds the text)."""
+
+
 class HexabotError(Exception):
     """Base class of every error hexabot-sim raises on purpose."""
 

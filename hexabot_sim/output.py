@@ -298,6 +298,7 @@ def write_run(
         },
         "metric_docs": {name: m.doc for name, m in result.metrics.items()},
         "files": files,
+        "warnings": list(result.warnings),
         "video": video_record,
         "simulation": {
             "steps": None if result.trajectory is None else len(result.trajectory.t) - 1,

@@ -26,9 +26,10 @@ FILE_DOCS: dict[str, str] = {
 
 STYLE = """
 :root { color-scheme: light dark; --fg: #1d1d1f; --bg: #fff; --muted: #5f6368; --line: #d9dce0; --head: #f3f4f6;
-        --accent: #0b57d0; }
+        --accent: #0b57d0; --warn: #fff4e5; }
 @media (prefers-color-scheme: dark) {
-  :root { --fg: #e8eaed; --bg: #16181b; --muted: #a0a5ab; --line: #3a3f45; --head: #23272c; --accent: #8ab4f8; }
+  :root { --fg: #e8eaed; --bg: #16181b; --muted: #a0a5ab; --line: #3a3f45; --head: #23272c; --accent: #8ab4f8;
+          --warn: #3b2a12; }
   figure img { background: #fff; }
 }
 * { box-sizing: border-box; }
@@ -41,6 +42,8 @@ a { color: var(--accent); }
 code, .num { font-family: ui-monospace, SFMono-Regular, Menlo, Consolas, monospace; font-size: .92em; }
 .lead { margin: 0 0 .5rem; color: var(--muted); }
 .summary { margin: .5rem 0 0; padding: .6rem .8rem; background: var(--head); border-radius: 6px; }
+.warning { margin: .5rem 0 0; padding: .6rem .8rem; background: var(--warn); border-left: 4px solid #d9822b;
+  border-radius: 6px; overflow-wrap: anywhere; }
 .files { display: flex; flex-wrap: wrap; gap: .5rem; padding: 0; margin: 0; list-style: none; }
 .files li { border: 1px solid var(--line); border-radius: 6px; padding: .35rem .6rem; max-width: 100%; }
 .files span { color: var(--muted); font-size: .85em; }
@@ -183,6 +186,8 @@ def html_page(
     line = summary_line(record, key_metrics)
     if line:
         out.append(f'<p class="summary">{_e(line)}</p>')
+    for warning in record.get("warnings") or []:  # what the figures say against the run's physics
+        out.append(f'<p class="warning"><b>Warning:</b> {_e(warning)}</p>')
     out.append("</header>")
 
     out += ["<section>", "<h2>Files</h2>", '<ul class="files">']

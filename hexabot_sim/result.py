@@ -44,6 +44,9 @@ class ScenarioResult:
     # Text lines the video shows under the time: each maps a recording row to text (render.OverlayLine).
     overlay: list[Callable[[int], str]] = dataclasses.field(default_factory=list)
     extras: dict[str, Any] = dataclasses.field(default_factory=dict)  # scenario data for its figures
+    # What the run's figures say against its physics, one line each (an undamped pendulum that lost its energy, a
+    # robot that fell or whose servos hit their torque limit): printed after the run, in run.json and the report.
+    warnings: list[str] = dataclasses.field(default_factory=list)
 
 
 @dataclasses.dataclass

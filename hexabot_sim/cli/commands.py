@@ -191,6 +191,8 @@ def _execute(
         metric = result.metrics[key]
         print(f"  {key:<26} {_format(metric.value, metric.unit)}")
     print(f"  files: {', '.join(files)}")
+    for warning in result.warnings:
+        eprint(f"{PROG}: warning: {warning}")
     return 0
 
 

@@ -140,6 +140,8 @@ def planned_stand_heights(p: WalkParams, t: np.ndarray) -> np.ndarray:
 
 
 _VERTICAL = np.array([0.0, 0.0, 1.0])
+SATURATED: float = 1 - 1e-9  # a joint torque at this share of the limit (or more) is at the limit
+SATURATION_WARNING: float = 0.25  # saturated in more of the steps is warned of (stairs 6 %, quadbot-trot-rough 10 %)
 FELL_DOC = (
     f"the plate touched the ground or tilted beyond {FALL_TILT_DEG:g} deg from the attitude it walks in (the "
     "slope's, or level with level_body=on)"
@@ -220,8 +222,14 @@ def walking_metrics(
     # the body on it, 45.08 deg from the vertical, read as a fall)
     axis = np.stack([2 * (x_ * z_ + w_ * y_), 2 * (y_ * z_ - w_ * x_), 1 - 2 * (x_**2 + y_**2)], axis=1)
     tilt = np.degrees(np.arccos(np.clip(axis @ np.asarray(up, dtype=float), -1.0, 1.0)))
-    fell = bool(contacts.body_contact.any() or (tilt > FALL_TILT_DEG).any())
+    falls = contacts.body_contact | (tilt > FALL_TILT_DEG)
+    fell = bool(falls.any())
     peak_torque = float(np.abs(contacts.torque).max())
+    # A joint of a loaded leg at its limit (actuatorfrcrange clamps the servo's torque there): the weight asks more
+    # than the servos have. A swing foot pushing on a stair's riser also saturates, and is not counted.
+    at_limit = np.abs(contacts.torque) >= SATURATED * p.ROBOT.torque_limit  # (n, 3 n_legs)
+    leg_at_limit = at_limit.reshape(len(t), -1, 3).any(axis=2)  # (n, n_legs)
+    saturated = (leg_at_limit & loaded).any(axis=1)
     return {
         "mean_vx": Metric(mean_vx, "m/s", "mean body-frame forward speed over the steady walk"),
         "mean_vy": Metric(mean_vy, "m/s", "mean body-frame sideways speed over the steady walk"),
@@ -280,8 +288,29 @@ def walking_metrics(
         "torque_limit_fraction": Metric(
             peak_torque / p.ROBOT.torque_limit, "1", f"peak_joint_torque / the {p.ROBOT.torque_limit} N*m limit"
         ),
+        "torque_saturated_fraction": Metric(
+            float(saturated.mean()), "1", "share of the steps in which a joint of a loaded leg is at its torque limit"
+        ),
         "fell": Metric(fell, "", FELL_DOC),
+        "fell_at": _null_why(
+            Metric(float(t[np.argmax(falls)]) if fell else None, "s", "the time of the first row that fell"),
+            "the robot did not fall",
+        ),
     }
+
+
+def walk_warnings(metrics: dict[str, Metric], torque_limit: float) -> list[str]:
+    """What the walk's figures say against it: a fall, servos held at their torque limit."""
+    out = []
+    if metrics["fell"].value:
+        out.append(f"the robot fell at t = {metrics['fell_at'].value:.3g} s ({FELL_DOC}); the walk's figures from "
+                   "then on are not a walk's")  # fmt: skip
+    share = metrics["torque_saturated_fraction"].value
+    if share > SATURATION_WARNING:
+        out.append(f"the servos saturate: a joint of a loaded leg was at its {torque_limit:g} N m torque limit in "
+                   f"{100 * share:.3g} % of the steps, so carrying the robot asks more than they have (a lighter "
+                   "robot, a gentler command or stronger servos: torque_limit in a robot file)")  # fmt: skip
+    return out
 
 
 TOUCHDOWN_TOLERANCE: float = 0.02  # [s] a touchdown further than this from the plan counts as early or late

@@ -25,6 +25,7 @@ from hexabot_sim.walking.metrics import (
     rpy_from_quat,
     steady_window,
     terrain_metrics,
+    walk_warnings,
     walking_metrics,
 )
 from hexabot_sim.walking.parameters import WalkParams, feasibility
@@ -124,6 +125,7 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
         column_units=units,
         metrics=metrics,
         summary=["mean_vx", "mean_vy", "mean_yaw_rate", "lateral_drift", "heading_drift", "slip_per_stance", "fell"],
+        warnings=walk_warnings(metrics, p.ROBOT.torque_limit),
         camera="slope" if p.slope_deg else "track",
         trail=trail,
         overlay=overlay,

@@ -1,6 +1,7 @@
 """Pendulum physics against independent truth: ODE solve, elliptic period, energy balance, equilibrium."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -150,3 +151,29 @@ def test_weak_spring_has_several_stable_rest_angles():
     """k < m g c: the spring cannot hold the link up everywhere; gravity wells near 2 pi n appear."""
     stable = closed_forms.equilibria(0.05, 1.0, 0.3)
     assert len(stable) >= 2
+
+
+def test_a_broken_energy_balance_is_warned_of_with_a_timestep_that_keeps_it():
+    """stiffness 24000 N m/rad: omega dt = 2.83 at 1 ms, just inside RK4's stability edge, so nothing diverges but
+    the undamped pendulum loses all its energy; it was written out without a word."""
+    p, result = run("pendulum-undamped", stiffness=24000.0, duration=0.5)
+    drift = result.metrics["energy_drift_rel"].value
+    assert drift > 0.9  # 95 % of it lost in 0.5 s
+    [warning] = result.warnings
+    assert f"the integration broke the energy balance by {100 * drift:.3g} % of E(0)" in warning
+    inertia, mgc = constants(p.mass, p.length, p.radius)  # the reference's own closed forms
+    omega = math.sqrt((p.stiffness + mgc) / inertia)
+    assert f"rate x timestep = {omega * p.timestep:.3g}" in warning
+    advised = float(re.search(r"try timestep <= (\S+) s$", warning).group(1))
+    assert 0.97 * 0.1 / omega <= advised <= 0.1 / omega  # 0.1 / omega rounded down to two digits
+    _, again = run("pendulum-undamped", stiffness=24000.0, duration=0.5, timestep=advised)
+    assert again.warnings == [] and again.metrics["energy_drift_rel"].value < 1e-3
+
+
+def test_sound_runs_warn_of_nothing(default_run):
+    assert default_run[2].warnings == []
+
+
+@pytest.mark.parametrize("drift", [None, 0.0, 0.05, closed_forms.ENERGY_WARNING])
+def test_no_energy_warning_within_the_bound(drift):
+    assert closed_forms.energy_warning(drift, 0.003, 0.15, 1.0, 0.0, 0.001) is None
