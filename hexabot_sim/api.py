@@ -156,7 +156,11 @@ def run(
     _check_path("config", config)
     _check_callable("progress", progress)
     layers = [params_mod.read_config(Path(config), registry.get(scenario).params_type)] if config is not None else []
-    prepared = prepare(scenario, *layers, {name: _plain(value) for name, value in params.items()})
+    layers.append({name: _plain(value) for name, value in params.items()})
+    prepared = prepare(scenario, *layers)
+    # The files it reads, which Result.save may not write over (the resolved params hold a schedule's rows, no file).
+    files = params_mod.input_files(config, prepared.entry.params_type, layers)
+    prepared = dataclasses.replace(prepared, inputs=tuple(files))
     with _mujoco_warnings():
         result = prepared.run(progress)
     for text in result.warnings:
@@ -175,12 +179,13 @@ class Prepared:
 
     entry: Scenario
     params: Any
+    inputs: tuple[str, ...] = ()  # the files the run reads (params.input_files): Result.save writes over none
 
     def run(self, progress: Callable[[int, int], None] | None = None) -> Result:
         """Simulates the scenario (MuJoCo's warnings go to whatever handler the caller installed)."""
         started = time.perf_counter()
         raw = self.entry.runner(self.entry.name, self.params, progress=progress)
-        return Result(self.entry, self.params, raw, time.perf_counter() - started)
+        return Result(self.entry, self.params, raw, time.perf_counter() - started, self.inputs)
 
 
 def prepare(scenario: str, *layers: Mapping[str, Any]) -> Prepared:
@@ -241,9 +246,12 @@ class Result:
             saturated. `run()` also issues each as a RunWarning; the CLI prints them, run.json keeps them.
     """
 
-    def __init__(self, scenario: Scenario, params: Any, raw: Any, wall_time: float) -> None:
+    def __init__(
+        self, scenario: Scenario, params: Any, raw: Any, wall_time: float, inputs: tuple[str, ...] = ()
+    ) -> None:
         self._scenario = scenario
         self._params = params
+        self._inputs = inputs
         self.raw = raw
         self.wall_time = wall_time
         self.scenario: str = scenario.name
@@ -328,7 +336,8 @@ class Result:
             The run folder.
 
         Raises:
-            hexabot_sim.errors.UsageError: a refused `out` (see the README's run folder contract) or bad video options.
+            hexabot_sim.errors.UsageError: a refused `out` (see the README's run folder contract; also one that is,
+                holds or lies inside a file the run read, with or without `force`) or bad video options.
             hexabot_sim.errors.OutputError: the folder could not be written.
         """
         _check_path("out", out)
@@ -343,6 +352,8 @@ class Result:
         if video:
             backend, reason = gl.video_backend()
         try:
+            if out is not None:  # a config, schedule or robot file the run read is never written over
+                folders.check_not_input(out, list(self._inputs))
             with folders.run_folder(out, self.scenario, force=force) as folder:
                 self.write_folder(folder.path, plots=plots, video=settings, backend=backend, no_video_reason=reason,
                                   video_progress=progress)  # fmt: skip
@@ -417,7 +428,8 @@ class Result:
             The path written.
 
         Raises:
-            hexabot_sim.errors.UsageError: bad options, or a scenario without a trajectory (leg-sweep).
+            hexabot_sim.errors.UsageError: bad options, a scenario without a trajectory (leg-sweep), or `path` a
+                file the run read (its config, schedule, waypoints or robot file).
             hexabot_sim.errors.OutputError: no working OpenGL or ffmpeg here, or rendering failed.
         """
         _check_path("path", path, optional=False)
@@ -439,6 +451,7 @@ class Result:
             raise UsageError(f"the folder {str(folder)!r} for the video does not exist")
         if not os.access(folder, os.W_OK | os.X_OK):
             raise OutputError(f"the folder {str(folder)!r} for the video cannot be written")
+        folders.check_not_input(path, list(self._inputs))  # never over a file the run read, even with force
         folders.check_replace(path, force)
         # The name cut short (a 250-byte name is legal; '.NAME.partial-PID.mp4' was not: a raw OSError), with a
         # random part so two renders to one path in one process do not share it.

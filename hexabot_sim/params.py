@@ -13,7 +13,7 @@ import re
 import stat
 import sys
 import tomllib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -212,7 +212,7 @@ def _to_float(raw: Any) -> float | None:
 def _convert(name: str, raw: Any, info: ParamInfo, kind: type) -> Any:
     """Converts one raw value (a string from --set or a TOML value) and checks its range."""
     if (info.table is not None or info.name_or_file is not None) and isinstance(raw, str):
-        raw = _home(raw)
+        raw = home(raw)
     if info.table is not None:  # a file name or rows: the parameter's own reader
         return info.table[1](name, raw)
     if kind is tuple:  # a list of numbers: "0.01,0.05" on the command line, [0.01, 0.05] in TOML
@@ -253,7 +253,19 @@ def _convert(name: str, raw: Any, info: ParamInfo, kind: type) -> Any:
     return value
 
 
-def _home(text: str) -> str:
+def input_files(config: str | os.PathLike | None, cls: type, layers: Sequence[Mapping[str, Any]],
+                grid_values: Sequence[Any] = ()) -> list[str]:  # fmt: skip
+    """The files a run or sweep reads: its config file and every existing file a file-naming parameter names (a
+    walk's schedule or waypoints, a robot file) in the layers or a grid's values, as the readers take them (~ is
+    the user's home). Its output folder may not be, hold or lie inside any of them (folders.check_not_input)."""
+    files = [os.fspath(config)] if config is not None else []
+    takes_file = {n for n, (info, _) in infos(cls).items() if info.table or info.name_or_file}
+    values = [v for layer in layers for n, v in layer.items() if n in takes_file] + list(grid_values)
+    named = [home(os.fspath(v)) for v in values if isinstance(v, (str, os.PathLike))]
+    return files + [v for v in named if isinstance(v, str) and os.path.isfile(v)]
+
+
+def home(text: str) -> str:
     """A file name with its leading ~ or ~user expanded, as a shell would (no shell expands it after `--set name=` or
     in a config file); any other text as it is."""
     return os.path.expanduser(text) if text.startswith("~") else text
@@ -415,7 +427,7 @@ def files_beside(data: dict[str, Any], cls: type, config: Path) -> dict[str, Any
             continue
         if info.name_or_file is not None and value.lower() in (n.lower() for n in info.name_or_file.names):
             continue
-        if Path(_home(value)).is_absolute():  # ~/file: the user's home, not the config's folder
+        if Path(home(value)).is_absolute():  # ~/file: the user's home, not the config's folder
             continue
         missing = False
         with contextlib.suppress(OSError, ValueError):  # a NUL byte or an over-long name: checked later

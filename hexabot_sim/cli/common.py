@@ -33,13 +33,7 @@ def eprint(text: str) -> None:
 
 
 def inputs(config: str | None, cls: type, layers: list[dict], grid_values: list = ()) -> list[str]:
-    """The files a command reads: its --config, and every file a parameter names (a walk's schedule or waypoints,
-    a robot file) in the layers or the grid's values; --out may not be, hold or lie inside any of them."""
-    import os
-
+    """The files a command reads (params.input_files): --out may not be, hold or lie inside any of them."""
     from hexabot_sim import params as params_mod
 
-    files = [config] if config is not None else []
-    takes_file = {n for n, (info, _) in params_mod.infos(cls).items() if info.table or info.name_or_file}
-    values = [v for layer in layers for n, v in layer.items() if n in takes_file] + list(grid_values)
-    return files + [v for v in values if isinstance(v, (str, os.PathLike)) and os.path.isfile(v)]
+    return params_mod.input_files(config, cls, layers, grid_values)

@@ -287,3 +287,44 @@ def test_run_and_sweep_never_write_over_the_files_their_parameters_name(tmp_path
         code, _, err = cli(capsys, *argv)
         assert code == 2 and "a command never writes over what it reads" in err, (argv, err)
     assert sorted(p.name for p in folder.iterdir()) == ["robot.toml", "schedule.csv"]
+
+
+@pytest.mark.parametrize("how", ["set", "config"])
+@pytest.mark.parametrize("command", ["run", "sweep"])
+def test_an_input_named_from_home_is_not_deleted_by_force(tmp_path, capsys, monkeypatch, how, command):
+    """Found by fuzzing: `--set schedule=~/proj/s.csv --out ~/proj --force` deleted s.csv. The input check took the
+    raw '~/proj/s.csv' (no such file), while the reader expanded ~ as a shell would."""
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    proj = tmp_path / "home" / "proj"
+    proj.mkdir(parents=True)
+    schedule = proj / "s.csv"
+    schedule.write_text("t, vx, vy, yaw_rate\n0, 0.1, 0, 0\n")
+    args = ["--set", "schedule=~/proj/s.csv"]
+    if how == "config":
+        config = tmp_path / "walk.toml"
+        config.write_text('schedule = "~/proj/s.csv"\n')
+        args = ["--config", str(config)]
+    grid = ["--grid", "duration=1.6,1.7"] if command == "sweep" else ["--set", "duration=1.6"]
+    code, out, err = cli(capsys, command, "hexabot-walk", *args, *grid, "--no-plots", "--out", str(proj), "--force")
+    assert code == 2 and out == "" and "never writes over what it reads" in err and "s.csv" in err, err
+    assert sorted(os.listdir(proj)) == ["s.csv"] and schedule.read_text().startswith("t, vx")
+
+
+def test_the_api_never_saves_or_films_over_a_file_the_run_read(tmp_path, monkeypatch):
+    """Result.save(out, force=True) into the folder of the run's schedule replaced the folder, schedule and all;
+    Result.video(path, force=True) wrote over the schedule itself."""
+    import hexabot_sim as hs
+    from hexabot_sim.errors import UsageError
+
+    monkeypatch.setenv("HOME", str(tmp_path))
+    (tmp_path / "proj").mkdir()
+    schedule = tmp_path / "proj" / "s.csv"
+    schedule.write_text("t, vx, vy, yaw_rate\n0, 0.1, 0, 0\n")
+    for name in (str(schedule), "~/proj/s.csv"):
+        result = hs.run("hexabot-walk", schedule=name, duration=1.6)
+        with pytest.raises(UsageError, match="never writes over what it reads"):
+            result.save(tmp_path / "proj", force=True, plots=False)
+        with pytest.raises(UsageError, match="never writes over what it reads"):
+            result.video(schedule, force=True)
+        assert sorted(os.listdir(tmp_path / "proj")) == ["s.csv"] and schedule.read_text().startswith("t, vx")
+    assert result.save(tmp_path / "elsewhere", plots=False).is_dir()  # another folder is fine
