@@ -25,7 +25,9 @@ STAGING_PREFIX = ".hexabot-sim-staging-"
 
 STAGING_SUFFIX = ".partial"
 
-_OLD_PREFIX = ".hexabot-sim-replaced-"
+OLD_PREFIX = ".hexabot-sim-replaced-"
+PREVIOUS = "previous"  # in a replaced folder: what --force moved aside
+_TARGET = "target"  # ... and the name it had, written first: `clean` puts it back if the run died before publishing
 
 
 def default_out(scenario: str, root: Path = Path("runs")) -> Path:
@@ -93,7 +95,7 @@ def _check_existing(out: Path, text: str, force: bool) -> None:
     if Path.home().resolve().is_relative_to(resolved):
         raise UsageError(f"output folder {text!r} is the home folder or one of its parents; choose a new folder")
     for part in (*Path(os.path.abspath(out)).parts, *resolved.parts):
-        if part.startswith((STAGING_PREFIX, _OLD_PREFIX)):
+        if part.startswith((STAGING_PREFIX, OLD_PREFIX)):
             raise UsageError(
                 f"output folder {text!r} is inside another run's staging folder {part!r}; choose a new folder"
             )
@@ -242,16 +244,18 @@ def _replace(parent_fd: int, staging: str, out: Path, force: bool, before: tuple
     old = None
     try:
         if force and now is not None and now[2]:
-            old = _mkdir_unique(parent_fd, f"{_OLD_PREFIX}{os.getpid()}-")
-            rename(out.name, f"{old}/previous")  # moved aside first, deleted only once the new run is in place
+            old = _mkdir_unique(parent_fd, f"{OLD_PREFIX}{os.getpid()}-")
+            _write_target(parent_fd, old, out.name)
+            rename(out.name, f"{old}/{PREVIOUS}")  # moved aside first, deleted only once the new run is in place
         rename(staging, out.name)
     except OSError as e:
         if old is not None:
             try:
-                rename(f"{old}/previous", out.name)
+                rename(f"{old}/{PREVIOUS}", out.name)
             except OSError:
                 pass
             with contextlib.suppress(OSError):
+                os.unlink(f"{old}/{_TARGET}", dir_fd=parent_fd)
                 os.rmdir(old, dir_fd=parent_fd)
         if e.errno in _TAKEN:
             raise OutputError(
@@ -354,6 +358,47 @@ def disk_full(folder: Path) -> bool:
     return st.f_bavail * st.f_frsize < DISK_FULL_BYTES
 
 
+def _write_target(parent_fd: int, old: str, name: str) -> None:
+    """Writes the name of the folder --force is about to move aside into its replaced folder `old` (fsynced)."""
+    fd = os.open(f"{old}/{_TARGET}", os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644, dir_fd=parent_fd)
+    try:
+        os.write(fd, os.fsencode(name))
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def replaced_fate(path: Path) -> tuple[str, Path | None]:
+    """What `clean` does with a stale replaced folder (stale_staging lists it) of a --force run that died.
+
+    Returns ("restore", where): the run died after it moved the user's folder aside and before it published its
+    own, so the name is free: put `previous` back there (rename_back). ("keep", where or None): `previous` is there
+    but its name is unknown, or taken by something that is not a run folder: only a person can tell, so it stays.
+    ("remove", None): nothing of the user's is in it, or the new run was published (what --force asked to replace).
+    """
+    previous = path / PREVIOUS
+    if not _is_folder(previous):
+        return "remove", None
+    try:
+        name = os.fsdecode((path / _TARGET).read_bytes())
+    except OSError:
+        name = ""
+    if not name or name in (".", "..") or "/" in name or "\0" in name:
+        return "keep", None
+    where = path.parent / name
+    if not os.path.lexists(where):
+        return "restore", where
+    return ("remove", None) if (where / "run.json").is_file() and not where.is_symlink() else ("keep", where)
+
+
+def rename_back(path: Path, where: Path) -> None:
+    """Moves a replaced folder's `previous` back to `where`, free when replaced_fate looked (a folder made there
+    since would be replaced if empty: rename() does that; a taken one raises)."""
+    os.rename(path / PREVIOUS, where)
+    with contextlib.suppress(OSError):
+        os.unlink(path / _TARGET)
+
+
 def stale_cells() -> list[Path]:
     """Sweep workers' kept-run folders in the system's temporary folder whose process is gone."""
     return [path for path in sorted(Path(tempfile.gettempdir()).glob(f"{CELL_PREFIX}*")) if _stale(path, _CELL_NAME)]
@@ -362,7 +407,7 @@ def stale_cells() -> list[Path]:
 def stale_staging(root: Path) -> list[Path]:
     """Staging folders in `root` and its sub-folders left by runs whose process no longer exists."""
     found = []
-    for prefix, name in ((STAGING_PREFIX, _STAGING_NAME), (_OLD_PREFIX, _OLD_NAME)):
+    for prefix, name in ((STAGING_PREFIX, _STAGING_NAME), (OLD_PREFIX, _OLD_NAME)):
         top = _entries(root)
         below = [entry for folder in top if _is_folder(folder) for entry in _entries(folder)]
         found += [path for path in sorted(top) + sorted(below) if path.name.startswith(prefix) and _stale(path, name)]
@@ -382,7 +427,7 @@ def _entries(folder: Path) -> list[Path]:
 # tempfile.TemporaryDirectory: <prefix><pid>-<8 of [a-z0-9_]>). A name that merely starts like one is a user's.
 _STAGING_NAME = re.compile(re.escape(STAGING_PREFIX) + r"([1-9][0-9]{0,9})-[0-9a-f]{8}" + re.escape(STAGING_SUFFIX))
 
-_OLD_NAME = re.compile(re.escape(_OLD_PREFIX) + r"([1-9][0-9]{0,9})-[0-9a-f]{8}")
+_OLD_NAME = re.compile(re.escape(OLD_PREFIX) + r"([1-9][0-9]{0,9})-[0-9a-f]{8}")
 
 _CELL_NAME = re.compile(re.escape(CELL_PREFIX) + r"([1-9][0-9]{0,9})-[a-z0-9_]{8}")
 

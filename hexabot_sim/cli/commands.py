@@ -207,11 +207,29 @@ def cmd_clean(args: argparse.Namespace) -> int:
     stale = folders.stale_staging(root) + folders.stale_cells()
     removed = 0
     for path in stale:
+        fate, where = folders.replaced_fate(path) if path.name.startswith(folders.OLD_PREFIX) else ("remove", None)
+        if fate == "keep":  # a --force run died with the user's folder moved aside, and its name is not known
+            shown = folders.display_path(path / folders.PREVIOUS)
+            print(f"kept {shown}: a folder a --force run moved aside before it died" + (
+                f"; {folders.display_path(where)} exists, so it was not put back" if where else "") +
+                "; move it where it belongs by hand")  # fmt: skip
+            continue
         if args.dry_run:
+            if fate == "restore":
+                print(
+                    f"would put {folders.display_path(path / folders.PREVIOUS)} back as {folders.display_path(where)}"
+                )
             print(f"would remove {folders.display_path(path)}")
             continue
         if not os.path.lexists(path):
             continue  # another clean (or its owner) removed it meanwhile
+        if fate == "restore":  # the run died between moving the user's folder aside and publishing its own
+            try:
+                folders.rename_back(path, where)
+            except OSError as e:
+                raise OutputError(f"could not put {folders.display_path(path / folders.PREVIOUS)!r} back as "
+                                  f"{folders.display_path(where)!r}: {e.strerror or e}") from None  # fmt: skip
+            print(f"restored {folders.display_path(where)} (a --force run died before replacing it)")
         try:
             if sys.version_info >= (3, 12):
                 shutil.rmtree(path, onexc=_gone_is_fine)

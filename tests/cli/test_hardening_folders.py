@@ -25,15 +25,15 @@ def test_clean_removes_only_folders_named_exactly_as_a_run_names_them(tmp_path, 
     ours = [
         tmp_path / f"{folders.STAGING_PREFIX}{dead}-0a1b2c3d{folders.STAGING_SUFFIX}",
         tmp_path / "sub" / f"{folders.STAGING_PREFIX}{dead}-deadbeef{folders.STAGING_SUFFIX}",
-        tmp_path / f"{folders._OLD_PREFIX}{dead}-00ff00ff",
+        tmp_path / f"{folders.OLD_PREFIX}{dead}-00ff00ff",
     ]
     users = [
         tmp_path / f"{folders.STAGING_PREFIX}backup",  # merely starts like ours: a user's folder
         tmp_path / "sub" / f"{folders.STAGING_PREFIX}old",
         tmp_path / f"{folders.STAGING_PREFIX}{dead}-0a1b2c3d",  # no suffix
         tmp_path / f"{folders.STAGING_PREFIX}{dead}-0a1b2c3d{folders.STAGING_SUFFIX}.keep",
-        tmp_path / f"{folders._OLD_PREFIX}{dead}-notes",
-        tmp_path / f"{folders._OLD_PREFIX}99999999999-00ff00ff",  # no system gives out such a pid
+        tmp_path / f"{folders.OLD_PREFIX}{dead}-notes",
+        tmp_path / f"{folders.OLD_PREFIX}99999999999-00ff00ff",  # no system gives out such a pid
         tmp_path / f"{folders.STAGING_PREFIX}{os.getpid()}-11223344{folders.STAGING_SUFFIX}",  # alive
     ]
     for folder in ours + users:
@@ -328,3 +328,52 @@ def test_the_api_never_saves_or_films_over_a_file_the_run_read(tmp_path, monkeyp
             result.video(schedule, force=True)
         assert sorted(os.listdir(tmp_path / "proj")) == ["s.csv"] and schedule.read_text().startswith("t, vx")
     assert result.save(tmp_path / "elsewhere", plots=False).is_dir()  # another folder is fine
+
+
+KILLED_AFTER_MOVING_ASIDE = """
+import os, sys
+real = os.rename
+def rename(src, dst, **kw):  # the process dies (SIGKILL-like) once --force has moved the old folder aside
+    real(src, dst, **kw)
+    if str(dst).endswith("/previous"):
+        os._exit(9)
+os.rename = rename
+from hexabot_sim.cli import main
+sys.exit(main(["run", "pendulum", "--set", "duration=0.05", "--no-plots", "--out", sys.argv[1], "--force"]))
+"""
+
+
+def test_clean_puts_back_a_folder_that_a_killed_force_run_moved_aside(tmp_path, capsys):
+    """Found by fuzzing: a --force run killed between moving the old folder aside and publishing its own left the
+    user's only copy in .hexabot-sim-replaced-*/previous, and `clean` then removed it with the unpublished run."""
+    runs = tmp_path / "runs"
+    (runs / "keep").mkdir(parents=True)
+    (runs / "keep" / "precious.txt").write_text("my old result")
+    proc = subprocess.run([sys.executable, "-c", KILLED_AFTER_MOVING_ASIDE, str(runs / "keep")], capture_output=True)
+    assert proc.returncode == 9, proc.stderr
+    assert not (runs / "keep").exists()  # the state the kill leaves: the old folder aside, the new one unpublished
+    [aside] = runs.glob(f"{folders.OLD_PREFIX}*")
+    assert (aside / "previous" / "precious.txt").exists() and len(list(runs.glob(f"{folders.STAGING_PREFIX}*"))) == 1
+    code, out, err = cli(capsys, "clean", str(runs), "--dry-run")
+    assert code == 0 and "would put" in out and not (runs / "keep").exists()
+    code, out, err = cli(capsys, "clean", str(runs))
+    assert code == 0 and "restored" in out and err == "", err
+    assert sorted(os.listdir(runs)) == ["keep"] and (runs / "keep" / "precious.txt").read_text() == "my old result"
+
+
+@pytest.mark.parametrize("case", ["published", "no target", "name taken by a user's folder"])
+def test_clean_removes_a_replaced_folder_only_when_the_run_was_published(tmp_path, capsys, case):
+    aside = tmp_path / f"{folders.OLD_PREFIX}{_dead_pid()}-00ff00ff"
+    (aside / "previous").mkdir(parents=True)
+    (aside / "previous" / "old.txt").write_text("old")
+    if case != "no target":
+        (aside / "target").write_text("keep")
+        (tmp_path / "keep").mkdir()
+        (tmp_path / "keep" / ("run.json" if case == "published" else "notes.txt")).write_text("{}")
+    code, out, err = cli(capsys, "clean", str(tmp_path))
+    assert code == 0, err
+    if case == "published":  # the new run is in place: the old one is what --force was asked to replace
+        assert not aside.exists() and "removed" in out
+    else:
+        assert (aside / "previous" / "old.txt").read_text() == "old" and "kept" in out and "by hand" in out
+    assert (tmp_path / "keep").exists() or case == "no target"
