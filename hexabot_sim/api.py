@@ -449,7 +449,7 @@ class Result:
         folder = path.parent
         if not folder.is_dir():
             raise UsageError(f"the folder {str(folder)!r} for the video does not exist")
-        if not os.access(folder, os.W_OK | os.X_OK):
+        if not folders.writable(folder):  # (root passes os.access: the mode bits too)
             raise OutputError(f"the folder {str(folder)!r} for the video cannot be written")
         folders.check_not_input(path, list(self._inputs))  # never over a file the run read, even with force
         folders.check_replace(path, force)

@@ -12,6 +12,7 @@ from typing import Any
 
 from hexabot_sim import folders
 from hexabot_sim.errors import OutputError, UsageError, printable
+from hexabot_sim.signals import PUBLISHED, RECEIVED_SIGNALS, signals_held, stop_request
 
 
 def export(
@@ -89,7 +90,7 @@ def export(
             raise UsageError(f"{what} {shown!r} is a folder; give a file name")
         if not path.parent.is_dir():
             raise UsageError(f"the folder {printable(str(path.parent))!r} for the {what} does not exist")
-        if not os.access(path.parent, os.W_OK | os.X_OK):  # a read-only folder or file system: exit 2, not 1
+        if not folders.writable(path.parent):  # a read-only folder or file system (also for root): exit 2, not 1
             raise UsageError(f"the folder {printable(str(path.parent))!r} for the {what} cannot be written")
         if spec.file_id is not None and _is_file(path, spec.file_id):
             raise UsageError(f"{what} {shown!r} is the robot file being exported; it is never written over")
@@ -115,26 +116,33 @@ def export(
             folders.check_replace(path, force, what, "add --force (force=True)")
             if spec.file_id is not None and _is_file(path, spec.file_id):  # linked to it meanwhile
                 raise UsageError(f"{what} {printable(str(path))!r} is the robot file being exported; left alone")
-        try:
-            for path, (what, _) in texts.items():
-                try:
-                    inode = os.stat(staged[path]).st_ino
-                    undo.append((path, _keep_previous(path) if force else None, inode))
-                    if force:
-                        os.replace(staged[path], path)
-                    else:
-                        folders.publish_new(staged[path], path, what, "it was written")
-                except OSError as e:
-                    raise OutputError(
-                        f"writing the {what} {printable(str(path))!r} failed: {e.strerror or e}"
-                    ) from None
-                written.append(path)
-        except BaseException:  # the second file failed (or a stop came): the first one is taken back
-            _take_back(undo, written)
-            raise
-        for _, previous, _ in undo:
-            if previous is not None:
-                previous.unlink(missing_ok=True)
+        # Both or neither: a stop request (Ctrl-C, SIGTERM) waits until the files and their kept copies are settled
+        # (it came between a file's rename and its bookkeeping, and the file replaced was lost).
+        PUBLISHED[0] = False
+        with signals_held():
+            if RECEIVED_SIGNALS:  # a stop request some library swallowed: honour it before anything is published
+                raise stop_request(RECEIVED_SIGNALS[-1])
+            try:
+                for path, (what, _) in texts.items():
+                    try:
+                        inode = os.stat(staged[path]).st_ino
+                        undo.append((path, _keep_previous(path) if force else None, inode))
+                        if force:
+                            os.replace(staged[path], path)
+                        else:
+                            folders.publish_new(staged[path], path, what, "it was written")
+                    except OSError as e:
+                        raise OutputError(
+                            f"writing the {what} {printable(str(path))!r} failed: {e.strerror or e}"
+                        ) from None
+                    written.append(path)
+            except BaseException:  # the second file failed (or a stop came): the first one is taken back
+                _take_back(undo)
+                raise
+            for _, previous, _ in undo:
+                if previous is not None:
+                    previous.unlink(missing_ok=True)
+            PUBLISHED[0] = True  # a stop request from now on is too late: both files are in place
     finally:
         for staging in staged.values():
             staging.unlink(missing_ok=True)
@@ -156,11 +164,12 @@ def _keep_previous(path: Path) -> Path | None:
     return keep
 
 
-def _take_back(undo: list[tuple[Path, Path | None, int]], written: list[Path]) -> None:
-    """Undoes the files published so far: each put back as it was (removed if it was new), if it is still ours."""
+def _take_back(undo: list[tuple[Path, Path | None, int]]) -> None:
+    """Undoes the files published so far: each put back as it was (removed if it was new), if it is still ours (our
+    staged file's inode is there: published, even if a stop came before it was counted)."""
     for path, previous, inode in reversed(undo):
         with contextlib.suppress(OSError):
-            ours = path in written and os.lstat(path).st_ino == inode
+            ours = os.lstat(path).st_ino == inode
             if previous is not None:
                 if ours:
                     os.replace(previous, path)

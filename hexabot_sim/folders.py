@@ -109,7 +109,7 @@ def _check_existing(out: Path, text: str, force: bool) -> None:
         raise UsageError(f"output folder {text!r} cannot be read: {e.strerror or e}") from None
     if nonempty and not force:
         raise UsageError(f"output folder {text!r} is not empty; choose another --out or add --force to replace it")
-    if out.is_dir() and (not out.stat().st_mode & 0o222 or not os.access(out, os.W_OK | os.X_OK)):
+    if out.is_dir() and not writable(out):
         # A run replaces --out by a rename, which needs no write permission on it (and root needs none at all):
         # a folder made read-only (or immutable) was replaced by a writable one, or found unwritable after the run.
         raise UsageError(f"output folder {text!r} is read-only; make it writable or choose another --out")
@@ -120,8 +120,17 @@ def _check_existing(out: Path, text: str, force: bool) -> None:
         ancestor = ancestor.parent
     if not ancestor.is_dir():
         raise UsageError(f"output folder {text!r}: {str(ancestor)!r} is not a folder")
-    if not ancestor.stat().st_mode & 0o222 or not os.access(ancestor, os.W_OK | os.X_OK):  # (root: the mode bits)
+    if not writable(ancestor):
         raise UsageError(f"output folder {text!r} cannot be written: no write permission in {str(ancestor)!r}")
+
+
+def writable(folder: Path) -> bool:
+    """Whether files may be made in `folder`: a write bit set (root passes os.access anyway, and would write into a
+    folder a user made read-only) and os.access (permissions, a read-only file system, an immutable folder)."""
+    try:
+        return bool(folder.stat().st_mode & 0o222) and os.access(folder, os.W_OK | os.X_OK)
+    except OSError:
+        return False
 
 
 def _make_parents(folder: Path) -> list[Path]:

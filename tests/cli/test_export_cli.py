@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import mujoco
@@ -258,3 +260,70 @@ def test_a_second_file_that_fails_takes_the_first_back(tmp_path, monkeypatch, fo
     assert api.export("elbow", mjcf=mjcf, urdf=urdf, force=True) == [mjcf, urdf]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.urdf", "a.xml"]  # no kept copy left behind
     assert mjcf.read_text().startswith("<!--") and urdf.read_text().startswith("<?xml")
+
+
+@pytest.mark.parametrize("force", [False, True])
+def test_a_stop_right_after_the_first_file_is_published_takes_it_back(tmp_path, monkeypatch, force):
+    """Found by fuzzing (strace delaying the rename, then SIGTERM): a stop that came after the first file's rename
+    but before it was counted left that file published and, with --force, the file it replaced lost."""
+    from hexabot_sim import exporting, folders
+
+    mjcf, urdf = tmp_path / "a.xml", tmp_path / "a.urdf"
+    if force:
+        mjcf.write_text("old mjcf")
+        urdf.write_text("old urdf")
+
+    def stop_after(publish):
+        def wrapped(src, dst, *args, **kwargs):
+            publish(src, dst, *args, **kwargs)
+            if Path(dst) == mjcf:
+                raise KeyboardInterrupt
+
+        return wrapped
+
+    monkeypatch.setattr(exporting.os, "replace", stop_after(os.replace))
+    monkeypatch.setattr(exporting.folders, "publish_new", stop_after(folders.publish_new))
+    with pytest.raises(KeyboardInterrupt):
+        api.export("elbow", mjcf=mjcf, urdf=urdf, force=force)
+    assert sorted(p.name for p in tmp_path.iterdir()) == (["a.urdf", "a.xml"] if force else [])
+    if force:
+        assert mjcf.read_text() == "old mjcf" and urdf.read_text() == "old urdf"
+
+
+SIGTERM_AFTER_FIRST_RENAME = """
+import os, signal, sys
+real = os.replace
+def replace(src, dst, *a, **k):  # SIGTERM arrives just after the first file is renamed into place
+    real(src, dst, *a, **k)
+    if str(dst).endswith("a.xml"):
+        os.kill(os.getpid(), signal.SIGTERM)
+os.replace = replace
+from hexabot_sim.cli import console
+sys.argv = ["hexabot-sim", "export", "elbow", "--mjcf", sys.argv[1] + "/a.xml", "--urdf", sys.argv[1] + "/a.urdf",
+            "--force"]
+console()
+"""
+
+
+def test_the_command_line_holds_a_stop_until_both_files_are_in_place(tmp_path):
+    (tmp_path / "a.xml").write_text("old mjcf")
+    (tmp_path / "a.urdf").write_text("old urdf")
+    proc = subprocess.run([sys.executable, "-c", SIGTERM_AFTER_FIRST_RENAME, str(tmp_path)], capture_output=True,
+                          text=True, timeout=120)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert "SIGTERM came after the results were published; they are complete" in proc.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.urdf", "a.xml"]  # no kept copy or staging file left
+    assert (tmp_path / "a.xml").read_text().startswith("<!--") and (tmp_path / "a.urdf").read_text().startswith("<?x")
+
+
+def test_a_folder_without_write_bits_is_refused_even_for_root(tmp_path, capsys):
+    """Found by fuzzing: as root, export wrote into a chmod 555 folder (os.access says yes to root), where run,
+    sweep and compare refuse it."""
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    folder.chmod(0o555)
+    try:
+        code, out, err = cli(capsys, "export", "leg", "--mjcf", str(folder / "leg.xml"))
+        assert code == 2 and out == "" and "cannot be written" in err and list(folder.iterdir()) == []
+    finally:
+        folder.chmod(0o755)
