@@ -21,12 +21,14 @@ from hexabot_sim.walking.figures import _moving_mean, figures
 from hexabot_sim.walking.forces import force_metrics
 from hexabot_sim.walking.ground import terrain
 from hexabot_sim.walking.metrics import (
+    in_plane,
     replay_contacts,
     rpy_from_quat,
     steady_window,
     terrain_metrics,
     walk_warnings,
     walking_metrics,
+    walking_up,
 )
 from hexabot_sim.walking.parameters import WalkParams, feasibility
 from hexabot_sim.walking.scene import build_xml, make_controller
@@ -78,9 +80,11 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     plan_t = np.array([c[0] for c in controller.commands])
     idx = np.clip(np.searchsorted(plan_t, t, side="right") - 1, 0, len(plan_t) - 1)
     plan = np.array([c[1:] for c in controller.commands])[idx] * np.asarray(controller.scale(t))[:, None]
-    c, s = np.cos(rpy[:, 2]), np.sin(rpy[:, 2])
-    vx_b = c * qvel[:, 0] + s * qvel[:, 1]
-    vy_b = -s * qvel[:, 0] + c * qvel[:, 1]
+    plane, vel = in_plane(qpos, qvel, walking_up(p, ground))  # along the slope walked with level_body=off
+    heading = rpy_from_quat(plane[:, 3:7])[:, 2]
+    c, s = np.cos(heading), np.sin(heading)
+    vx_b = c * vel[:, 0] + s * vel[:, 1]
+    vy_b = -s * vel[:, 0] + c * vel[:, 1]
     columns: dict[str, np.ndarray] = {"t": t, "x": qpos[:, 0], "y": qpos[:, 1], "z": qpos[:, 2]}
     columns |= {"roll": rpy[:, 0], "pitch": rpy[:, 1], "yaw": np.unwrap(rpy[:, 2])}
     columns |= {"vx_body": vx_b, "vy_body": vy_b, "yaw_rate": qvel[:, 5]}
