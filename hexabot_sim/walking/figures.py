@@ -151,11 +151,10 @@ def figures(result: ScenarioResult) -> dict[str, Any]:
     ax.grid(True, alpha=0.3)
     plots.legend_right(ax)
     m = result.metrics
+    per_stance = m["slip_per_stance"].value
+    per_stance = "no stance in the steady walk" if per_stance is None else f"{per_stance:.3g} mm per stance"
     fig.suptitle(
-        _title(
-            result,
-            f"foot slip: mean {m['slip_mean'].value * 1000:.3g} mm/s, {m['slip_per_stance'].value:.3g} mm per stance",
-        ),
+        _title(result, f"foot slip: mean {m['slip_mean'].value * 1000:.3g} mm/s, {per_stance}"),
         fontsize=plots.TITLE_FONTSIZE,
     )
     out["slip"] = fig

@@ -108,6 +108,9 @@ def force_metrics(
         legs: The legs' names, in the columns' order.
     """
     share = weight / len(legs)
+    # A stance counts for the impact only if it starts and ends inside the rows (a one-cycle window of the tripod
+    # holds none: its stances start and end on the window's edges).
+    no_stance = "no stance started and ended inside the steady walk's window; a longer walk has some"
     n_bounces = [bounces(loaded[:, i], dt) for i in range(len(legs))]
     impacts = [impact_ratios(force[:, i], loaded[:, i], dt) for i in range(len(legs))]
     impact = [float(r.max()) if r.size else None for r in impacts]
@@ -131,10 +134,13 @@ def force_metrics(
         "touchdown_impact_ratio": Metric(
             float(all_impacts.max()) if all_impacts.size else None,
             "1",
-            f"peak force in the first {IMPACT_TIME * 1000:g} ms of a stance over that stance's mean, the worst stance",
+            f"peak force in the first {IMPACT_TIME * 1000:g} ms of a stance over that stance's mean, the worst stance"
+            + ("" if all_impacts.size else f"; null here: {no_stance}"),
         ),
         "touchdown_impact_ratio_mean": Metric(
-            float(all_impacts.mean()) if all_impacts.size else None, "1", "touchdown_impact_ratio, mean over stances"
+            float(all_impacts.mean()) if all_impacts.size else None,
+            "1",
+            "touchdown_impact_ratio, mean over stances" + ("" if all_impacts.size else f"; null here: {no_stance}"),
         ),
         "stance_force_ripple": Metric(
             float(pooled),
@@ -162,7 +168,11 @@ def force_metrics(
     for i, leg in enumerate(legs):
         out |= {
             f"foot_bounces_{leg}": Metric(n_bounces[i], "1", f"foot_bounces of foot {leg}"),
-            f"touchdown_impact_ratio_{leg}": Metric(impact[i], "1", f"touchdown_impact_ratio of foot {leg}"),
+            f"touchdown_impact_ratio_{leg}": Metric(
+                impact[i],
+                "1",
+                f"touchdown_impact_ratio of foot {leg}" + ("" if impacts[i].size else f"; null here: {no_stance}"),
+            ),
             f"stance_force_ripple_{leg}": Metric(
                 ripples[i] if loaded_any[i] else None, "1", f"stance_force_ripple of foot {leg}"
             ),

@@ -173,6 +173,7 @@ def planned_stand_heights(p: WalkParams, t: np.ndarray) -> np.ndarray:
 
 _VERTICAL = np.array([0.0, 0.0, 1.0])
 SATURATED: float = 1 - 1e-9  # a joint torque at this share of the limit (or more) is at the limit
+SPEED_WARNING: float = 0.5  # a mean velocity further off the command than this share of its speed is warned of
 SATURATION_WARNING: float = 0.25  # saturated in more of the steps is warned of (stairs 6 %, quadbot-trot-rough 10 %)
 FELL_DOC = (
     f"the plate touched the ground or tilted beyond {FALL_TILT_DEG:g} deg from the attitude it walks in (the "
@@ -304,10 +305,14 @@ def walking_metrics(
             "m/s",
             "95th percentile of the loaded feet's contact-point speed",
         ),
-        "slip_per_stance": Metric(
-            slip_distance / touchdowns * 1000 if touchdowns else 0.0,
-            "mm",
-            "contact-point sliding distance per stance (a bounce is not a stance)",
+        "slip_per_stance": _null_why(
+            Metric(
+                slip_distance / touchdowns * 1000 if touchdowns else None,
+                "mm",
+                "contact-point sliding distance per stance (a bounce is not a stance)",
+            ),
+            "no stance began inside the steady walk's window (a period longer than the window); slip_mean has the "
+            "feet's sliding",
         ),
         "cost_of_transport": _null_why(
             Metric(
@@ -332,12 +337,25 @@ def walking_metrics(
     }
 
 
-def walk_warnings(metrics: dict[str, Metric], torque_limit: float) -> list[str]:
-    """What the walk's figures say against it: a fall, servos held at their torque limit."""
+def walk_warnings(metrics: dict[str, Metric], torque_limit: float, speed: float) -> list[str]:
+    """What the walk's figures say against it: a fall, a walk far off its command (the feet slid down a slope, say),
+    swings that found no ground, servos held at their torque limit. `speed`: the command's planar speed [m/s]."""
     out = []
     if metrics["fell"].value:
         out.append(f"the robot fell at t = {metrics['fell_at'].value:.3g} s ({FELL_DOC}); the walk's figures from "
                    "then on are not a walk's")  # fmt: skip
+    off = metrics["speed_abs_error"].value  # None where the command changes (a schedule, waypoints)
+    if off is not None and speed >= LEAST_SPEED and off > SPEED_WARNING * speed:
+        out.append(f"the body's mean velocity is {off:.3g} m/s off the commanded {speed:.3g} m/s "
+                   f"({100 * off / speed:.3g} %; mean_vx {metrics['mean_vx'].value:.3g}, mean_vy "
+                   f"{metrics['mean_vy'].value:.3g} m/s): the feet slid, or the walk stalled")  # fmt: skip
+    lost = metrics.get("feet_without_ground", Metric(0, "1", "")).value
+    if lost:
+        loaded = metrics["stance_loaded_fraction"].value
+        out.append(f"{lost} swing{'s' if lost > 1 else ''} found no ground within the legs' reach "
+                   "(feet_without_ground): the ground fell away further than the legs reach down (a level body "
+                   "walking downhill, say)" + ("" if loaded is None else
+                   f"; the stance feet carried load {100 * loaded:.3g} % of their planned stance"))  # fmt: skip
     share = metrics["torque_saturated_fraction"].value
     if share > SATURATION_WARNING:
         out.append(f"the servos saturate: a joint of a loaded leg was at its {torque_limit:g} N m torque limit in "

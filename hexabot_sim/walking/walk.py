@@ -129,7 +129,7 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
         column_units=units,
         metrics=metrics,
         summary=["mean_vx", "mean_vy", "mean_yaw_rate", "lateral_drift", "heading_drift", "slip_per_stance", "fell"],
-        warnings=walk_warnings(metrics, p.ROBOT.torque_limit),
+        warnings=walk_warnings(metrics, p.ROBOT.torque_limit, math.hypot(p.vx, p.vy)),
         camera="slope" if p.slope_deg else "track",
         trail=trail,
         overlay=overlay,

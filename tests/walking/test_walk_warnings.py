@@ -18,22 +18,35 @@ from hexabot_sim.walking import metrics
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "my_hexapod.toml"
 
 
-def _metrics(fell: bool, share: float) -> dict[str, Metric]:
+def _metrics(fell: bool = False, share: float = 0.0, off: float | None = 0.0, lost: int = 0) -> dict[str, Metric]:
     return {
         "fell": Metric(fell, "", ""),
         "fell_at": Metric(2.5 if fell else None, "s", ""),
         "torque_saturated_fraction": Metric(share, "1", ""),
+        "speed_abs_error": Metric(off, "m/s", ""),
+        "mean_vx": Metric(0.1 - (off or 0.0), "m/s", ""),
+        "mean_vy": Metric(0.0, "m/s", ""),
+        "feet_without_ground": Metric(lost, "1", ""),
+        "stance_loaded_fraction": Metric(0.73, "1", ""),
     }
 
 
 def test_the_warnings_follow_their_thresholds() -> None:
-    assert metrics.walk_warnings(_metrics(False, 0.0), 1.5) == []
-    assert metrics.walk_warnings(_metrics(False, metrics.SATURATION_WARNING), 1.5) == []  # at the bound: not above
-    [fall] = metrics.walk_warnings(_metrics(True, 0.0), 1.5)
+    def warned(**kw) -> list[str]:
+        return metrics.walk_warnings(_metrics(**kw), 1.5, 0.1)
+
+    assert warned() == [] and warned(off=None) == []  # None: a schedule's or a course's changing command
+    assert warned(share=metrics.SATURATION_WARNING) == [] and warned(off=0.05) == []  # at the bounds: not above
+    [fall] = warned(fell=True)
     assert fall.startswith("the robot fell at t = 2.5 s (the plate touched the ground or tilted beyond 45 deg")
-    [saturate] = metrics.walk_warnings(_metrics(False, 0.3), 1.5)
+    [saturate] = warned(share=0.3)
     assert saturate.startswith("the servos saturate: a joint of a loaded leg was at its 1.5 N m torque limit in 30 %")
-    assert len(metrics.walk_warnings(_metrics(True, 0.9), 1.5)) == 2
+    [slid] = warned(off=0.364)
+    assert slid.startswith("the body's mean velocity is 0.364 m/s off the commanded 0.1 m/s (364 %; mean_vx -0.264")
+    [lost] = warned(lost=7)
+    assert lost.startswith("7 swings found no ground within the legs' reach") and "carried load 73 %" in lost
+    assert len(warned(fell=True, share=0.9, off=0.2, lost=1)) == 4
+    assert metrics.walk_warnings(_metrics(off=0.2), 1.5, 0.0) == []  # no speed commanded (a turn on the spot)
 
 
 def test_a_sound_walk_warns_of_nothing_and_its_saturation_agrees_with_its_peak_torque() -> None:
@@ -66,3 +79,32 @@ def test_a_robot_too_heavy_for_its_servos_walks_with_a_warning(tmp_path: Path, c
     assert "<b>Warning:</b> the servos saturate" in (out / "report.html").read_text()
     with pytest.warns(RunWarning, match="the servos saturate"):
         hs.run("hexabot-walk", robot=str(heavy), duration=1.6)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "start"),
+    [
+        # Found by fuzzing: accepted (the steepest levelled slope is 21.5 deg), 7 swings found no ground and the feet
+        # carried load 73 % of their stance, and the run said nothing.
+        ({"slope_deg": 21.0, "slope_heading": "downhill", "level_body": "on", "touchdown": "sensed"}, "7 swings found"),
+        # 45 deg at friction 1 passes the friction check (tan 45 = 1, necessary, not sufficient) and slides down.
+        ({"slope_deg": 45.0}, "the body's mean velocity is"),
+    ],
+)
+def test_walks_far_off_their_command_say_so(overrides, start) -> None:
+    with pytest.warns(RunWarning) as caught:
+        result = hs.run("hexabot-walk", duration=4.0, **overrides)
+    [warning] = result.warnings
+    assert warning.startswith(start) and [str(w.message) for w in caught] == [warning]
+
+
+def test_metrics_without_a_stance_in_the_window_are_null_and_say_why() -> None:
+    """A 10 s period in a 12.5 s walk: no stance starts and ends inside the steady window. slip_per_stance read 0.0
+    (the feet did slide: slip_mean > 0) and touchdown_impact_ratio was null without a word (found by fuzzing)."""
+    result = hs.run("hexabot-walk", period=10.0, duration=12.5, vx=0.02)
+    m = result.metrics
+    assert m["slip_mean"].value > 0 and m["slip_per_stance"].value is None
+    assert "null here: no stance began inside the steady walk's window" in m["slip_per_stance"].doc
+    for name in ("touchdown_impact_ratio", "touchdown_impact_ratio_mean", "touchdown_impact_ratio_lf"):
+        assert m[name].value is None and "null here: no stance started and ended inside" in m[name].doc
+    assert "no stance in the steady walk" in result.figures()["slip"]._suptitle.get_text()
