@@ -189,3 +189,19 @@ def test_the_opt_out_set_by_the_program_before_it_imports_gymnasium_is_heeded():
         "print(sum(getattr(f, 'hexabot_sim_autoregister', False) for f in sys.meta_path))\n"
     )
     assert _python(code, **{ids.OPT_OUT: "0"}) == ["[]", "0"]
+
+
+@pytest.mark.parametrize(("script", "message"), [("hexabot-sim", "hexabot-sim: interrupted; nothing written\n"),
+                                                 ("other_program.py", "")])  # fmt: skip
+def test_ctrl_c_while_python_starts_ends_as_an_interrupt_not_a_fatal_error(tmp_path, script, message):
+    """Found by fuzzing: Ctrl-C in the first ~20 ms of `hexabot-sim run`, while site ran the .pth, printed "Fatal
+    Python error: init_import_site" and a traceback, exit 1. Now exit 130, and one line for hexabot-sim (the .pth
+    runs at every start of Python in the environment: other programs exit quietly)."""
+    fake = tmp_path / "hexabot_sim" / "envs"
+    fake.mkdir(parents=True)
+    (fake / "ids.py").write_text("raise KeyboardInterrupt  # the Ctrl-C, as it lands while the .pth loads ids.py\n")
+    program = tmp_path / script
+    program.write_text(f"import sys\nsys.path.insert(0, {str(tmp_path)!r})\nexec({_pth_file().read_text()!r})\n"
+                       "print('not reached')\n")  # fmt: skip
+    proc = subprocess.run([sys.executable, "-S", str(program)], capture_output=True, text=True, timeout=60)
+    assert (proc.returncode, proc.stdout, proc.stderr) == (130, "", message)
