@@ -210,26 +210,25 @@ def cmd_clean(args: argparse.Namespace) -> int:
         fate, where = folders.replaced_fate(path) if path.name.startswith(folders.OLD_PREFIX) else ("remove", None)
         if fate == "keep":  # a --force run died with the user's folder moved aside, and its name is not known
             shown = folders.display_path(path / folders.PREVIOUS)
-            print(f"kept {shown}: a folder a --force run moved aside before it died" + (
-                f"; {folders.display_path(where)} exists, so it was not put back" if where else "") +
-                "; move it where it belongs by hand")  # fmt: skip
+            taken = "" if where is None else f"; {folders.display_path(where)} exists, so it was not put back"
+            print(f"kept {shown}: a folder a --force run moved aside before it died{taken}; move it where it "
+                  "belongs by hand")  # fmt: skip
             continue
+        back = where if fate == "restore" else None  # the name free to put the user's folder back under
         if args.dry_run:
-            if fate == "restore":
-                print(
-                    f"would put {folders.display_path(path / folders.PREVIOUS)} back as {folders.display_path(where)}"
-                )
+            if back is not None:
+                print(f"would put {folders.display_path(path / folders.PREVIOUS)} back as {folders.display_path(back)}")
             print(f"would remove {folders.display_path(path)}")
             continue
         if not os.path.lexists(path):
             continue  # another clean (or its owner) removed it meanwhile
-        if fate == "restore":  # the run died between moving the user's folder aside and publishing its own
+        if back is not None:  # the run died between moving the user's folder aside and publishing its own
             try:
-                folders.rename_back(path, where)
+                folders.rename_back(path, back)
             except OSError as e:
                 raise OutputError(f"could not put {folders.display_path(path / folders.PREVIOUS)!r} back as "
-                                  f"{folders.display_path(where)!r}: {e.strerror or e}") from None  # fmt: skip
-            print(f"restored {folders.display_path(where)} (a --force run died before replacing it)")
+                                  f"{folders.display_path(back)!r}: {e.strerror or e}") from None  # fmt: skip
+            print(f"restored {folders.display_path(back)} (a --force run died before replacing it)")
         try:
             if sys.version_info >= (3, 12):
                 shutil.rmtree(path, onexc=_gone_is_fine)

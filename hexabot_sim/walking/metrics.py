@@ -31,31 +31,48 @@ def walking_up(p: WalkParams, ground: Ground | None) -> np.ndarray:
     return ground.normal() if ground is not None and p.level_body == "off" else _VERTICAL
 
 
-def in_plane(qpos: np.ndarray, qvel: np.ndarray | None, up: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-    """The floating base's state (qpos (n, >=7), qvel (n, >=3) or None) in the frame of the plane walked in: z along
-    `up`, turned from the world by the least rotation (mju_quatZ2Vec). On a slope walked with level_body=off the body
-    moves along the slope, and its speed, heading and distances are the slope's (horizontal ones read 1 - cos(slope)
-    short: -14 % at 30 deg); on level ground, or with a level body, the arrays as they are."""
+def _plane_turn(up: np.ndarray) -> np.ndarray | None:
+    """The least rotation (w, x, y, z) taking the vertical to `up` (mju_quatZ2Vec); None for the vertical itself."""
     if np.array_equal(up, _VERTICAL):
-        return qpos, qvel
+        return None
     turn = np.zeros(4)
     mujoco.mju_quatZ2Vec(turn, np.asarray(up, dtype=float))
-    rotation = np.zeros(9)
-    mujoco.mju_quat2Mat(rotation, turn)
-    rotation = rotation.reshape(3, 3)  # plane -> world
+    return turn
+
+
+def _turn_matrix(turn: np.ndarray) -> np.ndarray:
+    flat = np.zeros(9)
+    mujoco.mju_quat2Mat(flat, turn)
+    return flat.reshape(3, 3)  # plane -> world
+
+
+def in_plane(qpos: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """The floating base's pose (qpos (n, >=7)) in the frame of the plane walked in: z along `up`, turned from the
+    world by the least rotation. On a slope walked with level_body=off the body moves along the slope, and its speed,
+    heading and distances are the slope's (horizontal ones read 1 - cos(slope) short: -14 % at 30 deg); on level
+    ground, or with a level body, `qpos` itself."""
+    turn = _plane_turn(up)
+    if turn is None:
+        return qpos
     out = qpos.copy()
-    out[:, :3] = qpos[:, :3] @ rotation  # rows: R^T p
+    out[:, :3] = qpos[:, :3] @ _turn_matrix(turn)  # rows: R^T p
     w0, x0, y0, z0 = turn[0], -turn[1], -turn[2], -turn[3]  # the inverse turn, then the body's attitude
     w, x, y, z = (qpos[:, 3 + i] for i in range(4))
     out[:, 3] = w0 * w - x0 * x - y0 * y - z0 * z
     out[:, 4] = w0 * x + x0 * w + y0 * z - z0 * y
     out[:, 5] = w0 * y - x0 * z + y0 * w + z0 * x
     out[:, 6] = w0 * z + x0 * y - y0 * x + z0 * w
-    if qvel is None:
-        return out, None
-    vel = qvel.copy()
-    vel[:, :3] = qvel[:, :3] @ rotation
-    return out, vel
+    return out
+
+
+def velocity_in_plane(qvel: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """The floating base's linear velocity (qvel (n, >=3), its first three) in the frame of in_plane."""
+    turn = _plane_turn(up)
+    if turn is None:
+        return qvel
+    out = qvel.copy()
+    out[:, :3] = qvel[:, :3] @ _turn_matrix(turn)
+    return out
 
 
 @dataclasses.dataclass(frozen=True)
@@ -193,7 +210,7 @@ def walking_metrics(
     """The walking metrics of a run, from its recorded state and contacts, on its ground (None: the flat floor)."""
     # The attitude the body walks in: its tilt is measured from it (the slope's normal where it follows the ground).
     up = walking_up(p, ground)
-    plane, _ = in_plane(qpos, None, up)  # speeds, headings and distances along the plane walked in
+    plane = in_plane(qpos, up)  # speeds, headings and distances along the plane walked in
     window = steady_window(p, t)
     dt = p.timestep
     rpy = rpy_from_quat(qpos[:, 3:7])
@@ -383,7 +400,7 @@ def terrain_metrics(
     w = np.flatnonzero(window)
     i0, i1 = w[0], w[-1]
     along = walking_direction(p)
-    plane, _ = in_plane(qpos, None, walking_up(p, ground))  # along the slope walked with level_body=off
+    plane = in_plane(qpos, walking_up(p, ground))  # along the slope walked with level_body=off
     made_good = float((plane[i1, :2] - plane[i0, :2]) @ along)
     speed = math.hypot(p.vx, p.vy)
     speed_made_good = made_good / (t[i1] - t[i0])

@@ -26,6 +26,7 @@ from hexabot_sim.walking.metrics import (
     rpy_from_quat,
     steady_window,
     terrain_metrics,
+    velocity_in_plane,
     walk_warnings,
     walking_metrics,
     walking_up,
@@ -80,8 +81,9 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     plan_t = np.array([c[0] for c in controller.commands])
     idx = np.clip(np.searchsorted(plan_t, t, side="right") - 1, 0, len(plan_t) - 1)
     plan = np.array([c[1:] for c in controller.commands])[idx] * np.asarray(controller.scale(t))[:, None]
-    plane, vel = in_plane(qpos, qvel, walking_up(p, ground))  # along the slope walked with level_body=off
-    heading = rpy_from_quat(plane[:, 3:7])[:, 2]
+    up = walking_up(p, ground)  # along the slope walked with level_body=off
+    heading = rpy_from_quat(in_plane(qpos, up)[:, 3:7])[:, 2]
+    vel = velocity_in_plane(qvel, up)
     c, s = np.cos(heading), np.sin(heading)
     vx_b = c * vel[:, 0] + s * vel[:, 1]
     vy_b = -s * vel[:, 0] + c * vel[:, 1]
