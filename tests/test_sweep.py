@@ -10,6 +10,7 @@ import time
 from pathlib import Path
 
 import pytest
+from helpers import cli
 
 from hexabot_sim import sweep, sweep_figures
 from hexabot_sim.cli import main
@@ -293,3 +294,17 @@ def test_clean_removes_cell_folders_of_workers_that_are_gone(tmp_path, monkeypat
     assert main(["clean", str(runs)]) == 0
     assert f"removed {gone}" in capsys.readouterr().out
     assert not gone.exists() and alive.exists()
+
+
+def test_a_grid_over_a_config_files_value_says_so(tmp_path, capsys):
+    """A parameter in --config and in --grid was swept without a word (the grid wins, as --set would win over the
+    config; --set and --grid together are refused)."""
+    config = tmp_path / "cfg.toml"
+    config.write_text("damping = 0.05\nmass = 0.2\n")
+    code, out, err = cli(capsys, "sweep", "pendulum", "--grid", "damping=0,0.01", "--config", str(config), "--set",
+                         "duration=0.05", "--no-plots", "--out", str(tmp_path / "s"))  # fmt: skip
+    assert code == 0 and "cells ok: 2" in out
+    [line] = [x for x in err.splitlines() if "warning" in x]  # (a progress line may follow)
+    assert line == f"hexabot-sim: warning: --grid sweeps 'damping', which --config {config} also sets: the grid's " + (
+        "values are used"
+    )

@@ -27,6 +27,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     name = f"sweep-{registry.get(args.scenario).name}"
     checking = SweepProgress(f"{name}: checking")  # speaks only if checking the cells takes seconds
     plan = sweep.plan(args.scenario, args.grid, config, sets, checking)  # every cell validated: nothing runs before
+    overridden = [axis.name for axis in plan.axes if axis.name in config]  # (--set and --grid together: refused)
+    if overridden:  # a config file's value replaced without a word
+        names = ", ".join(f"'{name}'" for name in overridden)
+        eprint(f"{PROG}: warning: --grid sweeps {names}, which --config {args.config} also sets: the grid's values "
+               "are used")  # fmt: skip
     if args.out is not None:
         cls = registry.get(args.scenario).params_type
         grid_values = [v for axis in plan.axes for v in axis.values]
