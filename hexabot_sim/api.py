@@ -160,7 +160,7 @@ def run(
     prepared = prepare(scenario, *layers)
     # The files it reads, which Result.save may not write over (the resolved params hold a schedule's rows, no file).
     files = params_mod.input_files(config, prepared.entry.params_type, layers)
-    prepared = dataclasses.replace(prepared, inputs=tuple(files))
+    prepared = dataclasses.replace(prepared, inputs=tuple(os.path.abspath(f) for f in files))  # a later chdir
     with _mujoco_warnings():
         result = prepared.run(progress)
     for text in result.warnings:
@@ -212,6 +212,14 @@ def _check_path(name: str, value: Any, optional: bool = True) -> None:
         raise UsageError(f"'{name}' holds a NUL byte, which no file name can; got {value!r}")
     if len(raw) > 4095 or any(len(part) > 255 for part in raw.split(b"/")):
         raise UsageError(f"'{name}' is too long: a file or folder name is at most 255 bytes, a path 4095")
+
+
+def _same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """Whether both name one existing file (any links, mounts or spellings); False where either is missing."""
+    try:
+        return os.path.samefile(a, b)
+    except (OSError, ValueError):
+        return False
 
 
 def _check_flag(name: str, value: Any) -> None:
@@ -451,7 +459,9 @@ class Result:
             raise UsageError(f"the folder {str(folder)!r} for the video does not exist")
         if not folders.writable(folder):  # (root passes os.access: the mode bits too)
             raise OutputError(f"the folder {str(folder)!r} for the video cannot be written")
-        folders.check_not_input(path, list(self._inputs))  # never over a file the run read, even with force
+        if any(_same_file(path, f) for f in self._inputs):
+            raise UsageError(f"video path {str(path)!r} is a file the run read (its config, schedule, waypoints or "
+                             "robot file); a run never writes over what it reads: choose another path")  # fmt: skip
         folders.check_replace(path, force)
         # The name cut short (a 250-byte name is legal; '.NAME.partial-PID.mp4' was not: a raw OSError), with a
         # random part so two renders to one path in one process do not share it.

@@ -74,12 +74,26 @@ def check_not_input(out: str | os.PathLike[str], inputs: list[str]) -> None:
         sources = {Path(os.path.abspath(item)), Path(os.path.realpath(item))}
         overlaps = any(a == b or a.is_relative_to(b) or b.is_relative_to(a) for a in targets for b in sources)
         with contextlib.suppress(OSError):
-            overlaps = overlaps or os.path.samefile(out, item)
+            overlaps = overlaps or os.path.samefile(out, item) or _holds(out, item)
         if overlaps:
             raise UsageError(
                 f"output folder {display_path(Path(out))!r} is, contains or lies inside the input "
                 f"{display_path(Path(item))!r}; a command never writes over what it reads: choose another --out"
             )
+
+
+def _holds(out: str | os.PathLike[str], item: str) -> bool:
+    """Whether the existing folder `out` is one of the folders `item` lies in, by identity (device, inode): a bind
+    mount or a second name of a folder is no other folder (found by fuzzing: the schedule named through a bind
+    mount of --out was deleted with it)."""
+    if not os.path.isdir(out):
+        return False
+    folder = Path(os.path.abspath(item)).parent
+    for above in (folder, *folder.parents):
+        with contextlib.suppress(OSError):
+            if os.path.samefile(out, above):
+                return True
+    return False
 
 
 def _check_existing(out: Path, text: str, force: bool) -> None:

@@ -377,3 +377,41 @@ def test_clean_removes_a_replaced_folder_only_when_the_run_was_published(tmp_pat
     else:
         assert (aside / "previous" / "old.txt").read_text() == "old" and "kept" in out and "by hand" in out
     assert (tmp_path / "keep").exists() or case == "no target"
+
+
+def test_the_api_keeps_its_inputs_whatever_the_working_folder(tmp_path, monkeypatch):
+    """Found by fuzzing: hs.run(schedule="schedule.csv") kept the relative name, so after a chdir Result.save(folder
+    of the schedule, force=True) passed the check and replaced the folder, schedule and all."""
+    import hexabot_sim as hs
+    from hexabot_sim.errors import UsageError
+
+    proj = tmp_path / "proj"
+    proj.mkdir()
+    (proj / "schedule.csv").write_text("t, vx, vy, yaw_rate\n0, 0.1, 0, 0\n")
+    monkeypatch.chdir(proj)
+    result = hs.run("hexabot-walk", schedule="schedule.csv", duration=1.6)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(UsageError, match="never writes over what it reads"):
+        result.save(proj, force=True, plots=False)
+    with pytest.raises(UsageError, match=r"video path .* is a file the run read"):
+        result.video(proj / "schedule.csv", force=True)
+    assert sorted(os.listdir(proj)) == ["schedule.csv"]
+
+
+@pytest.mark.skipif(os.geteuid() != 0 or shutil.which("mount") is None, reason="a bind mount needs root and mount(8)")
+def test_an_input_named_through_a_bind_mount_of_out_is_still_an_input(tmp_path, capsys):
+    """Found by fuzzing: --out P --force with schedule=M/schedule.csv, M a bind mount of P, deleted P's files: the
+    check compared names; it now also compares the input's folders with --out by identity."""
+    proj, mount = tmp_path / "proj", tmp_path / "mnt"
+    proj.mkdir()
+    mount.mkdir()
+    (proj / "schedule.csv").write_text("t, vx, vy, yaw_rate\n0, 0.1, 0, 0\n")
+    if subprocess.run(["mount", "--bind", str(proj), str(mount)], capture_output=True).returncode:
+        pytest.skip("mount --bind is not permitted here")
+    try:
+        code, _, err = cli(capsys, "run", "hexabot-walk", "--set", f"schedule={mount / 'schedule.csv'}", *FAST[2:],
+                           "--set", "duration=1.6", "--out", str(proj), "--force")  # fmt: skip
+        assert code == 2 and "never writes over what it reads" in err
+        assert sorted(os.listdir(proj)) == ["schedule.csv"]
+    finally:
+        subprocess.run(["umount", str(mount)], capture_output=True)
