@@ -104,13 +104,15 @@ def export(
         for path, (what, text) in texts.items():
             # The name cut short: a 250-byte file name is legal, its staging name must be too (it was ENAMETOOLONG).
             staging = path.with_name(f".{path.name[:48]}.partial-{os.getpid()}-{secrets.token_hex(4)}")
+            staged[path] = staging  # before it exists: a stop as open() returns left an empty hidden file
             try:
                 with open(staging, "x", encoding="utf-8") as f:
-                    staged[path] = staging
                     f.write(text)
                     f.flush()
                     os.fsync(f.fileno())
             except OSError as e:
+                if isinstance(e, FileExistsError):  # not ours (a random name taken): never removed
+                    del staged[path]
                 raise OutputError(f"writing the {what} {printable(str(path))!r} failed: {e.strerror or e}") from None
         for path, (what, _) in texts.items():  # every file checked again before either is published
             folders.check_replace(path, force, what, "add --force (force=True)")

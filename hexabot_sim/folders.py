@@ -10,6 +10,7 @@ import os
 import re
 import secrets
 import shutil
+import stat
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -397,21 +398,39 @@ def replaced_fate(path: Path) -> tuple[str, Path | None]:
     Returns ("restore", where): the run died after it moved the user's folder aside and before it published its
     own, so the name is free: put `previous` back there (rename_back). ("keep", where or None): `previous` is there
     but its name is unknown, or taken by something that is not a run folder: only a person can tell, so it stays.
-    ("remove", None): nothing of the user's is in it, or the new run was published (what --force asked to replace).
+    ("remove", None): nothing of the user's is in it; ("remove", where): the new run was published at `where`, and
+    `previous` is what --force was asked to replace.
     """
     previous = path / PREVIOUS
-    if not _is_folder(previous):
-        return "remove", None
-    try:
-        name = os.fsdecode((path / _TARGET).read_bytes())
-    except OSError:
-        name = ""
+    if not os.path.lexists(previous) or previous.is_symlink():  # a link is not the user's folder (removed, not
+        return "remove", None  # followed); a run makes only a folder there
+    if not previous.is_dir():  # a file where a run puts a folder: not ours to judge
+        return "keep", None
+    name = _read_target(path / _TARGET)
     if not name or name in (".", "..") or "/" in name or "\0" in name:
         return "keep", None
     where = path.parent / name
     if not os.path.lexists(where):
         return "restore", where
-    return ("remove", None) if (where / "run.json").is_file() and not where.is_symlink() else ("keep", where)
+    return ("remove" if (where / "run.json").is_file() and not where.is_symlink() else "keep"), where
+
+
+def _read_target(path: Path) -> str:
+    """The name a replaced folder's `target` file holds; "" for anything a run does not write there (a link, a
+    FIFO that would block, a device, a long file): read without following links or blocking, at most 4 KiB."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    except OSError:
+        return ""
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode) or info.st_size > 4096:
+            return ""
+        return os.fsdecode(os.read(fd, 4096))
+    except OSError:
+        return ""
+    finally:
+        os.close(fd)
 
 
 def rename_back(path: Path, where: Path) -> None:
@@ -427,13 +446,20 @@ def stale_cells() -> list[Path]:
     return [path for path in sorted(Path(tempfile.gettempdir()).glob(f"{CELL_PREFIX}*")) if _stale(path, _CELL_NAME)]
 
 
+CLEAN_DEPTH: int = 4  # clean DIR looks this many folder levels down (an --out of runs/a/b/x stages in runs/a/b)
+
+
 def stale_staging(root: Path) -> list[Path]:
-    """Staging folders in `root` and its sub-folders left by runs whose process no longer exists."""
+    """Staging and replaced folders in `root` and its sub-folders (CLEAN_DEPTH levels, links not followed) left by
+    runs whose process no longer exists: the staging folders first, then the replaced ones."""
+    levels, entries = [_entries(root)], []
+    while len(levels) <= CLEAN_DEPTH:  # (one level down was looked at only: runs/a/b/x's were never found)
+        entries += levels[-1]
+        down = [folder for folder in levels[-1] if _is_folder(folder) and not folder.name.startswith(_OURS)]
+        levels.append([entry for folder in down for entry in _entries(folder)])
     found = []
     for prefix, name in ((STAGING_PREFIX, _STAGING_NAME), (OLD_PREFIX, _OLD_NAME)):
-        top = _entries(root)
-        below = [entry for folder in top if _is_folder(folder) for entry in _entries(folder)]
-        found += [path for path in sorted(top) + sorted(below) if path.name.startswith(prefix) and _stale(path, name)]
+        found += [path for path in sorted(entries) if path.name.startswith(prefix) and _stale(path, name)]
     return found
 
 
@@ -449,6 +475,8 @@ def _entries(folder: Path) -> list[Path]:
 # The exact names our runs create (_mkdir_unique: <prefix><pid>-<8 hex digits><suffix>; a sweep cell's
 # tempfile.TemporaryDirectory: <prefix><pid>-<8 of [a-z0-9_]>). A name that merely starts like one is a user's.
 _STAGING_NAME = re.compile(re.escape(STAGING_PREFIX) + r"([1-9][0-9]{0,9})-[0-9a-f]{8}" + re.escape(STAGING_SUFFIX))
+
+_OURS = (STAGING_PREFIX, OLD_PREFIX)  # folders of ours are not looked into: what they hold is a run's, or a user's
 
 _OLD_NAME = re.compile(re.escape(OLD_PREFIX) + r"([1-9][0-9]{0,9})-[0-9a-f]{8}")
 

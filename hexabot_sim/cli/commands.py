@@ -207,28 +207,13 @@ def cmd_clean(args: argparse.Namespace) -> int:
     stale = folders.stale_staging(root) + folders.stale_cells()
     removed = 0
     for path in stale:
-        fate, where = folders.replaced_fate(path) if path.name.startswith(folders.OLD_PREFIX) else ("remove", None)
-        if fate == "keep":  # a --force run died with the user's folder moved aside, and its name is not known
-            shown = folders.display_path(path / folders.PREVIOUS)
-            taken = "" if where is None else f"; {folders.display_path(where)} exists, so it was not put back"
-            print(f"kept {shown}: a folder a --force run moved aside before it died{taken}; move it where it "
-                  "belongs by hand")  # fmt: skip
-            continue
-        back = where if fate == "restore" else None  # the name free to put the user's folder back under
+        if path.name.startswith(folders.OLD_PREFIX) and not _settle_replaced(path, args.dry_run):
+            continue  # kept: it holds the user's folder
         if args.dry_run:
-            if back is not None:
-                print(f"would put {folders.display_path(path / folders.PREVIOUS)} back as {folders.display_path(back)}")
             print(f"would remove {folders.display_path(path)}")
             continue
         if not os.path.lexists(path):
             continue  # another clean (or its owner) removed it meanwhile
-        if back is not None:  # the run died between moving the user's folder aside and publishing its own
-            try:
-                folders.rename_back(path, back)
-            except OSError as e:
-                raise OutputError(f"could not put {folders.display_path(path / folders.PREVIOUS)!r} back as "
-                                  f"{folders.display_path(back)!r}: {e.strerror or e}") from None  # fmt: skip
-            print(f"restored {folders.display_path(back)} (a --force run died before replacing it)")
         try:
             if sys.version_info >= (3, 12):
                 shutil.rmtree(path, onexc=_gone_is_fine)
@@ -250,6 +235,40 @@ def cmd_clean(args: argparse.Namespace) -> int:
         cells = tempfile.gettempdir()
         print(f"no staging folders left by interrupted runs in {args.folder} (nor sweep cells in {cells})")
     return 0
+
+
+def _settle_replaced(path: Path, dry_run: bool) -> bool:
+    """A stale replaced folder of a --force run that died (folders.replaced_fate): puts the user's folder back under
+    its name when that is free. True: the folder may go; False: it is kept (it holds the user's folder), and said."""
+    from hexabot_sim import folders
+
+    fate, where = folders.replaced_fate(path)
+    aside = folders.display_path(path / folders.PREVIOUS)
+    if fate == "remove":
+        if where is not None:  # the new run stands there: `previous` is what --force was asked to replace
+            print(f"{'would remove' if dry_run else 'removing'} {aside}: the folder a --force run replaced with "
+                  f"{folders.display_path(where)}")  # fmt: skip
+        return True
+    if fate == "restore" and where is not None:  # the run died between moving the folder aside and publishing
+        if dry_run:
+            print(f"would put {aside} back as {folders.display_path(where)}")
+            return True
+        try:
+            folders.rename_back(path, where)
+        except FileNotFoundError:
+            if not os.path.lexists(path / folders.PREVIOUS):
+                return True  # another clean put it back meanwhile
+            why = "its name became unusable"
+        except OSError as e:
+            why = e.strerror or str(e)
+        else:
+            print(f"restored {folders.display_path(where)} (a --force run died before replacing it)")
+            return True
+        print(f"kept {aside}: it could not be put back as {folders.display_path(where)} ({why}); move it by hand")
+        return False
+    taken = "" if where is None else f"; {folders.display_path(where)} exists, so it was not put back"
+    print(f"kept {aside}: a folder a --force run moved aside before it died{taken}; move it where it belongs by hand")
+    return False
 
 
 def _gone_is_fine(function: Any, path: str, info: Any) -> None:

@@ -327,3 +327,20 @@ def test_a_folder_without_write_bits_is_refused_even_for_root(tmp_path, capsys):
         assert code == 2 and out == "" and "cannot be written" in err and list(folder.iterdir()) == []
     finally:
         folder.chmod(0o755)
+
+
+def test_a_stop_as_a_staging_file_is_opened_leaves_no_hidden_file(tmp_path, monkeypatch):
+    """Found by fuzzing: SIGTERM just as open() of the staging file returned left an empty .a.xml.partial-* file
+    (it was recorded for removal only once open had returned)."""
+    import builtins
+
+    from hexabot_sim import exporting
+
+    def open_then_stop(file, *args, **kwargs):
+        builtins.open(file, *args, **kwargs).close()  # the file exists: the stop lands as open() returns
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(exporting, "open", open_then_stop, raising=False)
+    with pytest.raises(KeyboardInterrupt):
+        api.export("elbow", mjcf=tmp_path / "a.xml", urdf=tmp_path / "a.urdf")
+    assert list(tmp_path.iterdir()) == []

@@ -415,3 +415,48 @@ def test_an_input_named_through_a_bind_mount_of_out_is_still_an_input(tmp_path, 
         assert sorted(os.listdir(proj)) == ["schedule.csv"]
     finally:
         subprocess.run(["umount", str(mount)], capture_output=True)
+
+
+def test_clean_survives_hostile_replaced_folders_and_restores_the_rest(tmp_path, capsys):
+    """Found by fuzzing: a `target` that is a FIFO hung clean (even --dry-run), one linked to /dev/zero was a
+    MemoryError, and one name that could not be restored (300 bytes) ended the clean with exit 1 before the
+    folders after it, a restorable one among them, on every later clean too."""
+    dead = _dead_pid()
+
+    def replaced(hexa: str) -> Path:
+        folder = tmp_path / f"{folders.OLD_PREFIX}{dead}-{hexa}"
+        (folder / "previous").mkdir(parents=True)
+        (folder / "previous" / "data.txt").write_text(hexa)
+        return folder
+
+    os.mkfifo(replaced("00000001") / "target")
+    (replaced("00000002") / "target").symlink_to("/dev/zero")
+    (replaced("00000003") / "target").write_text("a" * 300)
+    (replaced("00000004") / "target").write_text("ok")
+    odd = tmp_path / f"{folders.OLD_PREFIX}{dead}-00000005"
+    odd.mkdir()
+    (odd / "previous").write_text("a file where a run puts a folder")
+    (odd / "target").write_text("other")
+    for argv in (["--dry-run"], []):
+        code, out, err = cli(capsys, "clean", str(tmp_path), *argv)
+        assert code == 0 and err == "", err
+    assert (tmp_path / "ok" / "data.txt").read_text() == "00000004"  # the restorable one was put back
+    assert "could not be put back" in out and "File name too long" in out
+    for hexa in ("00000001", "00000002", "00000003"):
+        assert (tmp_path / f"{folders.OLD_PREFIX}{dead}-{hexa}" / "previous" / "data.txt").read_text() == hexa
+    assert (odd / "previous").read_text() == "a file where a run puts a folder"
+
+
+def test_clean_looks_four_folder_levels_down(tmp_path, capsys):
+    """Found by fuzzing: clean DIR looked one level down, so a run killed while writing --out runs/a/b/x left its
+    staging folder (or a --force run the user's folder moved aside) in runs/a/b, where clean runs never looked."""
+    dead = _dead_pid()
+    name = f"{folders.STAGING_PREFIX}{dead}-0a1b2c3d{folders.STAGING_SUFFIX}"
+    found = [tmp_path / "a" / "b" / name, tmp_path / "a" / "b" / "c" / name]
+    beyond = tmp_path / "1" / "2" / "3" / "4" / name  # five levels down: not looked at
+    inside = tmp_path / f"{folders.STAGING_PREFIX}{dead}-00ff00ff{folders.STAGING_SUFFIX}" / name  # within ours
+    for folder in (*found, beyond, inside):
+        folder.mkdir(parents=True)
+    code, out, _ = cli(capsys, "clean", str(tmp_path))
+    assert code == 0 and not any(p.exists() for p in found) and beyond.exists()
+    assert out.count("removed") == 3  # the two found and the outer staging folder (with what it held)
