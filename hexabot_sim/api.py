@@ -164,7 +164,7 @@ def run(
     with _mujoco_warnings():
         result = prepared.run(progress)
     for text in result.warnings:
-        warnings.warn(text, RunWarning, stacklevel=2)
+        warnings.warn(RunWarning(text, result), stacklevel=2)  # raised as an error, it still carries the result
     return result
 
 
@@ -285,7 +285,8 @@ class Result:
         line = report.summary_line(record, self.summary)
         import html
 
-        return f"<p><b>{html.escape(self.scenario)}</b>: {html.escape(line)}</p>"
+        notes = "".join(f"<p><b>Warning:</b> {html.escape(text)}</p>" for text in self.warnings)
+        return f"<p><b>{html.escape(self.scenario)}</b>: {html.escape(line)}</p>{notes}"
 
     def to_pandas(self) -> Any:
         """The columns as a pandas DataFrame (units in `df.attrs["units"]`).

@@ -20,7 +20,15 @@ def printable(text: str) -> str:
 
 
 class RunWarning(UserWarning):
-    """A run that finished but whose figures say something is physically off (`Result.warnings` holds the text)."""
+    """A run that finished but whose figures say something is physically off (`Result.warnings` holds the text).
+
+    `result` is the run's Result: under `warnings.simplefilter("error")` the warning is raised after the run, and the
+    result is not lost with it.
+    """
+
+    def __init__(self, message: str, result: object = None) -> None:
+        super().__init__(message)
+        self.result = result
 
 
 class HexabotError(Exception):

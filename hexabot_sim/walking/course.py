@@ -55,11 +55,13 @@ def schedule_metrics(p: Any, t: np.ndarray, columns: dict[str, np.ndarray], sett
         "schedule_rows_measured": Metric(len(table), "1", "schedule rows long enough to measure a steady walk"),
         "schedule_speed_error_max": Metric(
             max(speed_errors) if speed_errors else None, "1",
-            "largest |mean body velocity - row's command| / |command| over the rows' steady walks",
+            "largest |mean body velocity - row's command| / |command| over the rows' steady walks"
+            + ("" if speed_errors else "; null here: no row moving at 1 mm/s or more has a steady walk measured"),
         ),
         "schedule_yaw_rate_error_max": Metric(
             max(yaw_errors) if yaw_errors else None, "1",
-            "largest |mean yaw rate - row's yaw_rate| / |yaw_rate| over the turning rows' steady walks",
+            "largest |mean yaw rate - row's yaw_rate| / |yaw_rate| over the turning rows' steady walks"
+            + ("" if yaw_errors else "; null here: no row turning at 1 mrad/s or more has a steady walk measured"),
         ),
     }  # fmt: skip
     return metrics, table
@@ -90,6 +92,10 @@ def course_metrics(
         ),
         "course_arrived": Metric(
             arrived, "", f"the body came within {1000 * 0.01:g} mm of the last waypoint (facing its heading, if any)"
+        ),
+        "course_distance_left": Metric(
+            float(np.hypot(*(qpos[-1, :2] - follower.points[-1, :2]))), "m",
+            "distance from the body's last position to the last waypoint",
         ),
         "course_cost_of_transport": Metric(
             energy / (total_mass * 9.81 * travelled) if travelled > 0 else None, "1",

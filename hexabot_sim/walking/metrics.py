@@ -348,10 +348,14 @@ def walking_metrics(
         ),
         "fell": Metric(fell, "", FELL_DOC),
         "fell_at": _null_why(
-            Metric(float(t[np.argmax(falls)]) if fell else None, "s", "the time of the first row that fell"),
+            Metric(round(float(t[np.argmax(falls)]), 9) if fell else None, "s", "the time of the first row that fell"),
             "the robot did not fall",
         ),
     }
+
+
+def _percent(share: float) -> str:
+    return f"{100 * share:.3g} %" if share < 10 else f"{100 * share:.0f} %"  # 1530 %, not 1.53e+03 %
 
 
 def walk_warnings(metrics: dict[str, Metric], torque_limit: float, speed: float) -> list[str]:
@@ -364,8 +368,16 @@ def walk_warnings(metrics: dict[str, Metric], torque_limit: float, speed: float)
     off = metrics["speed_abs_error"].value  # None where the command changes (a schedule, waypoints)
     if off is not None and speed >= LEAST_SPEED and off > SPEED_WARNING * speed:
         out.append(f"the body's mean velocity is {off:.3g} m/s off the commanded {speed:.3g} m/s "
-                   f"({100 * off / speed:.3g} %; mean_vx {metrics['mean_vx'].value:.3g}, mean_vy "
+                   f"({_percent(off / speed)}; mean_vx {metrics['mean_vx'].value:.3g}, mean_vy "
                    f"{metrics['mean_vy'].value:.3g} m/s): the feet slid, or the walk stalled")  # fmt: skip
+    row = metrics.get("schedule_speed_error_max", Metric(None, "1", "")).value
+    if row is not None and row > SPEED_WARNING:
+        out.append(f"a schedule row's mean velocity is {_percent(row)} off its command (schedule_speed_error_max): "
+                   "the feet slid, or the walk stalled")  # fmt: skip
+    left, length = (metrics.get(k, Metric(None, "m", "")).value for k in ("course_distance_left", "course_length"))
+    if left is not None and length is not None and not metrics["course_arrived"].value and left > length:
+        out.append(f"the body ended {left:.3g} m from the last waypoint, further than the whole {length:.3g} m "
+                   "course: the feet slid, or the walk went astray")  # fmt: skip
     lost = metrics.get("feet_without_ground", Metric(0, "1", "")).value
     if lost:
         loaded = metrics["stance_loaded_fraction"].value
@@ -417,7 +429,10 @@ def terrain_metrics(
         ),
         "height_above_ground_ptp": Metric(float(np.ptp(above)), "m", "peak-to-peak height above the local ground"),
         "distance_made_good": Metric(
-            made_good, "m", "horizontal progress along the commanded direction over the steady walk"
+            made_good,
+            "m",
+            "progress along the commanded direction over the steady walk (horizontal; along the "
+            "slope's plane with level_body=off)",
         ),
         "speed_made_good": Metric(speed_made_good, "m/s", "distance_made_good / its time"),
         "speed_made_good_error": _null_why(
@@ -425,11 +440,15 @@ def terrain_metrics(
             f"commanded under {LEAST_SPEED:g} m/s: the robot's own creep would dominate the ratio",
         ),
         "touchdowns": Metric(len(events), "1", "swings that ended after the settling time"),
-        "touchdown_error_mean": Metric(
-            float(touched.mean()) if touched.size else None, "s", "touch time - planned touchdown, mean"
+        "touchdown_error_mean": _null_why(
+            Metric(float(touched.mean()) if touched.size else None, "s", "touch time - planned touchdown, mean"),
+            "no swing ended on the ground after the settling time",
         ),
-        "touchdown_error_max": Metric(
-            float(np.abs(touched).max()) if touched.size else None, "s", "largest |touch time - planned touchdown|"
+        "touchdown_error_max": _null_why(
+            Metric(
+                float(np.abs(touched).max()) if touched.size else None, "s", "largest |touch time - planned touchdown|"
+            ),
+            "no swing ended on the ground after the settling time",
         ),
         "early_touchdowns": Metric(
             int((touched < -TOUCHDOWN_TOLERANCE).sum()),

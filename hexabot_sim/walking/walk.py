@@ -159,7 +159,8 @@ def course_results(p, t, qpos, qvel, contacts, controller, total_mass, metrics) 
     for key in (*keys, "speed_made_good_error", "stride"):
         m = metrics.get(key)
         if m is not None:
-            metrics[key] = dataclasses.replace(m, value=None, doc=f"{m.doc}; null here: {why}")
+            doc = m.doc.split("; null here: ")[0]  # its own reason (e.g. vy commanded 0) is not this walk's
+            metrics[key] = dataclasses.replace(m, value=None, doc=f"{doc}; null here: {why}")
     if not p.waypoints:
         return extras
     power = np.abs(contacts.torque * qvel[:, 6 : 6 + contacts.torque.shape[1]]).sum(axis=1)

@@ -116,25 +116,34 @@ def settling_time(t: np.ndarray, theta: np.ndarray, rest: float, band: float) ->
 
 
 ENERGY_WARNING: float = 0.1  # energy_drift_rel above this is warned of: the motion is the integrator's
+LEAST_TIMESTEP: float = 1e-6  # [s] the pendulum's smallest timestep (its parameter's lower bound)
 STEP_SHARE: float = 0.1  # the timestep advised: this over the pendulum's fastest rate (RK4: drift ~1e-6 of E there)
 
 
-def energy_warning(drift: float | None, inertia: float, mgc: float, k: float, b: float, timestep: float) -> str | None:
+def energy_warning(
+    drift: float | None, inertia: float, mgc: float, k: float, b: float, timestep: float, integrator: str
+) -> str | None:
     """The warning for an energy balance the integration broke (None: kept within ENERGY_WARNING, or not measured).
 
-    The fastest rates of the motion are the undamped frequency sqrt((k + m g c) / I) and the damper's b / I; a
-    step that is not small against them (an explicit integrator near its stability edge, say RK4 at omega dt = 2.8)
-    loses or gains energy without diverging, and the run's figures are then the integrator's, not the pendulum's.
+    The fastest rates of the motion are the undamped frequency sqrt((k + m g c) / I) and, for RK4, the damper's b / I
+    (MuJoCo's Euler and implicit integrators take joint damping implicitly: b / I does not limit them). A step that
+    is not small against them (RK4 near its stability edge at omega dt = 2.8, say) loses or gains energy without
+    diverging, and the run's figures are then the integrator's, not the pendulum's.
     """
     if drift is None or not drift > ENERGY_WARNING:
         return None
-    omega, decay = math.sqrt(max(k + mgc, 0.0) / inertia), b / inertia
+    omega, decay = math.sqrt(max(k + mgc, 0.0) / inertia), (b / inertia if integrator == "RK4" else 0.0)
     rate = max(omega, decay)
     fastest = f"sqrt((k + m g c) / I) = {omega:.4g} rad/s" if omega >= decay else f"b / I = {decay:.4g} 1/s"
-    unit = 10.0 ** (math.floor(math.log10(STEP_SHARE / rate)) - 1)
-    advice = float(f"{math.floor(STEP_SHARE / rate / unit) * unit:.2g}")  # rounded down to two digits
-    return (
+    head = (
         f"energy_drift_rel = {drift:.3g}: the integration broke the energy balance by {100 * drift:.3g} % of E(0), "
         f"so the motion is not the pendulum's; the timestep {timestep:g} s is coarse against its fastest rate "
-        f"({fastest}; rate x timestep = {rate * timestep:.3g}): try timestep <= {advice:g} s"
+        f"({fastest}; rate x timestep = {rate * timestep:.3g})"
     )
+    unit = 10.0 ** (math.floor(math.log10(STEP_SHARE / rate)) - 1)
+    advice = float(f"{math.floor(STEP_SHARE / rate / unit) * unit:.2g}")  # rounded down to two digits
+    if advice >= LEAST_TIMESTEP:
+        return f"{head}: try timestep <= {advice:g} s"
+    implicit = ", or integrator=implicit, which takes the damper implicitly" if decay > omega else ""
+    return (f"{head}; no timestep down to the least, {LEAST_TIMESTEP:g} s, is that fine: lower the stiffness or "
+            f"damping{implicit}")  # fmt: skip

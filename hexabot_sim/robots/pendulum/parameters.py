@@ -6,6 +6,7 @@ import dataclasses
 
 from hexabot_sim.budget import check_duration, check_run_cost, step_count
 from hexabot_sim.params import apart, param
+from hexabot_sim.robots.pendulum.closed_forms import LEAST_TIMESTEP
 
 INTEGRATORS = ("RK4", "Euler", "implicit", "implicitfast")
 # Cost of a run for budget.check_run_cost, measured on the 2-core development machine: seconds per
@@ -30,7 +31,7 @@ class PendulumParams:
     theta0_deg: float = param(90.0, "deg", "initial angle, 0 = hanging down; released from rest", ge=-720.0, le=720.0)
     gravity: float = param(9.81, "m/s^2", "gravitational acceleration (0 switches gravity off)", ge=0.0, le=100.0)
     duration: float = param(10.0, "s", "simulated time", gt=0.0, le=86400.0)
-    timestep: float = param(0.001, "s", "integration timestep", ge=1e-6, le=0.1)
+    timestep: float = param(0.001, "s", "integration timestep", ge=LEAST_TIMESTEP, le=0.1)
     integrator: str = param("RK4", "", "MuJoCo integrator", choices=INTEGRATORS)
 
     def __post_init__(self) -> None:

@@ -283,7 +283,7 @@ def run(name: str, p: PendulumParams, progress: Progress | None = None) -> Scena
             "target": target if k > 0 else None,
             "stable_equilibria": equilibria(k, mgc, target, float(theta.min()) - 7.0, float(theta.max()) + 7.0),
         },
-        warnings=[w for w in [energy_warning(drift, inertia, mgc, k, b, float(model.opt.timestep))] if w],
+        warnings=[w for w in [energy_warning(drift, inertia, mgc, k, b, float(model.opt.timestep), p.integrator)] if w],
     )
 
 

@@ -176,4 +176,17 @@ def test_sound_runs_warn_of_nothing(default_run):
 
 @pytest.mark.parametrize("drift", [None, 0.0, 0.05, closed_forms.ENERGY_WARNING])
 def test_no_energy_warning_within_the_bound(drift):
-    assert closed_forms.energy_warning(drift, 0.003, 0.15, 1.0, 0.0, 0.001) is None
+    assert closed_forms.energy_warning(drift, 0.003, 0.15, 1.0, 0.0, 0.001, "RK4") is None
+
+
+def test_the_advice_follows_the_integrator_and_the_least_timestep():
+    """Found by fuzzing: b / I limited the advice for every integrator, though MuJoCo's Euler and implicit ones take
+    joint damping implicitly (k 2000, b 100 at 10 ms with Euler was told 3e-6 s; 1.2e-4 keeps the energy), and
+    a huge damper was told a timestep below the least allowed (3e-7 s, refused when tried)."""
+    inertia, mgc = 0.003, 0.14715
+    euler = closed_forms.energy_warning(0.19, inertia, mgc, 2000.0, 100.0, 0.01, "Euler")
+    assert "sqrt((k + m g c) / I) = 816.5 rad/s" in euler and euler.endswith("try timestep <= 0.00012 s")
+    rk4 = closed_forms.energy_warning(0.5, inertia, mgc, 2000.0, 1000.0, 1e-5, "RK4")  # b / I = 3.3e5 1/s
+    assert "b / I = 3.333e+05 1/s" in rk4
+    assert rk4.endswith("no timestep down to the least, 1e-06 s, is that fine: lower the stiffness or damping, or "
+                        "integrator=implicit, which takes the damper implicitly")  # fmt: skip
