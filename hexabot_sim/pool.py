@@ -68,6 +68,7 @@ class CellResult:
     error: str | None
     seconds: float  # wall time in the worker [s]
     files: dict[str, bytes] | None = None  # --keep-runs: relative path -> content of the cell's run folder
+    warnings: list[str] = dataclasses.field(default_factory=list)  # the run's Result.warnings (run.json's)
 
 
 def _scalar(value: Any) -> tuple[bool, Any]:
@@ -99,7 +100,8 @@ def run_cell(job: CellJob) -> CellResult:
             {k: m.doc for k, m in result.metrics.items()},
         )
         files = job.keep(job, result, time.perf_counter() - started) if job.keep is not None else None
-        return CellResult(job.index, metrics, units, docs, None, time.perf_counter() - started, files)
+        return CellResult(job.index, metrics, units, docs, None, time.perf_counter() - started, files,
+                          list(result.warnings))  # fmt: skip
     except (KeyboardInterrupt, MemoryError, WorkerFailed):
         raise
     except HexabotError as e:

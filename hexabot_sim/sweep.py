@@ -25,6 +25,7 @@ CSV_NAME = "sweep.csv"
 JSON_NAME = "sweep.json"
 CELLS_DIR = "cells"  # --keep-runs: cells/cell-0000 ... one run folder per row of sweep.csv
 ERROR_COLUMN = "error"
+WARNINGS_COLUMN = "warnings"  # a cell's run warnings (Result.warnings), joined by " | "
 
 MAX_CELLS: int = 100_000  # cells of one sweep (a cell is one run)
 MAX_WORKERS: int = 256  # local worker processes
@@ -316,7 +317,7 @@ def cell_text(value: Any) -> str:
 
 @dataclasses.dataclass(frozen=True)
 class Table:
-    """sweep.csv in memory: the swept columns, then the metric columns, then `error`."""
+    """sweep.csv in memory: the swept columns, then the metric columns, then `warnings` and `error`."""
 
     swept: tuple[str, ...]
     metrics: tuple[str, ...]  # column names (a metric named like a swept parameter gets a 'metric_' prefix)
@@ -327,7 +328,7 @@ class Table:
 
     @property
     def header(self) -> tuple[str, ...]:
-        return (*self.swept, *self.metrics, ERROR_COLUMN)
+        return (*self.swept, *self.metrics, WARNINGS_COLUMN, ERROR_COLUMN)
 
     def column(self, name: str) -> list[Any]:
         k = self.header.index(name)
@@ -347,7 +348,10 @@ def table(p: Plan, results: Sequence[CellResult]) -> Table:
             docs.setdefault(name, r.docs.get(name, ""))
     metric_names = tuple(names)
     columns = tuple(f"metric_{n}" if n in swept else n for n in metric_names)
-    rows = tuple((*p.cell_values(r.index), *(r.metrics.get(n) for n in metric_names), r.error or "") for r in results)
+    rows = tuple(
+        (*p.cell_values(r.index), *(r.metrics.get(n) for n in metric_names), " | ".join(r.warnings), r.error or "")
+        for r in results
+    )
     param_units = params_mod.units(type(p.base))
     column_units = {a: param_units[a] for a in swept}
     column_units |= {c: units[n] for c, n in zip(columns, metric_names, strict=True)}
@@ -378,6 +382,7 @@ def record(p: Plan, t: Table, results: Sequence[CellResult], executor: Mapping[s
             derived.append(name)
     seconds = [r.seconds for r in results]
     failed = [r.index for r in results if r.error]
+    warned = [r.index for r in results if r.warnings]
     return {
         "scenario": p.scenario,
         "description": registry.get(p.scenario).summary,
@@ -385,6 +390,7 @@ def record(p: Plan, t: Table, results: Sequence[CellResult], executor: Mapping[s
         "cells": len(p.cells),
         "order": "row-major: the first --grid varies slowest; row i of sweep.csv is cell i",
         "failed_cells": failed,
+        "warned_cells": warned,
         "fixed": fixed,
         "derived": derived,
         "columns": list(t.header),

@@ -225,7 +225,7 @@ def test_sweep_figures_print_full_values_not_an_offset(grid):
     p = sweep.plan("pendulum", grid, {}, {})
     n = len(p.cells)
     swept = tuple(axis.name for axis in p.axes)
-    rows = tuple((*[getattr(cell, a) for a in swept], 1.0 + 1e-8 * i, "") for i, cell in enumerate(p.cells))
+    rows = tuple((*[getattr(cell, a) for a in swept], 1.0 + 1e-8 * i, "", "") for i, cell in enumerate(p.cells))
     table = sweep.Table(swept, ("drift",), ("drift",), rows, {"drift": "1"}, {"drift": "a metric"})
     fig = sweep_figures.figures(p, table)["drift"]
     FigureCanvasAgg(fig).draw()
@@ -243,7 +243,7 @@ def test_a_curve_marks_its_null_cells_and_keeps_the_whole_grid_in_view():
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     p = sweep.plan("pendulum", ["damping=log:0.001:0.1:5"], {}, {})
-    rows = tuple((cell.damping, None if i < 2 else 1.0 / (i + 1), "") for i, cell in enumerate(p.cells))
+    rows = tuple((cell.damping, None if i < 2 else 1.0 / (i + 1), "", "") for i, cell in enumerate(p.cells))
     table = sweep.Table(("damping",), ("settle",), ("settle",), rows, {"settle": "s"}, {"settle": "a metric"})
     fig = sweep_figures.figures(p, table)["settle"]
     FigureCanvasAgg(fig).draw()
@@ -308,3 +308,20 @@ def test_a_grid_over_a_config_files_value_says_so(tmp_path, capsys):
     assert line == f"hexabot-sim: warning: --grid sweeps 'damping', which --config {config} also sets: the grid's " + (
         "values are used"
     )
+
+
+def test_a_cells_run_warnings_reach_the_sweep(tmp_path, capsys):
+    """Found by fuzzing: a cell whose run warned (an undamped pendulum that lost its energy) showed only its
+    energy_drift_rel in sweep.csv, and nothing on stderr or in sweep.json."""
+    out = tmp_path / "s"
+    code, stdout, err = cli(capsys, "sweep", "pendulum-undamped", "--grid", "stiffness=0,24000", "--set",
+                            "duration=0.5", "--no-plots", "--out", str(out))  # fmt: skip
+    assert code == 0 and "cells ok: 2, failed: 0" in stdout
+    [line] = [x for x in err.splitlines() if "warning" in x]
+    assert line.startswith("hexabot-sim: warning: 1 of 2 cells warned (the 'warnings' column of sweep.csv); the "
+                           "first, stiffness = 24000: energy_drift_rel = 0.947")  # fmt: skip
+    lines = (out / "sweep.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    assert header[-2:] == ["warnings", "error"]
+    assert lines[1].endswith(",,") and "the integration broke the energy balance" in lines[2]
+    assert json.loads((out / "sweep.json").read_text())["warned_cells"] == [1]

@@ -81,6 +81,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             f"{sweep.CSV_NAME}); the first, {label}: {first.error}",
             file=sys.stderr,
         )
+    warned = [r for r in results if r.warnings]
+    if warned:  # each cell's run warnings are in sweep.csv; said here as a failed cell is
+        values = plan.cell_values(warned[0].index)
+        label = ", ".join(f"{n} = {sweep.cell_text(v)}" for n, v in zip(table.swept, values, strict=True))
+        eprint(f"{PROG}: warning: {len(warned)} of {len(results)} cells warned (the '{sweep.WARNINGS_COLUMN}' column "
+               f"of {sweep.CSV_NAME}); the first, {label}: {warned[0].warnings[0]}")  # fmt: skip
     cell_time = sum(r.seconds for r in results)
     print(
         f"{name}: {len(results)} cells ({shape}) on {where} in {total:.2f} s "
