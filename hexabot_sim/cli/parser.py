@@ -207,8 +207,9 @@ def _add_study_parsers(sub: Any) -> None:
         "sweep",
         help="run a scenario over a grid of parameter values (all cores, or a Dask cluster) into a sweep folder",
         description="Full-factorial grid: each --grid adds an axis (the first varies slowest). Writes sweep.csv "
-        "(one row per cell: swept parameters, every scalar metric, 'warnings', 'error'), sweep.json (grid, fixed parameters, "
-        "units, versions, timing) and a figure per metric (one axis: metric vs the parameter; two: a heatmap).",
+        "(one row per cell: swept parameters, every scalar metric, 'warnings', 'error'), sweep.json (grid, fixed "
+        "parameters, units, versions, timing) and a figure per metric (one axis: metric vs the parameter; two: a "
+        "heatmap).",
     )
     sweep.add_argument("scenario", help="scenario name (see 'hexabot-sim list')")
     sweep.add_argument(
