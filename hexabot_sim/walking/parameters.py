@@ -470,8 +470,8 @@ def feasibility(p: WalkParams) -> str:
         fixes = [f"a lower 'duty' (the gait's own: {own:.3g})"] * (p.duty > own)
         fixes += ["a gait with less stance"] * bool(faster)
         # The swing's lift turns the joints too: step_height=0.1 was told only of the command (found by fuzzing).
-        slowest = (f"no gait has less stance than the {p.gait}: lower the command or 'step_height' ({p.step_height:g} "
-                   "m), or raise 'max_joint_speed'")  # fmt: skip
+        slowest = f"no gait has less stance than the {p.gait}: lower the command or 'step_height', or raise "
+        slowest += "'max_joint_speed'"
         advice = (
             f"the {p.gait} gait's swing moves the foot over the ground {duty / (1 - duty):.2g}x as fast as the body "
             "whatever the period: "

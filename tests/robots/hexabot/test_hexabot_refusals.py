@@ -21,7 +21,7 @@ from hexabot_sim.robots.hexabot.walk import HexabotParams
         # A duty of one's own is named as the fix (a tripod at duty 0.8 was told only of gaits with less stance).
         ({"vx": 0.2, "duty": 0.8}, "whatever the period: a lower 'duty' (the gait's own: 0.5)"),
         # The tripod has no gait with less stance (it was told to take one).
-        ({"vx": 0.1, "step_height": 0.1}, "than the tripod: lower the command or 'step_height' (0.1 m), or raise"),
+        ({"vx": 0.1, "step_height": 0.1}, "than the tripod: lower the command or 'step_height', or raise"),
         # A duty equal to the gait's own is not told to be lowered (the range starts there).
         (
             {"gait": "wave", "duty": 5 / 6, "period": 0.5, "vx": 0},
