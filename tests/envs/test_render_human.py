@@ -69,9 +69,9 @@ def test_human_windows_show_the_robot_at_the_control_rate_and_leave_the_physics_
     for name in ("hexabot_sim/HexabotJoints-v0", "hexabot_sim/HexabotCommand-v0"):
         shown = runs[f"{name} human"]
         image = read_xwd((tmp_path / f"{name.split('/')[1]}.xwd").read_bytes())
-        # The robot's links, coxae and tibiae are drawn. The window shows the latest frame it drew, which under load
-        # can be a step before the last (the small coxae then covered 47 pixels, not 50: a full suite beside two
-        # fuzzing helpers, 2026-11-28); a window without the robot has none of its colours.
+        # The robot's links, coxae and tibiae are drawn. The small coxae covered 47 pixels (not 50) in two full suites
+        # run beside two fuzzing helpers (2026-11-28; 50 and more alone, why not established); a window without the
+        # robot has none of its colours.
         for rgb in (BLUE, ORANGE, GREEN):
             assert colour_pixels(image, rgb) >= 25, f"{name}: robot colour {rgb} missing from the window"
         assert shown["render_none"]  # render() draws in the window and returns None, as Gymnasium's human mode
