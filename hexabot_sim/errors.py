@@ -30,6 +30,9 @@ class RunWarning(UserWarning):
         super().__init__(message)
         self.result = result
 
+    def __reduce__(self) -> tuple:
+        return RunWarning, (str(self),)  # the text crosses processes; a Result (a compiled model) does not pickle
+
 
 class HexabotError(Exception):
     """Base class of every error hexabot-sim raises on purpose."""

@@ -452,23 +452,36 @@ CLEAN_DEPTH: int = 4  # clean DIR looks this many folder levels down (an --out o
 def stale_staging(root: Path) -> list[Path]:
     """Staging and replaced folders in `root` and its sub-folders (CLEAN_DEPTH levels, links not followed) left by
     runs whose process no longer exists: the staging folders first, then the replaced ones."""
-    levels, entries = [_entries(root)], []
-    while len(levels) <= CLEAN_DEPTH:  # (one level down was looked at only: runs/a/b/x's were never found)
-        entries += levels[-1]
-        down = [folder for folder in levels[-1] if _is_folder(folder) and not folder.name.startswith(_OURS)]
-        levels.append([entry for folder in down for entry in _entries(folder)])
+    named: list[Path] = []
+    level = [root]
+    for _ in range(CLEAN_DEPTH):  # (one level down was looked at only: runs/a/b/x's were never found)
+        down = []
+        for folder in level:
+            for name, is_folder in _folders_in(folder):
+                if name.startswith(_OURS):  # ours (or a look-alike): judged, never looked into
+                    named.append(folder / name)
+                elif is_folder:
+                    down.append(folder / name)
+        level = down
     found = []
-    for prefix, name in ((STAGING_PREFIX, _STAGING_NAME), (OLD_PREFIX, _OLD_NAME)):
-        found += [path for path in sorted(entries) if path.name.startswith(prefix) and _stale(path, name)]
+    for prefix, pattern in ((STAGING_PREFIX, _STAGING_NAME), (OLD_PREFIX, _OLD_NAME)):
+        found += sorted(path for path in named if path.name.startswith(prefix) and _stale(path, pattern))
     return found
 
 
-def _entries(folder: Path) -> list[Path]:
-    """The entries of `folder`; none when it vanished while we looked (another clean at the same time)."""
+def _folders_in(folder: Path) -> list[tuple[str, bool]]:
+    """(name, is a real folder) of the entries of `folder`; none when it is gone or cannot be read (another clean
+    removed it, a folder without x permission: Path.is_dir raised PermissionError and clean stopped)."""
     try:
         with os.scandir(folder) as entries:
-            return [folder / entry.name for entry in entries]
-    except (FileNotFoundError, NotADirectoryError, PermissionError):  # as glob did: what we cannot read is not ours
+            out = []
+            for entry in entries:
+                try:
+                    out.append((entry.name, entry.is_dir(follow_symlinks=False)))
+                except OSError:
+                    out.append((entry.name, False))
+            return out
+    except OSError:
         return []
 
 
@@ -495,7 +508,10 @@ _PID_MAX = 1 << 22  # Linux's largest pid_max
 
 
 def _is_folder(path: Path) -> bool:
-    return path.is_dir() and not path.is_symlink()
+    try:
+        return path.is_dir() and not path.is_symlink()
+    except OSError:  # a folder we may list but not enter: its entries' types cannot be read
+        return False
 
 
 def _alive(pid: int) -> bool:

@@ -20,7 +20,8 @@ FILE_DOCS: dict[str, str] = {
     "model.xml": "the exact MJCF that was simulated (loading it reproduces the run)",
     "trajectory.npz": "full recorded state: t, qpos, qvel, ctrl (numpy.load)",
     "video.mp4": "the video (H.264)",
-    "sweep.csv": "one row per grid cell: the swept parameters, every scalar metric, the error of a failed cell",
+    "sweep.csv": "one row per grid cell: the swept parameters, every scalar metric, its run warnings, the error of a "
+    "failed cell",
     "sweep.json": "grid, fixed parameters, units, failed cells, executor, timing, versions",
 }
 
@@ -250,13 +251,15 @@ def sweep_page(record: Mapping[str, Any], param_docs: Mapping[str, str], folder:
     metrics = {
         "cells": record["cells"],
         "failed_cells": len(record.get("failed_cells") or []),
+        "warned_cells": len(record.get("warned_cells") or []),
         "wall_time": timing.get("wall_time"),
         "parallel_speedup": timing.get("parallel_speedup"),
     }
-    units = {"cells": "1", "failed_cells": "1", "wall_time": "s", "parallel_speedup": "1"}
+    units = {"cells": "1", "failed_cells": "1", "warned_cells": "1", "wall_time": "s", "parallel_speedup": "1"}
     docs = {
         "cells": f"grid cells ({shape}); row i of sweep.csv is cell i",
         "failed_cells": "cells whose run failed (a row with its error in sweep.csv)",
+        "warned_cells": "cells whose run warned (a row with its warnings in sweep.csv)",
         "wall_time": "wall time of the whole sweep",
         "parallel_speedup": "summed cell time / wall time",
     }
@@ -276,4 +279,4 @@ def sweep_page(record: Mapping[str, Any], param_docs: Mapping[str, str], folder:
         "metric_docs": docs,
         "versions": record.get("versions") or {},
     }
-    return html_page(page_record, param_docs, ["cells", "failed_cells", "wall_time"], folder)
+    return html_page(page_record, param_docs, ["cells", "failed_cells", "warned_cells", "wall_time"], folder)

@@ -205,7 +205,7 @@ def cmd_clean(args: argparse.Namespace) -> int:
     if not root.is_dir():
         raise UsageError(f"{folders.display_path(root)!r} is not a folder")
     stale = folders.stale_staging(root) + folders.stale_cells()
-    removed = 0
+    removed, failures = 0, []  # a folder that cannot be removed is said, and the clean goes on (restores included)
     for path in stale:
         if path.name.startswith(folders.OLD_PREFIX) and not _settle_replaced(path, args.dry_run):
             continue  # kept: it holds the user's folder
@@ -220,12 +220,12 @@ def cmd_clean(args: argparse.Namespace) -> int:
             else:
                 shutil.rmtree(path, onerror=_gone_is_fine)
         except OSError as e:
-            raise OutputError(f"could not remove {folders.display_path(path)!r}: {e.strerror or e}") from None
+            failures.append(f"could not remove {folders.display_path(path)!r}: {e.strerror or e}")
+            continue
         except RecursionError:  # rmtree recurses per level (Python 3.11): a look-alike nested 1,500 deep
-            raise OutputError(
-                f"could not remove {folders.display_path(path)!r}: its folders nest deeper than Python's recursion "
-                "limit; remove it by hand (rm -r)"
-            ) from None
+            failures.append(f"could not remove {folders.display_path(path)!r}: its folders nest deeper than Python's "
+                            "recursion limit; remove it by hand (rm -r)")  # fmt: skip
+            continue
         removed += 1
         done = f"{removed} stale folder{'s' if removed > 1 else ''} removed before it"
         DONE_SO_FAR[:] = [f"{done}, listed above"]
@@ -234,6 +234,11 @@ def cmd_clean(args: argparse.Namespace) -> int:
     if not stale:
         cells = tempfile.gettempdir()
         print(f"no staging folders left by interrupted runs in {args.folder} (nor sweep cells in {cells})")
+    for failure in failures[1:]:
+        eprint(f"{PROG}: {failure}")
+    if failures:  # the first as the error, the others above it
+        more = f" (and {len(failures) - 1} more, above)" if len(failures) > 1 else ""
+        raise OutputError(failures[0] + more)
     return 0
 
 

@@ -92,7 +92,10 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         f"{name}: {len(results)} cells ({shape}) on {where} in {total:.2f} s "
         f"(cells {cell_time:.2f} s in all) -> {folders.display_path(run.final)}"
     )
-    print(f"  cells ok: {len(results) - len(failed)}, failed: {len(failed)}")
+    print(
+        f"  cells ok: {len(results) - len(failed)}, failed: {len(failed)}"
+        + (f", warned: {len(warned)}" if warned else "")
+    )
     figures = [f for f in files if f.endswith(".png")]
     print(f"  files: {sweep.CSV_NAME}, {sweep.JSON_NAME}, {len(figures)} figures" + (
         f", {sweep.CELLS_DIR}/ ({kept[0]} run folders)" if args.keep_runs else ""))  # fmt: skip

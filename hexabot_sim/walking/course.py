@@ -50,6 +50,8 @@ def schedule_metrics(p: Any, t: np.ndarray, columns: dict[str, np.ndarray], sett
             "yaw_rate_error": abs(rate - cmd_w) / abs(cmd_w) if abs(cmd_w) >= 1e-3 else None,
         })  # fmt: skip
     speed_errors = [float(r["speed_error"]) for r in table if r["speed_error"] is not None]
+    # Rows told to stand or turn on the spot have no relative speed error: their mean drift [m/s] instead.
+    drifts = [float(np.hypot(r["vx"], r["vy"])) for r in table if r["speed_error"] is None]
     yaw_errors = [float(r["yaw_rate_error"]) for r in table if r["yaw_rate_error"] is not None]
     metrics = {
         "schedule_rows_measured": Metric(len(table), "1", "schedule rows long enough to measure a steady walk"),
@@ -57,6 +59,11 @@ def schedule_metrics(p: Any, t: np.ndarray, columns: dict[str, np.ndarray], sett
             max(speed_errors) if speed_errors else None, "1",
             "largest |mean body velocity - row's command| / |command| over the rows' steady walks"
             + ("" if speed_errors else "; null here: no row moving at 1 mm/s or more has a steady walk measured"),
+        ),
+        "schedule_still_drift_max": Metric(
+            max(drifts) if drifts else None, "m/s",
+            "largest mean body speed over the steady walks of rows that command no speed (standing, turning on the "
+            "spot)" + ("" if drifts else "; null here: every measured row commands a speed"),
         ),
         "schedule_yaw_rate_error_max": Metric(
             max(yaw_errors) if yaw_errors else None, "1",

@@ -191,6 +191,7 @@ def planned_stand_heights(p: WalkParams, t: np.ndarray) -> np.ndarray:
 _VERTICAL = np.array([0.0, 0.0, 1.0])
 SATURATED: float = 1 - 1e-9  # a joint torque at this share of the limit (or more) is at the limit
 SPEED_WARNING: float = 0.5  # a mean velocity further off the command than this share of its speed is warned of
+STILL_DRIFT_WARNING: float = 0.01  # [m/s] a mean drift above this where no speed is commanded is warned of
 SATURATION_WARNING: float = 0.25  # saturated in more of the steps is warned of (stairs 6 %, quadbot-trot-rough 10 %)
 FELL_DOC = (
     f"the plate touched the ground or tilted beyond {FALL_TILT_DEG:g} deg from the attitude it walks in (the "
@@ -366,6 +367,12 @@ def walk_warnings(metrics: dict[str, Metric], torque_limit: float, speed: float)
         out.append(f"the robot fell at t = {metrics['fell_at'].value:.3g} s ({FELL_DOC}); the walk's figures from "
                    "then on are not a walk's")  # fmt: skip
     off = metrics["speed_abs_error"].value  # None where the command changes (a schedule, waypoints)
+    still = metrics.get("schedule_still_drift_max", Metric(None, "m/s", "")).value
+    if off is not None and speed < LEAST_SPEED:  # standing or turning on the spot: the drift itself
+        still = off
+    if still is not None and still > STILL_DRIFT_WARNING:
+        out.append(f"the body drifted at {still:.3g} m/s where it was told to stand or turn on the spot: the feet "
+                   "slid, or the walk went astray")  # fmt: skip
     if off is not None and speed >= LEAST_SPEED and off > SPEED_WARNING * speed:
         out.append(f"the body's mean velocity is {off:.3g} m/s off the commanded {speed:.3g} m/s "
                    f"({_percent(off / speed)}; mean_vx {metrics['mean_vx'].value:.3g}, mean_vy "

@@ -460,3 +460,39 @@ def test_clean_looks_four_folder_levels_down(tmp_path, capsys):
     code, out, _ = cli(capsys, "clean", str(tmp_path))
     assert code == 0 and not any(p.exists() for p in found) and beyond.exists()
     assert out.count("removed") == 3  # the two found and the outer staging folder (with what it held)
+
+
+def test_clean_goes_on_past_what_it_cannot_read_or_remove(tmp_path, capsys, monkeypatch):
+    """Found by fuzzing: a folder that may be listed but not entered made clean's deeper look an internal error
+    (PermissionError from Path.is_dir), and a staging folder that could not be removed ended the clean before it
+    put a user's folder back."""
+    dead = _dead_pid()
+    locked = tmp_path / "locked"
+    (locked / "inner").mkdir(parents=True)
+    staging = tmp_path / "b" / f"{folders.STAGING_PREFIX}{dead}-deadbeef{folders.STAGING_SUFFIX}"
+    staging.mkdir(parents=True)
+    stuck = tmp_path / f"{folders.STAGING_PREFIX}{dead}-0badf00d{folders.STAGING_SUFFIX}"
+    stuck.mkdir()
+    aside = tmp_path / f"{folders.OLD_PREFIX}{dead}-cafebabe"
+    (aside / "previous").mkdir(parents=True)
+    (aside / "previous" / "data.txt").write_text("precious")
+    (aside / "target").write_text("mydata")
+    real_is_dir = Path.is_dir
+
+    def is_dir(self):  # a folder listed but not entered: its entries' types cannot be read (as for a non-root user)
+        if self.parent == locked:
+            raise PermissionError(13, "Permission denied", str(self))
+        return real_is_dir(self)
+
+    real_rmtree = shutil.rmtree
+
+    def rmtree(path, *args, **kwargs):
+        if Path(path) == stuck:
+            raise PermissionError(13, "Permission denied", str(path))
+        return real_rmtree(path, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "is_dir", is_dir)
+    monkeypatch.setattr(shutil, "rmtree", rmtree)
+    code, _, err = cli(capsys, "clean", str(tmp_path))
+    assert code == 1 and err.count("\n") == 1 and "could not remove" in err and "0badf00d" in err
+    assert (tmp_path / "mydata" / "data.txt").read_text() == "precious" and not staging.exists() and stuck.exists()

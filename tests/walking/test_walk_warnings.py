@@ -46,7 +46,10 @@ def test_the_warnings_follow_their_thresholds() -> None:
     [lost] = warned(lost=7)
     assert lost.startswith("7 swings found no ground within the legs' reach") and "carried load 73 %" in lost
     assert len(warned(fell=True, share=0.9, off=0.2, lost=1)) == 4
-    assert metrics.walk_warnings(_metrics(off=0.2), 1.5, 0.0) == []  # no speed commanded (a turn on the spot)
+    # No speed commanded (standing, a turn on the spot): the drift itself, above 1 cm/s.
+    assert metrics.walk_warnings(_metrics(off=metrics.STILL_DRIFT_WARNING), 1.5, 0.0) == []
+    [drift] = metrics.walk_warnings(_metrics(off=0.2), 1.5, 0.0)
+    assert drift.startswith("the body drifted at 0.2 m/s where it was told to stand or turn on the spot")
 
 
 def test_a_sound_walk_warns_of_nothing_and_its_saturation_agrees_with_its_peak_torque() -> None:
@@ -93,6 +96,9 @@ def test_a_robot_too_heavy_for_its_servos_walks_with_a_warning(tmp_path: Path, c
         ({"slope_deg": 45.0, "duration": 4.0}, "the body's mean velocity is"),
         ({"slope_deg": 45.0, "schedule": [[0, 0.1, 0, 0]], "duration": 6.0}, "a schedule row's mean velocity is 4"),
         ({"slope_deg": 45.0, "waypoints": [[0.5, 0]], "duration": 9.0}, "the body ended 2.8"),
+        # ... and told to turn on the spot, or to stand and turn in a schedule (no speed commanded: no warning at first)
+        ({"slope_deg": 45.0, "vx": 0.0, "yaw_rate": 0.3, "duration": 8.0}, "the body drifted at 0.4"),
+        ({"slope_deg": 45.0, "schedule": [[0, 0, 0, 0.3], [4, 0, 0, 0]], "duration": 8.0}, "the body drifted at 0.5"),
     ],
 )  # fmt: skip
 def test_walks_far_off_their_command_say_so(overrides, start) -> None:
@@ -133,3 +139,14 @@ def test_a_changing_command_gives_its_own_reason_once() -> None:
     for name in ("vy_error", "yaw_rate_error", "lateral_drift"):
         assert m[name].value is None and m[name].doc.count("null here") == 1 and "the command changes" in m[name].doc
     assert "null here: no row turning" in m["schedule_yaw_rate_error_max"].doc
+
+
+def test_a_run_warning_crosses_processes() -> None:
+    """RunWarning's .result (a Result holding a compiled model and lambdas) made it unpicklable: raised as an error in
+    a process pool's worker, it arrived as "Can't pickle local object" (found by fuzzing). The text crosses."""
+    import pickle
+
+    with pytest.warns(RunWarning):
+        result = hs.run("pendulum-undamped", stiffness=24000.0, duration=0.2)
+    again = pickle.loads(pickle.dumps(RunWarning(result.warnings[0], result)))
+    assert isinstance(again, RunWarning) and str(again) == result.warnings[0] and again.result is None
