@@ -197,14 +197,14 @@ def _execute(
 
 
 def cmd_clean(args: argparse.Namespace) -> int:
-    from hexabot_sim import folders
+    from hexabot_sim import cleaning, folders
 
     if not args.folder:
         raise UsageError("clean needs a folder name (default: runs); got an empty one")
     root = Path(args.folder)
     if not root.is_dir():
         raise UsageError(f"{folders.display_path(root)!r} is not a folder")
-    stale = folders.stale_staging(root) + folders.stale_cells()
+    stale = cleaning.stale_staging(root) + cleaning.stale_cells()
     removed, failures = 0, []  # a folder that cannot be removed is said, and the clean goes on (restores included)
     for path in stale:
         if path.name.startswith(folders.OLD_PREFIX) and not _settle_replaced(path, args.dry_run):
@@ -243,11 +243,11 @@ def cmd_clean(args: argparse.Namespace) -> int:
 
 
 def _settle_replaced(path: Path, dry_run: bool) -> bool:
-    """A stale replaced folder of a --force run that died (folders.replaced_fate): puts the user's folder back under
+    """A stale replaced folder of a --force run that died (cleaning.replaced_fate): puts the user's folder back under
     its name when that is free. True: the folder may go; False: it is kept (it holds the user's folder), and said."""
-    from hexabot_sim import folders
+    from hexabot_sim import cleaning, folders
 
-    fate, where = folders.replaced_fate(path)
+    fate, where = cleaning.replaced_fate(path)
     aside = folders.display_path(path / folders.PREVIOUS)
     if fate == "remove":
         if where is not None:  # the new run stands there: `previous` is what --force was asked to replace
@@ -259,7 +259,7 @@ def _settle_replaced(path: Path, dry_run: bool) -> bool:
             print(f"would put {aside} back as {folders.display_path(where)}")
             return True
         try:
-            folders.rename_back(path, where)
+            cleaning.rename_back(path, where)
         except FileNotFoundError:
             if not os.path.lexists(path / folders.PREVIOUS):
                 return True  # another clean put it back meanwhile
