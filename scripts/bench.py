@@ -196,7 +196,12 @@ def bench_sweep(repeat: int, duration: float = 5.0) -> dict[str, float]:
     # Per-cell overhead: cells of a few steps, so the time is the executor's, not the physics'.
     tiny = sweep.plan("pendulum", ["damping=0.001:0.1:200"], {}, {"duration": "0.01"})
     pool_s, dask_s = [], []
-    with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None, silence_logs=50) as cluster:
+    with (
+        tempfile.TemporaryDirectory(prefix="bench-dask-") as scratch,
+        LocalCluster(
+            n_workers=2, threads_per_worker=1, dashboard_address=None, silence_logs=50, local_directory=scratch
+        ) as cluster,
+    ):  # its scratch files in a folder of its own (they were left in /tmp/dask-scratch-space)
         for _ in range(repeat):
             pool_s.append(timed(pool.local_executor(2), sweep.jobs(tiny)))
             with dask_cluster.dask_executor(cluster.scheduler_address) as (executor, _workers):

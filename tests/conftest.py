@@ -1,6 +1,7 @@
 """Shared fixtures: headless GL chosen before MuJoCo is imported, one GL probe per session; numba's cache warmed
 once before the test processes start."""
 
+import contextlib
 import os
 
 os.environ.setdefault("MUJOCO_GL", "egl")  # must precede any `import mujoco`
@@ -8,6 +9,25 @@ os.environ.setdefault("MUJOCO_GL", "egl")  # must precede any `import mujoco`
 import pytest
 
 from hexabot_sim import gl
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _dask_scratch(tmp_path_factory: pytest.TempPathFactory):
+    """Dask's scratch files (a scheduler's and its workers' dask-scratch-space, in this process and in the dask
+    commands the cluster tests start) in the session's temporary folder: they were left in /tmp."""
+    path = str(tmp_path_factory.mktemp("dask"))
+    before = os.environ.get("DASK_TEMPORARY_DIRECTORY")
+    os.environ["DASK_TEMPORARY_DIRECTORY"] = path  # read by the dask commands started from here
+    try:
+        import dask
+    except ImportError:
+        dask = None
+    with dask.config.set({"temporary-directory": path}) if dask is not None else contextlib.nullcontext():
+        yield
+    if before is None:
+        os.environ.pop("DASK_TEMPORARY_DIRECTORY", None)
+    else:
+        os.environ["DASK_TEMPORARY_DIRECTORY"] = before
 
 
 def pytest_sessionstart(session: pytest.Session) -> None:
