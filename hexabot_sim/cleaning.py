@@ -10,11 +10,12 @@ from __future__ import annotations
 import contextlib
 import os
 import re
-import stat
 import tempfile
 from pathlib import Path
 
+from hexabot_sim.errors import UsageError
 from hexabot_sim.folders import CELL_PREFIX, OLD_PREFIX, PREVIOUS, STAGING_PREFIX, STAGING_SUFFIX, TARGET
+from hexabot_sim.params import read_bounded
 
 
 def replaced_fate(path: Path) -> tuple[str, Path | None]:
@@ -42,20 +43,13 @@ def replaced_fate(path: Path) -> tuple[str, Path | None]:
 
 def _read_target(path: Path) -> str:
     """The name a replaced folder's `target` file holds; "" for anything a run does not write there (a link, a
-    FIFO that would block, a device, a long file): read without following links or blocking, at most 4 KiB."""
-    try:
-        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
-    except OSError:
+    FIFO that would block, a device, a file over 4 KiB): params.read_bounded, links not followed."""
+    if path.is_symlink():
         return ""
     try:
-        info = os.fstat(fd)
-        if not stat.S_ISREG(info.st_mode) or info.st_size > 4096:
-            return ""
-        return os.fsdecode(os.read(fd, 4096))
-    except OSError:
+        return os.fsdecode(read_bounded(path, "target", 4096))
+    except UsageError:
         return ""
-    finally:
-        os.close(fd)
 
 
 def rename_back(path: Path, where: Path) -> None:

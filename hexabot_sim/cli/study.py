@@ -72,21 +72,22 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     failed = [r for r in results if r.error]
     shape = " x ".join(f"{len(a.values)} {a.name}" for a in plan.axes)
     COMPLETED[:] = [f"the sweep folder {folders.display_path(run.final)} is complete"]
+
+    def label(index: int) -> str:  # a cell by its swept values
+        values = plan.cell_values(index)
+        return ", ".join(f"{n} = {sweep.cell_text(v)}" for n, v in zip(table.swept, values, strict=True))
+
     if failed:
         first = failed[0]
-        values = plan.cell_values(first.index)
-        label = ", ".join(f"{n} = {sweep.cell_text(v)}" for n, v in zip(table.swept, values, strict=True))
         print(
             f"{PROG}: warning: {len(failed)} of {len(results)} cells failed (rows with an 'error' in "
-            f"{sweep.CSV_NAME}); the first, {label}: {first.error}",
+            f"{sweep.CSV_NAME}); the first, {label(first.index)}: {first.error}",
             file=sys.stderr,
         )
     warned = [r for r in results if r.warnings]
     if warned:  # each cell's run warnings are in sweep.csv; said here as a failed cell is
-        values = plan.cell_values(warned[0].index)
-        label = ", ".join(f"{n} = {sweep.cell_text(v)}" for n, v in zip(table.swept, values, strict=True))
         eprint(f"{PROG}: warning: {len(warned)} of {len(results)} cells warned (the '{sweep.WARNINGS_COLUMN}' column "
-               f"of {sweep.CSV_NAME}); the first, {label}: {warned[0].warnings[0]}")  # fmt: skip
+               f"of {sweep.CSV_NAME}); the first, {label(warned[0].index)}: {warned[0].warnings[0]}")  # fmt: skip
     cell_time = sum(r.seconds for r in results)
     print(
         f"{name}: {len(results)} cells ({shape}) on {where} in {total:.2f} s "

@@ -206,12 +206,13 @@ def walking_metrics(
     qvel: np.ndarray,
     contacts: Contacts,
     total_mass: float,
-    ground: Ground | None = None,
+    ground: Ground | None,
+    plane: np.ndarray,
 ) -> dict[str, Metric]:
-    """The walking metrics of a run, from its recorded state and contacts, on its ground (None: the flat floor)."""
+    """The walking metrics of a run, from its recorded state and contacts, on its ground (None: the flat floor);
+    `plane`: qpos in the plane walked in (in_plane), for the speeds, headings and distances."""
     # The attitude the body walks in: its tilt is measured from it (the slope's normal where it follows the ground).
     up = walking_up(p, ground)
-    plane = in_plane(qpos, up)  # speeds, headings and distances along the plane walked in
     window = steady_window(p, t)
     dt = p.timestep
     rpy = rpy_from_quat(qpos[:, 3:7])
@@ -409,9 +410,11 @@ def terrain_metrics(
     t: np.ndarray,
     qpos: np.ndarray,
     controller: WalkingController,
+    plane: np.ndarray,
 ) -> dict[str, Metric]:
-    """Attitude relative to gravity, height above the local ground, progress, touchdowns and levelling limits (how
-    often the stance feet carry load is a foot-force metric of every walk: walking/forces.py)."""
+    """Attitude relative to gravity, height above the local ground, progress (along `plane`, qpos in the plane walked
+    in), touchdowns and levelling limits (how often the stance feet carry load is a foot-force metric of every walk:
+    walking/forces.py)."""
     window = steady_window(p, t)
     rpy = np.degrees(rpy_from_quat(qpos[window, 3:7]))  # z-y-x angles: roll and pitch are relative to gravity
     roll, pitch = rpy[:, 0], rpy[:, 1]
@@ -419,7 +422,6 @@ def terrain_metrics(
     w = np.flatnonzero(window)
     i0, i1 = w[0], w[-1]
     along = walking_direction(p)
-    plane = in_plane(qpos, walking_up(p, ground))  # along the slope walked with level_body=off
     made_good = float((plane[i1, :2] - plane[i0, :2]) @ along)
     speed = math.hypot(p.vx, p.vy)
     speed_made_good = made_good / (t[i1] - t[i0])

@@ -57,7 +57,9 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     contacts = replay_contacts(model, t, qpos, qvel, ctrl, legs)
     total_mass = float(model.body_subtreemass[model.body("torso").id])
     ground = terrain(p)
-    metrics = walking_metrics(p, t, qpos, qvel, contacts, total_mass, ground)
+    up = walking_up(p, ground)  # speeds, headings and distances along the slope walked with level_body=off
+    plane = in_plane(qpos, up)
+    metrics = walking_metrics(p, t, qpos, qvel, contacts, total_mass, ground, plane)
     gait = commands.start_gait(p)  # a schedule's first row's gait replaces the walk's
     changes = len({row.gait for row in commands.setpoints(p)}) > 1 if p.schedule else False
     duty = Metric(gait.duty, "1", "stance fraction of the gait cycle")
@@ -71,7 +73,7 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     loaded = contacts.loaded(total_mass)
     planned = controller.planned_stance(t)  # (n, n_legs)
     if not ground.flat or p.on_ground():  # flat runs with the planned controller keep their metrics as they were
-        metrics |= terrain_metrics(p, ground, t, qpos, controller)
+        metrics |= terrain_metrics(p, ground, t, qpos, controller, plane)
     window = steady_window(p, t)
     weight = total_mass * 9.81
     metrics |= force_metrics(contacts.load[window], loaded[window], planned[window], p.timestep, weight, legs)
@@ -81,8 +83,7 @@ def analyse(name, p, model, xml, traj, controller, wall) -> ScenarioResult:
     plan_t = np.array([c[0] for c in controller.commands])
     idx = np.clip(np.searchsorted(plan_t, t, side="right") - 1, 0, len(plan_t) - 1)
     plan = np.array([c[1:] for c in controller.commands])[idx] * np.asarray(controller.scale(t))[:, None]
-    up = walking_up(p, ground)  # along the slope walked with level_body=off
-    heading = rpy_from_quat(in_plane(qpos, up)[:, 3:7])[:, 2]
+    heading = rpy_from_quat(plane[:, 3:7])[:, 2]
     vel = velocity_in_plane(qvel, up)
     c, s = np.cos(heading), np.sin(heading)
     vx_b = c * vel[:, 0] + s * vel[:, 1]
